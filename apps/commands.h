@@ -1,0 +1,22 @@
+// The oslam subcommands, registered in one place (commands.cpp).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace oslam {
+
+struct Command {
+  std::string name;
+  std::string summary;  // one line for `oslam --help`
+  // Parses its own arguments (argv after the command name). Returns the exit
+  // code; throws UsageError (exit 2) or Error (exit 1).
+  int (*run)(const std::vector<std::string>& args);
+};
+
+const std::vector<Command>& Commands();
+
+// One function per subcommand, each in its own file.
+int RunCameraCommand(const std::vector<std::string>& args);
+
+}  // namespace oslam

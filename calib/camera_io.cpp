@@ -1,0 +1,81 @@
+#include "calib/camera_io.h"
+
+#include <cmath>
+#include <filesystem>
+
+#include <opencv2/core.hpp>
+
+#include "calib/hyperbolic_camera.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/yaml.h"
+
+namespace oslam {
+
+std::unique_ptr<CameraModel> CreateCameraModel(const std::string& model_name) {
+  // The one place camera models are registered.
+  if (model_name == HyperbolicCamera::kModelName) return std::make_unique<HyperbolicCamera>();
+  std::string known;
+  for (const auto& name : CameraModelNames()) known += (known.empty() ? "" : ", ") + name;
+  throw Error("unknown camera model '" + model_name + "' (known: " + known + ")");
+}
+
+std::vector<std::string> CameraModelNames() { return {HyperbolicCamera::kModelName}; }
+
+std::unique_ptr<CameraModel> LoadCamera(const std::string& path) {
+  YamlFile file(path);
+  const cv::FileNode root = file.root();
+  file.RequireOnlyKeys(root, "", {"model", "image_width", "image_height", "blind_radius_px",
+                                  "rim_radius_px", "flip_image_angle", "intrinsics"});
+  const std::string model_name = file.String(root, "model");
+  std::unique_ptr<CameraModel> camera;
+  try {
+    camera = CreateCameraModel(model_name);
+  } catch (const Error& error) {
+    throw Error::InFile(path, error.what());
+  }
+  camera->set_image_size(file.Int(root, "image_width"), file.Int(root, "image_height"));
+  camera->set_annulus(
+      {file.Double(root, "blind_radius_px"), file.Double(root, "rim_radius_px")});
+
+  const cv::FileNode intrinsics_node = file.Map(root, "intrinsics");
+  const std::vector<std::string> names = camera->IntrinsicNames();
+  file.RequireOnlyKeys(intrinsics_node, "intrinsics.", names);
+  Eigen::VectorXd intrinsics(names.size());
+  for (size_t i = 0; i < names.size(); ++i)
+    intrinsics[i] = file.Double(intrinsics_node, names[i], "intrinsics.");
+  camera->SetIntrinsics(intrinsics);
+
+  if (auto* hyperbolic = dynamic_cast<HyperbolicCamera*>(camera.get())) {
+    HyperbolicMirrorParameters p = hyperbolic->parameters();
+    p.flip_image_angle = file.OptionalInt(root, "flip_image_angle", 0) != 0;
+    hyperbolic->set_parameters(p);
+  }
+  std::string why;
+  if (!camera->Validate(&why)) throw Error::InFile(path, "invalid camera: " + why);
+  return camera;
+}
+
+void SaveCamera(const CameraModel& camera, const std::string& path) {
+  std::string why;
+  if (!camera.Validate(&why)) throw Error::InFile(path, "refusing to save an invalid camera: " + why);
+  WriteAtomically(path, [&](const std::string& temp_path) {
+    cv::FileStorage fs(temp_path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+    if (!fs.isOpened()) throw Error::InFile(path, "cannot open for writing");
+    fs << "model" << camera.ModelName();
+    fs << "image_width" << camera.image_width();
+    fs << "image_height" << camera.image_height();
+    fs << "blind_radius_px" << camera.annulus().blind_radius_px;
+    fs << "rim_radius_px" << camera.annulus().rim_radius_px;
+    if (const auto* hyperbolic = dynamic_cast<const HyperbolicCamera*>(&camera))
+      fs << "flip_image_angle" << (hyperbolic->parameters().flip_image_angle ? 1 : 0);
+    fs << "intrinsics" << "{";
+    const std::vector<std::string> names = camera.IntrinsicNames();
+    const Eigen::VectorXd values = camera.Intrinsics();
+    for (size_t i = 0; i < names.size(); ++i) fs << names[i] << values[i];
+    fs << "}";
+    fs.release();
+  });
+}
+
+}  // namespace oslam

@@ -1,0 +1,28 @@
+// A bounding slice: the annular sector an object covers in the omnidirectional
+// image, in polar image coordinates (spec §3.1, §10.1). It is the measurement
+// every detector produces and the observation model predicts.
+#pragma once
+
+#include <vector>
+
+namespace oslam {
+
+struct BoundingSlice {
+  double u_r_px = 0.0;     // radius of the object's base point (inner radius of the slice)
+  double u_phi_rad = 0.0;  // angle of the base point (middle angle of the slice)
+  double s_r_px = 0.0;     // radial length r_max - r_min (projected height)
+  double s_phi_rad = 0.0;  // angular width (projected diameter), in [0, 2 pi)
+};
+
+// The slice spanning radii [r_min, r_max] and the counter-clockwise arc from
+// angle_begin to angle_end (wrap at +-pi handled).
+BoundingSlice SliceFromExtents(double r_min_px, double r_max_px, double angle_begin_rad,
+                               double angle_end_rad);
+
+// Smallest slice containing every (radius, angle) point: the angular arc is
+// the complement of the largest gap between sorted angles, so a blob across
+// the +-pi seam gets its true width. Empty input gives a zero slice.
+BoundingSlice SliceOfPolarPoints(const std::vector<double>& radii_px,
+                                 const std::vector<double>& angles_rad);
+
+}  // namespace oslam

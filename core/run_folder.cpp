@@ -1,0 +1,343 @@
+#include "core/run_folder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "core/atomic_file.h"
+#include "core/csv.h"
+#include "core/error.h"
+#include "core/yaml.h"
+
+namespace oslam {
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------- classes
+
+namespace {
+
+const std::vector<std::string> kClassKeys = {"name",          "display_rgb",   "diameter_mean_m",
+                                             "diameter_std_m", "height_mean_m", "height_std_m",
+                                             "colour"};
+
+ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std::string& prefix) {
+  if (!node.isMap()) file.Fail(prefix, "each class must be a mapping");
+  file.RequireOnlyKeys(node, prefix + ".", kClassKeys);
+  const std::string key = prefix + ".";
+  ObjectClass object_class;
+  object_class.name = file.String(node, "name", key);
+  if (object_class.name.empty()) file.Fail(key + "name", "must not be empty");
+  const std::vector<double> rgb = file.Doubles(node, "display_rgb", 3, key);
+  for (int c = 0; c < 3; ++c) {
+    if (rgb[c] < 0 || rgb[c] > 255) file.Fail(key + "display_rgb", "entries must be 0..255");
+    object_class.display_rgb[c] = static_cast<int>(std::lround(rgb[c]));
+  }
+  object_class.diameter_mean_m = file.Double(node, "diameter_mean_m", key);
+  object_class.diameter_std_m = file.Double(node, "diameter_std_m", key);
+  object_class.height_mean_m = file.Double(node, "height_mean_m", key);
+  object_class.height_std_m = file.Double(node, "height_std_m", key);
+  for (const char* field : {"diameter_mean_m", "diameter_std_m", "height_mean_m", "height_std_m"}) {
+    if (!(file.Double(node, field, key) > 0)) file.Fail(key + field, "must be positive");
+  }
+  const cv::FileNode colour = node["colour"];
+  if (!colour.empty() && !colour.isNone()) {
+    const std::string colour_key = key + "colour.";
+    if (!colour.isMap()) file.Fail(key + "colour", "must be a mapping");
+    file.RequireOnlyKeys(colour, colour_key, {"yuv_mean", "yuv_std", "k_sigma"});
+    ColourBox box;
+    const std::vector<double> mean = file.Doubles(colour, "yuv_mean", 3, colour_key);
+    const std::vector<double> stddev = file.Doubles(colour, "yuv_std", 3, colour_key);
+    std::copy(mean.begin(), mean.end(), box.yuv_mean.begin());
+    std::copy(stddev.begin(), stddev.end(), box.yuv_std.begin());
+    for (double s : stddev)
+      if (s < 0) file.Fail(colour_key + "yuv_std", "must be non-negative");
+    box.k_sigma = file.OptionalDouble(colour, "k_sigma", 3.0, colour_key);
+    if (!(box.k_sigma > 0)) file.Fail(colour_key + "k_sigma", "must be positive");
+    object_class.colour = box;
+  }
+  return object_class;
+}
+
+}  // namespace
+
+std::vector<ObjectClass> ReadClasses(const std::string& path) {
+  YamlFile file(path);
+  file.RequireOnlyKeys(file.root(), "", {"classes"});
+  const cv::FileNode list = file.Seq(file.root(), "classes");
+  if (list.size() == 0) file.Fail("classes", "no classes listed");
+  std::vector<ObjectClass> classes;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const std::string prefix = "classes[" + std::to_string(i) + "]";
+    ObjectClass object_class = ParseClass(file, list[static_cast<int>(i)], prefix);
+    if (FindClass(classes, object_class.name) >= 0)
+      file.Fail(prefix + ".name", "duplicate class '" + object_class.name + "'");
+    classes.push_back(std::move(object_class));
+  }
+  return classes;
+}
+
+void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& path) {
+  WriteAtomically(path, [&](const std::string& temp_path) {
+    cv::FileStorage fs(temp_path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+    if (!fs.isOpened()) throw Error::InFile(path, "cannot open for writing");
+    fs << "classes" << "[";
+    for (const ObjectClass& c : classes) {
+      fs << "{";
+      fs << "name" << c.name;
+      fs << "display_rgb" << std::vector<int>(c.display_rgb.begin(), c.display_rgb.end());
+      fs << "diameter_mean_m" << c.diameter_mean_m << "diameter_std_m" << c.diameter_std_m;
+      fs << "height_mean_m" << c.height_mean_m << "height_std_m" << c.height_std_m;
+      if (c.colour) {
+        fs << "colour" << "{";
+        fs << "yuv_mean" << std::vector<double>(c.colour->yuv_mean.begin(), c.colour->yuv_mean.end());
+        fs << "yuv_std" << std::vector<double>(c.colour->yuv_std.begin(), c.colour->yuv_std.end());
+        fs << "k_sigma" << c.colour->k_sigma;
+        fs << "}";
+      }
+      fs << "}";
+    }
+    fs << "]";
+    fs.release();
+  });
+}
+
+int FindClass(const std::vector<ObjectClass>& classes, const std::string& name) {
+  for (size_t i = 0; i < classes.size(); ++i)
+    if (classes[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+// ---------------------------------------------------------------- odometry
+
+namespace {
+
+void CheckFrameColumn(const CsvTable& table) {
+  const int frame_column = table.ColumnIndex("frame");
+  for (size_t row = 0; row < table.num_rows(); ++row) {
+    const long frame = table.Integer(row, frame_column);
+    if (frame != static_cast<long>(row)) {
+      throw Error::AtLine(table.path(), table.line_of_row(row),
+                          "expected frame " + std::to_string(row) + ", found " +
+                              std::to_string(frame) + " (rows must be frames 0,1,2,... in order)");
+    }
+  }
+}
+
+}  // namespace
+
+Odometry ReadOdometry(const std::string& path, long expected_rows) {
+  const CsvTable table = CsvTable::Read(path);
+  if (table.num_rows() == 0) throw Error::InFile(path, "no odometry rows");
+  CheckFrameColumn(table);
+  if (expected_rows >= 0 && static_cast<long>(table.num_rows()) != expected_rows) {
+    throw Error::InFile(path, "has " + std::to_string(table.num_rows()) + " rows but the run has " +
+                                  std::to_string(expected_rows) + " frames");
+  }
+  Odometry odometry;
+  if (table.HasColumn("x_m")) {
+    odometry.kind = OdometryKind::kPoses;
+    const int x = table.ColumnIndex("x_m"), y = table.ColumnIndex("y_m"),
+              theta = table.ColumnIndex("theta_rad");
+    for (size_t row = 0; row < table.num_rows(); ++row) {
+      odometry.poses.push_back(
+          {table.Double(row, x), table.Double(row, y), WrapAngle(table.Double(row, theta))});
+      odometry.increments.push_back(
+          row == 0 ? OdometryIncrement{}
+                   : IncrementBetween(odometry.poses[row - 1], odometry.poses[row]));
+    }
+  } else if (table.HasColumn("distance_m")) {
+    odometry.kind = OdometryKind::kIncrements;
+    const int distance = table.ColumnIndex("distance_m"), turn = table.ColumnIndex("turn_rad");
+    Pose2 pose;
+    for (size_t row = 0; row < table.num_rows(); ++row) {
+      OdometryIncrement increment{table.Double(row, distance), table.Double(row, turn)};
+      if (row == 0) increment = {};  // nothing happens before the first frame
+      pose = ApplyIncrement(pose, increment);
+      odometry.increments.push_back(increment);
+      odometry.poses.push_back(pose);
+    }
+  } else {
+    throw Error::InFile(path,
+                        "needs columns x_m,y_m,theta_rad (poses) or distance_m,turn_rad "
+                        "(increments)");
+  }
+  return odometry;
+}
+
+void WriteOdometryPoses(const std::vector<Pose2>& poses, const std::string& path) {
+  std::ostringstream out;
+  out << "frame,x_m,y_m,theta_rad\n";
+  for (size_t i = 0; i < poses.size(); ++i)
+    out << i << ',' << CsvNumber(poses[i].x) << ',' << CsvNumber(poses[i].y) << ','
+        << CsvNumber(poses[i].theta) << '\n';
+  WriteTextFileAtomically(path, out.str());
+}
+
+// ---------------------------------------------------------------- frames
+
+namespace {
+
+bool IsImageFile(const fs::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
+  for (const char* known : {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"})
+    if (extension == known) return true;
+  return false;
+}
+
+}  // namespace
+
+FrameSource::FrameSource(const std::string& run_dir) {
+  if (!fs::is_directory(run_dir)) throw Error::InFile(run_dir, "run folder not found");
+  const fs::path frames_dir = fs::path(run_dir) / "frames";
+  if (fs::is_directory(frames_dir)) {
+    for (const auto& entry : fs::directory_iterator(frames_dir))
+      if (entry.is_regular_file() && IsImageFile(entry.path()))
+        image_paths_.push_back(entry.path().string());
+    std::sort(image_paths_.begin(), image_paths_.end());
+    if (image_paths_.empty())
+      throw Error::InFile(frames_dir.string(), "no image files (png, jpg, bmp, tif)");
+    count_ = image_paths_.size();
+    return;
+  }
+  for (const auto& entry : fs::directory_iterator(run_dir))
+    if (entry.is_regular_file() && entry.path().stem() == "video") video_path_ = entry.path().string();
+  if (video_path_.empty())
+    throw Error::InFile(run_dir, "no frames/ folder and no video.* file");
+  cv::VideoCapture capture(video_path_);
+  if (!capture.isOpened()) throw Error::InFile(video_path_, "OpenCV cannot open this video");
+  const double frames = capture.get(cv::CAP_PROP_FRAME_COUNT);
+  if (!(frames > 0)) throw Error::InFile(video_path_, "video has no frames");
+  count_ = static_cast<size_t>(frames);
+}
+
+cv::Mat FrameSource::Read(size_t index) const {
+  if (index >= count_) throw Error("frame index " + std::to_string(index) + " out of range");
+  if (!video_path_.empty()) {
+    cv::VideoCapture capture(video_path_);
+    capture.set(cv::CAP_PROP_POS_FRAMES, static_cast<double>(index));
+    cv::Mat frame;
+    if (!capture.read(frame) || frame.empty())
+      throw Error::InFile(video_path_, "cannot decode frame " + std::to_string(index));
+    return frame;
+  }
+  cv::Mat image = cv::imread(image_paths_[index], cv::IMREAD_COLOR);
+  if (image.empty()) throw Error::InFile(image_paths_[index], "cannot read image (corrupt or not an image)");
+  return image;
+}
+
+std::string FrameSource::Name(size_t index) const {
+  return video_path_.empty() ? image_paths_.at(index) : video_path_;
+}
+
+// ---------------------------------------------------------------- ground truth
+
+namespace {
+
+std::vector<Pose2> ReadTrajectory(const std::string& path) {
+  const CsvTable table = CsvTable::Read(path);
+  CheckFrameColumn(table);
+  const int x = table.ColumnIndex("x_m"), y = table.ColumnIndex("y_m"),
+            theta = table.ColumnIndex("theta_rad");
+  std::vector<Pose2> poses;
+  for (size_t row = 0; row < table.num_rows(); ++row)
+    poses.push_back({table.Double(row, x), table.Double(row, y), table.Double(row, theta)});
+  return poses;
+}
+
+std::vector<GroundTruthObject> ReadObjects(const std::string& path) {
+  const CsvTable table = CsvTable::Read(path);
+  const int id = table.ColumnIndex("id"), cls = table.ColumnIndex("class"),
+            shape = table.ColumnIndex("shape"), x = table.ColumnIndex("x_m"),
+            y = table.ColumnIndex("y_m"), z = table.ColumnIndex("z_m"),
+            diameter = table.ColumnIndex("diameter_m"), height = table.ColumnIndex("height_m"),
+            length = table.ColumnIndex("length_m"), width = table.ColumnIndex("width_m"),
+            yaw = table.ColumnIndex("yaw_rad");
+  std::vector<GroundTruthObject> objects;
+  for (size_t row = 0; row < table.num_rows(); ++row) {
+    GroundTruthObject object;
+    object.id = static_cast<int>(table.Integer(row, id));
+    object.class_name = table.Text(row, cls);
+    object.shape = table.Text(row, shape);
+    object.base_world = {table.Double(row, x), table.Double(row, y), table.Double(row, z)};
+    object.diameter_m = table.Double(row, diameter);
+    object.height_m = table.Double(row, height);
+    object.length_m = table.Double(row, length);
+    object.width_m = table.Double(row, width);
+    object.yaw_rad = table.Double(row, yaw);
+    objects.push_back(object);
+  }
+  return objects;
+}
+
+std::vector<GroundTruthSighting> ReadSightings(const std::string& path) {
+  const CsvTable table = CsvTable::Read(path);
+  const int frame = table.ColumnIndex("frame"), object = table.ColumnIndex("object_id"),
+            ur = table.ColumnIndex("u_r_px"), uphi = table.ColumnIndex("u_phi_rad"),
+            sr = table.ColumnIndex("s_r_px"), sphi = table.ColumnIndex("s_phi_rad"),
+            visible = table.ColumnIndex("visible_fraction");
+  std::vector<GroundTruthSighting> sightings;
+  for (size_t row = 0; row < table.num_rows(); ++row) {
+    sightings.push_back({table.Integer(row, frame), static_cast<int>(table.Integer(row, object)),
+                         table.Double(row, ur), table.Double(row, uphi), table.Double(row, sr),
+                         table.Double(row, sphi), table.Double(row, visible)});
+  }
+  return sightings;
+}
+
+}  // namespace
+
+std::optional<GroundTruth> ReadGroundTruth(const std::string& run_dir) {
+  const fs::path dir = fs::path(run_dir) / "ground_truth";
+  if (!fs::is_directory(dir)) return std::nullopt;
+  GroundTruth truth;
+  truth.trajectory = ReadTrajectory((dir / "trajectory.csv").string());
+  truth.objects = ReadObjects((dir / "objects.csv").string());
+  truth.sightings = ReadSightings((dir / "sightings.csv").string());
+  for (const GroundTruthSighting& sighting : truth.sightings) {
+    const bool known = std::any_of(truth.objects.begin(), truth.objects.end(),
+                                   [&](const auto& o) { return o.id == sighting.object_id; });
+    if (!known)
+      throw Error::InFile((dir / "sightings.csv").string(),
+                          "object_id " + std::to_string(sighting.object_id) + " not in objects.csv");
+  }
+  return truth;
+}
+
+void WriteGroundTruth(const GroundTruth& truth, const std::string& run_dir) {
+  const fs::path dir = fs::path(run_dir) / "ground_truth";
+  WriteOdometryPoses(truth.trajectory, (dir / "trajectory.csv").string());
+
+  std::ostringstream objects;
+  objects << "id,class,shape,x_m,y_m,z_m,diameter_m,height_m,length_m,width_m,yaw_rad\n";
+  for (const GroundTruthObject& o : truth.objects) {
+    objects << o.id << ',' << o.class_name << ',' << o.shape << ',' << CsvNumber(o.base_world.x())
+            << ',' << CsvNumber(o.base_world.y()) << ',' << CsvNumber(o.base_world.z()) << ','
+            << CsvNumber(o.diameter_m) << ',' << CsvNumber(o.height_m) << ','
+            << CsvNumber(o.length_m) << ',' << CsvNumber(o.width_m) << ',' << CsvNumber(o.yaw_rad)
+            << '\n';
+  }
+  WriteTextFileAtomically((dir / "objects.csv").string(), objects.str());
+
+  std::ostringstream sightings;
+  sightings << "frame,object_id,u_r_px,u_phi_rad,s_r_px,s_phi_rad,visible_fraction\n";
+  for (const GroundTruthSighting& s : truth.sightings) {
+    sightings << s.frame << ',' << s.object_id << ',' << CsvNumber(s.u_r_px) << ','
+              << CsvNumber(s.u_phi_rad) << ',' << CsvNumber(s.s_r_px) << ','
+              << CsvNumber(s.s_phi_rad) << ',' << CsvNumber(s.visible_fraction) << '\n';
+  }
+  WriteTextFileAtomically((dir / "sightings.csv").string(), sightings.str());
+}
+
+RunFolderPaths RunFolderPaths::Of(const std::string& run_dir) {
+  const fs::path dir(run_dir);
+  return {run_dir, (dir / "camera.yaml").string(), (dir / "classes.yaml").string(),
+          (dir / "odometry.csv").string(), (dir / "ground_truth").string()};
+}
+
+}  // namespace oslam

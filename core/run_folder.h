@@ -1,0 +1,122 @@
+// The run folder ("video folder") a user points oslam at; format in
+// docs/formats.md. Readers validate everything up front and throw
+// oslam::Error naming the file, line (or key) and problem.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "core/motion_model.h"
+#include "core/pose2.h"
+
+namespace oslam {
+
+// ---- classes.yaml ----
+
+// CMVision-style colour box in YUV (OpenCV's YCrCb order is not used: Y, U, V).
+struct ColourBox {
+  std::array<double, 3> yuv_mean{};
+  std::array<double, 3> yuv_std{};
+  double k_sigma = 3.0;  // box half-width in standard deviations (thesis: 3)
+};
+
+struct ObjectClass {
+  std::string name;
+  std::array<int, 3> display_rgb{128, 128, 128};
+  // Size prior (spec Tables 6.1/6.2): mean and std of diameter and height.
+  double diameter_mean_m = 0.0;
+  double diameter_std_m = 0.0;
+  double height_mean_m = 0.0;
+  double height_std_m = 0.0;
+  std::optional<ColourBox> colour;  // detector settings, once trained
+};
+
+std::vector<ObjectClass> ReadClasses(const std::string& path);
+void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& path);
+// Index of `name`, or -1.
+int FindClass(const std::vector<ObjectClass>& classes, const std::string& name);
+
+// ---- odometry.csv ----
+
+enum class OdometryKind { kPoses, kIncrements };
+
+struct Odometry {
+  OdometryKind kind = OdometryKind::kPoses;
+  // One per frame; increments[0] is zero (nothing before the first frame),
+  // increments[i] takes pose i-1 to pose i.
+  std::vector<OdometryIncrement> increments;
+  // The integrated odometry poses, starting from the first row (poses) or the
+  // origin (increments).
+  std::vector<Pose2> poses;
+};
+
+// Columns "frame,x_m,y_m,theta_rad" (integrated poses) or
+// "frame,distance_m,turn_rad" (increments). Frames must be 0,1,2,... with no
+// gap. When expected_rows >= 0 the row count must equal it.
+Odometry ReadOdometry(const std::string& path, long expected_rows = -1);
+void WriteOdometryPoses(const std::vector<Pose2>& poses, const std::string& path);
+
+// ---- frames ----
+
+// Frames of a run: the images in RUN/frames/ sorted by name (png, jpg, jpeg,
+// bmp, tif, tiff), or else a single video file RUN/video.* read by OpenCV.
+class FrameSource {
+ public:
+  explicit FrameSource(const std::string& run_dir);
+  size_t size() const { return count_; }
+  // Colour (BGR 8-bit) frame i; throws naming the file when it cannot be read.
+  cv::Mat Read(size_t index) const;
+  // File name of frame i (the video file for videos).
+  std::string Name(size_t index) const;
+  bool is_video() const { return !video_path_.empty(); }
+
+ private:
+  std::vector<std::string> image_paths_;
+  std::string video_path_;
+  size_t count_ = 0;
+};
+
+// ---- ground_truth/ (written by the simulator) ----
+
+struct GroundTruthObject {
+  int id = 0;
+  std::string class_name;  // empty for distractors of no class
+  std::string shape;       // cylinder | box | sphere | panel
+  Eigen::Vector3d base_world = Eigen::Vector3d::Zero();
+  double diameter_m = 0.0;  // O-Map cylinder equivalent (boxes: sqrt(L^2 + W^2))
+  double height_m = 0.0;
+  double length_m = 0.0;  // box/panel extents along its own x / y, 0 otherwise
+  double width_m = 0.0;
+  double yaw_rad = 0.0;
+};
+
+struct GroundTruthSighting {
+  long frame = 0;
+  int object_id = 0;
+  double u_r_px = 0, u_phi_rad = 0, s_r_px = 0, s_phi_rad = 0;
+  double visible_fraction = 1.0;  // unoccluded share of the object's image footprint
+};
+
+struct GroundTruth {
+  std::vector<Pose2> trajectory;  // one per frame
+  std::vector<GroundTruthObject> objects;
+  std::vector<GroundTruthSighting> sightings;
+};
+
+// Reads RUN/ground_truth/{trajectory,objects,sightings}.csv; nullopt when the
+// folder is absent.
+std::optional<GroundTruth> ReadGroundTruth(const std::string& run_dir);
+void WriteGroundTruth(const GroundTruth& truth, const std::string& run_dir);
+
+// ---- the whole folder ----
+
+struct RunFolderPaths {
+  std::string dir, camera, classes, odometry, ground_truth;
+  static RunFolderPaths Of(const std::string& run_dir);
+};
+
+}  // namespace oslam
