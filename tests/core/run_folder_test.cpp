@@ -1,1 +1,193 @@
+// Run-folder readers and writers: round trips and one-line errors.
+#include "core/run_folder.h"
+
+#include <filesystem>
+#include <fstream>
+
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/error.h"
+#include "test_util.h"
+
+namespace oslam {
+namespace {
+
+std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
+    return e.what();
+  }
+  return "(no error)";
+}
+
+bool Contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+ObjectClass GreenBox() {
+  ObjectClass c;
+  c.name = "green box";
+  c.display_rgb = {40, 160, 60};
+  c.diameter_mean_m = 0.6;
+  c.diameter_std_m = 0.3;
+  c.height_mean_m = 0.6;
+  c.height_std_m = 0.15;
+  return c;
+}
+
+TEST(Classes, WriteThenReadRoundTrips) {
+  testing::TempDir dir;
+  ObjectClass ball = GreenBox();
+  ball.name = "pink ball";
+  ball.colour = ColourBox{{150, 120, 170}, {8, 3, 4}, 3.0};
+  WriteClasses({GreenBox(), ball}, dir.Path("classes.yaml"));
+  const std::vector<ObjectClass> read = ReadClasses(dir.Path("classes.yaml"));
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_EQ(read[0].name, "green box");
+  EXPECT_EQ(read[0].display_rgb, (std::array<int, 3>{40, 160, 60}));
+  EXPECT_DOUBLE_EQ(read[0].height_std_m, 0.15);
+  EXPECT_FALSE(read[0].colour.has_value());
+  ASSERT_TRUE(read[1].colour.has_value());
+  EXPECT_DOUBLE_EQ(read[1].colour->yuv_mean[2], 170);
+  EXPECT_EQ(FindClass(read, "pink ball"), 1);
+  EXPECT_EQ(FindClass(read, "unicorn"), -1);
+}
+
+TEST(Classes, BadFilesAreReportedWithTheKey) {
+  testing::TempDir dir;
+  const std::string path = dir.Path("classes.yaml");
+  const std::string good =
+      "classes:\n  - name: door\n    display_rgb: [255, 128, 0]\n    diameter_mean_m: 1.0\n"
+      "    diameter_std_m: 0.3\n    height_mean_m: 2.2\n    height_std_m: 0.5\n";
+  auto error_for = [&](const std::string& text) {
+    std::ofstream(path) << text;
+    return ErrorOf([&] { ReadClasses(path); });
+  };
+  std::ofstream(path) << good;
+  EXPECT_EQ(ReadClasses(path).at(0).name, "door");
+  EXPECT_EQ(error_for(good + "    size: 3\n"),
+            path + ": classes[0].size: unknown key (allowed: name, display_rgb, diameter_mean_m, "
+                   "diameter_std_m, height_mean_m, height_std_m, colour)");
+  EXPECT_EQ(error_for(good + good.substr(9)),
+            path + ": classes[1].name: duplicate class 'door'");
+  EXPECT_TRUE(Contains(error_for("classes: []\n"), "no classes listed"));
+  std::string negative = good;
+  negative.replace(negative.find("0.5"), 3, "-0.5");
+  EXPECT_EQ(error_for(negative), path + ": classes[0].height_std_m: must be positive");
+  std::string no_colour = good;
+  no_colour.replace(no_colour.find("[255, 128, 0]"), 13, "[255, 128]");
+  EXPECT_EQ(error_for(no_colour), path + ": classes[0].display_rgb: expected 3 numbers, found 2");
+}
+
+TEST(Odometry, PosesAndIncrementsGiveTheSamePoses) {
+  testing::TempDir dir;
+  std::vector<Pose2> truth = {{0, 0, 0}};
+  for (const OdometryIncrement step : {OdometryIncrement{0.2, 0}, OdometryIncrement{0, 0.17},
+                                       OdometryIncrement{0.2, 0}, OdometryIncrement{-0.2, 0}})
+    truth.push_back(ApplyIncrement(truth.back(), step));
+  WriteOdometryPoses(truth, dir.Path("poses.csv"));
+  const Odometry from_poses = ReadOdometry(dir.Path("poses.csv"), 5);
+  EXPECT_EQ(from_poses.kind, OdometryKind::kPoses);
+
+  std::ofstream increments(dir.Path("increments.csv"));
+  increments << "frame,distance_m,turn_rad\n";
+  for (size_t i = 0; i < from_poses.increments.size(); ++i)
+    increments << i << ',' << from_poses.increments[i].distance_m << ','
+               << from_poses.increments[i].turn_rad << '\n';
+  increments.close();
+  const Odometry from_increments = ReadOdometry(dir.Path("increments.csv"));
+  EXPECT_EQ(from_increments.kind, OdometryKind::kIncrements);
+  ASSERT_EQ(from_increments.poses.size(), 5u);
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_NEAR(from_increments.poses[i].x, truth[i].x, 1e-12);
+    EXPECT_NEAR(from_increments.poses[i].y, truth[i].y, 1e-12);
+    EXPECT_NEAR(from_increments.poses[i].theta, truth[i].theta, 1e-12);
+  }
+  EXPECT_NEAR(from_poses.increments[2].turn_rad, 0.17, 1e-12);
+  EXPECT_NEAR(from_poses.increments[4].distance_m, -0.2, 1e-12);
+}
+
+TEST(Odometry, BadFilesAreReportedWithTheLine) {
+  testing::TempDir dir;
+  const std::string path = dir.Path("odometry.csv");
+  auto error_for = [&](const std::string& text, long rows = -1) {
+    std::ofstream(path) << text;
+    return ErrorOf([&] { ReadOdometry(path, rows); });
+  };
+  const std::string header = "frame,x_m,y_m,theta_rad\n";
+  EXPECT_EQ(error_for(header + "0,0,0,0\n2,0,0,0\n"),
+            path + ":3: expected frame 1, found 2 (rows must be frames 0,1,2,... in order)");
+  EXPECT_EQ(error_for(header + "0,0,0,0\n1,nan,0,0\n"),
+            path + ":3: column 'x_m': value is NaN or infinite");
+  EXPECT_EQ(error_for(header + "0,0,0,0\n1,0,0,0\n", 3),
+            path + ": has 2 rows but the run has 3 frames");
+  EXPECT_EQ(error_for(header), path + ": no odometry rows");
+  EXPECT_TRUE(Contains(error_for("frame,a,b\n0,1,2\n"), "needs columns x_m,y_m,theta_rad"));
+  EXPECT_EQ(error_for(header + "0,0,0\n"), path + ":2: expected 4 fields as in the header, found 3");
+}
+
+TEST(Frames, ImagesAreSortedByNameAndBadImagesNamed) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir.Path("frames"));
+  const cv::Mat image(4, 6, CV_8UC3, cv::Scalar(10, 20, 30));
+  cv::imwrite(dir.Path("frames/000002.png"), image);
+  cv::imwrite(dir.Path("frames/000001.png"), image * 2);
+  std::ofstream(dir.Path("frames/000003.jpg")) << "not a jpeg";
+  std::ofstream(dir.Path("frames/notes.txt")) << "ignored";
+  const FrameSource frames(dir.Path());
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames.Read(0).at<cv::Vec3b>(0, 0), cv::Vec3b(20, 40, 60));
+  EXPECT_EQ(frames.Read(1).cols, 6);
+  EXPECT_EQ(ErrorOf([&] { frames.Read(2); }),
+            dir.Path("frames/000003.jpg") + ": cannot read image (corrupt or not an image)");
+}
+
+TEST(Frames, MissingOrEmptyFoldersAreReported) {
+  testing::TempDir dir;
+  EXPECT_EQ(ErrorOf([&] { FrameSource frames(dir.Path("absent")); }),
+            dir.Path("absent") + ": run folder not found");
+  EXPECT_EQ(ErrorOf([&] { FrameSource frames(dir.Path()); }),
+            dir.Path() + ": no frames/ folder and no video.* file");
+  std::filesystem::create_directories(dir.Path("frames"));
+  EXPECT_EQ(ErrorOf([&] { FrameSource frames(dir.Path()); }),
+            dir.Path("frames") + ": no image files (png, jpg, bmp, tif)");
+}
+
+TEST(GroundTruth, WriteThenReadRoundTrips) {
+  testing::TempDir dir;
+  EXPECT_FALSE(ReadGroundTruth(dir.Path()).has_value());
+  GroundTruth truth;
+  truth.trajectory = {{0, 0, 0}, {0.2, 0.01, 0.1}};
+  GroundTruthObject box;
+  box.id = 7;
+  box.class_name = "green box";
+  box.shape = "box";
+  box.base_world = {1.5, -0.5, 0};
+  box.length_m = 0.49;
+  box.width_m = 0.47;
+  box.diameter_m = std::hypot(0.49, 0.47);
+  box.height_m = 0.57;
+  box.yaw_rad = 0.3;
+  truth.objects = {box};
+  truth.sightings = {{1, 7, 120.5, -0.4, 30.25, 0.3, 0.8}};
+  WriteGroundTruth(truth, dir.Path());
+  const std::optional<GroundTruth> read = ReadGroundTruth(dir.Path());
+  ASSERT_TRUE(read.has_value());
+  ASSERT_EQ(read->objects.size(), 1u);
+  EXPECT_EQ(read->objects[0].class_name, "green box");
+  EXPECT_EQ(read->objects[0].base_world, box.base_world);
+  EXPECT_EQ(read->objects[0].diameter_m, box.diameter_m);
+  ASSERT_EQ(read->sightings.size(), 1u);
+  EXPECT_EQ(read->sightings[0].s_r_px, 30.25);
+  EXPECT_EQ(read->trajectory[1].theta, 0.1);
+
+  std::ofstream(dir.Path("ground_truth/sightings.csv"), std::ios::app) << "1,8,1,1,1,1,1\n";
+  EXPECT_EQ(ErrorOf([&] { ReadGroundTruth(dir.Path()); }),
+            dir.Path("ground_truth/sightings.csv") + ": object_id 8 not in objects.csv");
+}
+
+}  // namespace
+}  // namespace oslam
