@@ -1,0 +1,50 @@
+# Shared by scripts/quickstart.sh and scripts/test.sh: install the Debian
+# packages that are missing (and only those), then configure and build.
+# Idempotent: a second run with nothing changed installs nothing and rebuilds
+# nothing.
+set -euo pipefail
+
+OSLAM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+OSLAM_BUILD_DIR="${OSLAM_BUILD_DIR:-$OSLAM_ROOT/build}"
+
+# Everything oslam builds against (Debian 12 names).
+OSLAM_PACKAGES=(
+  g++ make cmake pkg-config
+  libeigen3-dev libopencv-dev libsuitesparse-dev
+  libtinygltf-dev libstb-dev libpcl-dev libvtk9-dev
+  libgtest-dev libbenchmark-dev
+)
+
+oslam_log() { printf '[oslam] %s\n' "$*" >&2; }
+
+oslam_install_missing() {
+  local missing=()
+  local package
+  for package in "${OSLAM_PACKAGES[@]}"; do
+    if [[ "$(dpkg-query -W -f='${db:Status-Status}' "$package" 2>/dev/null)" != "installed" ]]; then
+      missing+=("$package")
+    fi
+  done
+  if ((${#missing[@]} == 0)); then
+    return 0
+  fi
+  oslam_log "installing missing packages: ${missing[*]}"
+  local sudo=()
+  if [[ "$(id -u)" != 0 ]]; then sudo=(sudo); fi
+  "${sudo[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends \
+    "${missing[@]}" >/dev/null
+}
+
+oslam_build() {
+  if [[ ! -f "$OSLAM_BUILD_DIR/CMakeCache.txt" ]]; then
+    oslam_log "configuring in $OSLAM_BUILD_DIR"
+    cmake -S "$OSLAM_ROOT" -B "$OSLAM_BUILD_DIR" -DCMAKE_BUILD_TYPE=Release >/dev/null
+  fi
+  oslam_log "building (this takes a few minutes the first time)"
+  cmake --build "$OSLAM_BUILD_DIR" -j "$(nproc)" -- --no-print-directory >"$OSLAM_BUILD_DIR/build.log" 2>&1 || {
+    tail -n 40 "$OSLAM_BUILD_DIR/build.log" >&2
+    oslam_log "build failed; full log in $OSLAM_BUILD_DIR/build.log"
+    return 1
+  }
+}
