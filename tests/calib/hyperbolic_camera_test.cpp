@@ -39,7 +39,8 @@ INSTANTIATE_TEST_SUITE_P(Spec, ImageRadiusVectors,
                                            RadiusVector{"lpa", 1.0, 0.0, 99.63},
                                            RadiusVector{"lpa", 2.0, 0.0, 138.65},
                                            RadiusVector{"lpa", 3.0, 0.3, 172.68},
-                                           RadiusVector{"lpa", 5.0, 1.0, 211.30}));
+                                           RadiusVector{"lpa", 5.0, 1.0, 211.30}),
+    [](const auto& info) { return std::string(info.param.preset) + "_" + std::to_string(info.index); });
 
 TEST(HyperbolicCamera, EccentricityAndHorizonMatchSpecTable) {
   const HyperbolicCamera cogniron = HyperbolicCamera::Preset("cogniron");

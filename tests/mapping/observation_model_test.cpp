@@ -46,7 +46,8 @@ INSTANTIATE_TEST_SUITE_P(
                           {-1, 2, 0},
                           1.0,
                           1.7,
-                          {161.124, 2.05619, 192.642, 0.46295}}));
+                          {161.124, 2.05619, 192.642, 0.46295}}),
+    [](const auto& info) { return std::string(info.param.preset) + "_" + std::to_string(info.index); });
 
 Eigen::VectorXd SliceVector(const CameraModel& camera, const Eigen::VectorXd& x) {
   // x = pose (3), base (3), size (2)
