@@ -1,0 +1,164 @@
+#include "detect/blob_detector.h"
+
+#include <cmath>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/angles.h"
+#include "core/atomic_file.h"
+#include "core/csv.h"
+#include "core/error.h"
+
+namespace oslam {
+
+bool BlobDetectorOptions::Validate(std::string* why) const {
+  if (min_area_px < 1) {
+    if (why) *why = "min_area_px must be at least 1";
+    return false;
+  }
+  if (opening_radius_px < 0 || opening_radius_px > 10) {
+    if (why) *why = "opening_radius_px must be in 0..10";
+    return false;
+  }
+  return true;
+}
+
+BlobDetector::BlobDetector(const CameraModel& camera, const std::vector<ObjectClass>& classes,
+                           const BlobDetectorOptions& options)
+    : classes_(classes), options_(options), classifier_(classes) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("blob detector: " + why);
+  const int width = camera.image_width(), height = camera.image_height();
+  mask_.create(height, width, CV_8UC1);
+  radius_px_.create(height, width, CV_32FC1);
+  angle_rad_.create(height, width, CV_32FC1);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const Eigen::Vector2d pixel(x, y);
+      const PolarPoint polar = camera.PixelToPolar(pixel);
+      radius_px_.at<float>(y, x) = static_cast<float>(polar.radius_px);
+      angle_rad_.at<float>(y, x) = static_cast<float>(polar.angle_rad);
+      mask_.at<uint8_t>(y, x) = (!options.annulus_only || camera.IsInAnnulus(pixel)) ? 255 : 0;
+    }
+  }
+}
+
+std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) const {
+  if (bgr.size() != mask_.size() || bgr.type() != CV_8UC3) {
+    throw Error("frame " + std::to_string(frame) + " is " + std::to_string(bgr.cols) + "x" +
+                std::to_string(bgr.rows) + ", but the camera expects " +
+                std::to_string(mask_.cols) + "x" + std::to_string(mask_.rows) + " colour images");
+  }
+  cv::Mat yuv, class_bits;
+  cv::cvtColor(bgr, yuv, cv::COLOR_BGR2YUV);
+  std::vector<int> counts;
+  classifier_.Classify(yuv, mask_, &class_bits, &counts);
+
+  std::vector<Detection> detections;
+  const cv::Mat kernel = cv::getStructuringElement(
+      cv::MORPH_ELLIPSE, cv::Size(2 * options_.opening_radius_px + 1, 2 * options_.opening_radius_px + 1));
+  for (int c = 0; c < classifier_.num_classes(); ++c) {
+    if (counts[c] < options_.min_area_px) continue;
+    cv::Mat class_mask = (class_bits & cv::Scalar(static_cast<int>(1u << c))) != 0;
+    if (options_.opening_radius_px > 0) cv::morphologyEx(class_mask, class_mask, cv::MORPH_OPEN, kernel);
+    cv::Mat labels, stats, centroids;
+    const int num_labels = cv::connectedComponentsWithStats(class_mask, labels, stats, centroids, 8, CV_32S);
+    for (int label = 1; label < num_labels; ++label) {
+      if (stats.at<int>(label, cv::CC_STAT_AREA) < options_.min_area_px) continue;
+      const cv::Rect box(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
+                         stats.at<int>(label, cv::CC_STAT_WIDTH), stats.at<int>(label, cv::CC_STAT_HEIGHT));
+      detections.push_back(DescribeBlob(labels, label, box, yuv, c, frame));
+    }
+  }
+  return detections;
+}
+
+Detection BlobDetector::DescribeBlob(const cv::Mat& labels, int label, const cv::Rect& box,
+                                     const cv::Mat& yuv, int class_index, long frame) const {
+  std::vector<double> radii, angles;
+  std::array<double, 3> sum{};
+  for (int y = box.y; y < box.y + box.height; ++y) {
+    const int* row = labels.ptr<int>(y);
+    for (int x = box.x; x < box.x + box.width; ++x) {
+      if (row[x] != label) continue;
+      radii.push_back(radius_px_.at<float>(y, x));
+      angles.push_back(angle_rad_.at<float>(y, x));
+      const cv::Vec3b& colour = yuv.at<cv::Vec3b>(y, x);
+      for (int ch = 0; ch < 3; ++ch) sum[ch] += colour[ch];
+    }
+  }
+  Detection detection;
+  detection.frame = frame;
+  detection.class_index = class_index;
+  detection.class_name = classes_[class_index].name;
+  detection.area_px = static_cast<int>(radii.size());
+  detection.slice = SliceOfPolarPoints(radii, angles);
+  // Pixels are unit squares, their centres sampled: widen by half a pixel on
+  // every side so sizes are not biased low.
+  const double pad_angle = 0.5 / std::max(1.0, detection.slice.u_r_px);
+  detection.slice.u_r_px -= 0.5;
+  detection.slice.s_r_px += 1.0;
+  detection.slice.s_phi_rad += 2.0 * pad_angle;
+  const ColourBox& model = *classes_[class_index].colour;
+  double d2 = 0;
+  for (int ch = 0; ch < 3; ++ch) {
+    detection.mean_yuv[ch] = sum[ch] / detection.area_px;
+    const double sigma = std::max(1.0, model.yuv_std[ch]);
+    d2 += std::pow((detection.mean_yuv[ch] - model.yuv_mean[ch]) / sigma, 2);
+  }
+  detection.score = std::exp(-0.5 * d2);
+  return detection;
+}
+
+void WriteDetections(const std::vector<Detection>& detections, const std::string& path) {
+  std::ostringstream out;
+  out << "frame,class,u_r_px,u_phi_rad,s_r_px,s_phi_rad,area_px,mean_y,mean_u,mean_v,score\n";
+  for (const Detection& d : detections) {
+    out << d.frame << ',' << d.class_name << ',' << CsvNumber(d.slice.u_r_px) << ','
+        << CsvNumber(d.slice.u_phi_rad) << ',' << CsvNumber(d.slice.s_r_px) << ','
+        << CsvNumber(d.slice.s_phi_rad) << ',' << d.area_px << ',' << CsvNumber(d.mean_yuv[0])
+        << ',' << CsvNumber(d.mean_yuv[1]) << ',' << CsvNumber(d.mean_yuv[2]) << ','
+        << CsvNumber(d.score) << '\n';
+  }
+  WriteTextFileAtomically(path, out.str());
+}
+
+std::vector<Detection> ReadDetections(const std::string& path,
+                                      const std::vector<ObjectClass>& classes) {
+  const CsvTable table = CsvTable::Read(path);
+  const int frame = table.ColumnIndex("frame"), cls = table.ColumnIndex("class"),
+            ur = table.ColumnIndex("u_r_px"), uphi = table.ColumnIndex("u_phi_rad"),
+            sr = table.ColumnIndex("s_r_px"), sphi = table.ColumnIndex("s_phi_rad");
+  std::vector<Detection> detections;
+  for (size_t row = 0; row < table.num_rows(); ++row) {
+    Detection d;
+    d.frame = table.Integer(row, frame);
+    d.class_name = table.Text(row, cls);
+    d.class_index = FindClass(classes, d.class_name);
+    if (d.class_index < 0)
+      throw Error::AtLine(path, table.line_of_row(row), "unknown class '" + d.class_name + "'");
+    d.slice = {table.Double(row, ur), table.Double(row, uphi), table.Double(row, sr),
+               table.Double(row, sphi)};
+    if (table.HasColumn("area_px")) d.area_px = static_cast<int>(table.Integer(row, table.ColumnIndex("area_px")));
+    if (table.HasColumn("score")) d.score = table.Double(row, table.ColumnIndex("score"));
+    detections.push_back(d);
+  }
+  return detections;
+}
+
+void DrawSlice(cv::Mat* image, const CameraModel& camera, const BoundingSlice& slice,
+               const cv::Scalar& colour, int thickness) {
+  const int steps = std::max(2, static_cast<int>(std::ceil(slice.s_phi_rad / 0.02)));
+  const double begin = slice.u_phi_rad - 0.5 * slice.s_phi_rad;
+  std::vector<cv::Point> outline;
+  auto add = [&](double radius, double angle) {
+    const Eigen::Vector2d p = camera.PolarToPixel({radius, angle});
+    outline.emplace_back(cvRound(p.x()), cvRound(p.y()));
+  };
+  for (int i = 0; i <= steps; ++i) add(slice.u_r_px, begin + slice.s_phi_rad * i / steps);
+  for (int i = steps; i >= 0; --i) add(slice.u_r_px + slice.s_r_px, begin + slice.s_phi_rad * i / steps);
+  cv::polylines(*image, outline, true, colour, thickness, cv::LINE_AA);
+}
+
+}  // namespace oslam

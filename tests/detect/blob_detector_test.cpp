@@ -1,0 +1,171 @@
+// Colour-blob detection on synthetic omnidirectional frames with known slices.
+#include "detect/blob_detector.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "calib/hyperbolic_camera.h"
+#include "core/angles.h"
+#include "core/error.h"
+#include "detect/colour_classifier.h"
+#include "test_util.h"
+
+namespace oslam {
+namespace {
+
+// BGR colours far apart in YUV.
+const cv::Vec3b kGreen(60, 170, 40), kPink(180, 105, 255), kBlue(200, 80, 20);
+
+ObjectClass ClassWithColour(const std::string& name, const cv::Vec3b& bgr, double noise_std) {
+  ObjectClass c;
+  c.name = name;
+  c.diameter_mean_m = c.height_mean_m = 0.3;
+  c.diameter_std_m = c.height_std_m = 0.1;
+  cv::Mat pixel(1, 1, CV_8UC3, cv::Scalar(bgr[0], bgr[1], bgr[2])), yuv;
+  cv::cvtColor(pixel, yuv, cv::COLOR_BGR2YUV);
+  ColourBox box;
+  for (int ch = 0; ch < 3; ++ch) {
+    box.yuv_mean[ch] = yuv.at<cv::Vec3b>(0, 0)[ch];
+    box.yuv_std[ch] = noise_std;
+  }
+  c.colour = box;
+  return c;
+}
+
+// Fills the annular sector of `slice` with `colour` (pixel centres inside).
+void PaintSlice(cv::Mat* image, const CameraModel& camera, const BoundingSlice& slice,
+                const cv::Vec3b& colour) {
+  for (int y = 0; y < image->rows; ++y)
+    for (int x = 0; x < image->cols; ++x) {
+      const PolarPoint p = camera.PixelToPolar({x, y});
+      const double dphi = std::abs(WrapAngle(p.angle_rad - slice.u_phi_rad));
+      if (p.radius_px >= slice.u_r_px && p.radius_px <= slice.u_r_px + slice.s_r_px &&
+          dphi <= 0.5 * slice.s_phi_rad)
+        image->at<cv::Vec3b>(y, x) = colour;
+    }
+}
+
+struct Scene {
+  HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  std::vector<ObjectClass> classes = {ClassWithColour("green box", kGreen, 4),
+                                      ClassWithColour("pink ball", kPink, 4),
+                                      ClassWithColour("blue ball", kBlue, 4)};
+  std::vector<std::pair<int, BoundingSlice>> truth = {
+      {0, {120.0, 0.5, 40.0, 0.35}},
+      {1, {90.0, -2.0, 15.0, 0.2}},
+      {2, {150.0, kPi - 0.02, 20.0, 0.15}},  // straddles the ±π seam
+  };
+  cv::Mat Render(uint64_t seed) const {
+    cv::Mat image(camera.image_height(), camera.image_width(), CV_8UC3, cv::Scalar(128, 128, 128));
+    for (const auto& [c, slice] : truth) {
+      const ColourBox& box = *classes[c].colour;
+      cv::Mat pixel(1, 1, CV_8UC3, cv::Scalar(box.yuv_mean[0], box.yuv_mean[1], box.yuv_mean[2]));
+      cv::cvtColor(pixel, pixel, cv::COLOR_YUV2BGR);
+      PaintSlice(&image, camera, slice, pixel.at<cv::Vec3b>(0, 0));
+    }
+    cv::Mat noise(image.size(), CV_16SC3);
+    cv::RNG rng(seed);
+    rng.fill(noise, cv::RNG::NORMAL, 0, 2.0);
+    cv::Mat noisy;
+    image.convertTo(noisy, CV_16SC3);
+    noisy += noise;
+    noisy.convertTo(image, CV_8UC3);
+    return image;
+  }
+};
+
+TEST(BlobDetector, FindsEachPaintedSliceWithItsClassAndExtent) {
+  const Scene scene;
+  const BlobDetector detector(scene.camera, scene.classes);
+  const std::vector<Detection> detections = detector.Detect(scene.Render(7), 3);
+  ASSERT_EQ(detections.size(), scene.truth.size());
+  for (const auto& [c, slice] : scene.truth) {
+    const auto it = std::find_if(detections.begin(), detections.end(),
+                                 [&](const Detection& d) { return d.class_index == c; });
+    ASSERT_NE(it, detections.end()) << scene.classes[c].name;
+    EXPECT_EQ(it->frame, 3);
+    EXPECT_EQ(it->class_name, scene.classes[c].name);
+    // Pixel quantisation: within 1 px radially and 1 px of arc angularly.
+    EXPECT_NEAR(it->slice.u_r_px, slice.u_r_px, 1.0);
+    EXPECT_NEAR(it->slice.s_r_px, slice.s_r_px, 1.0);
+    EXPECT_NEAR(WrapAngle(it->slice.u_phi_rad - slice.u_phi_rad), 0.0, 1.0 / slice.u_r_px);
+    EXPECT_NEAR(it->slice.s_phi_rad, slice.s_phi_rad, 1.5 / slice.u_r_px);
+    EXPECT_GT(it->score, 0.5);
+  }
+}
+
+TEST(BlobDetector, IgnoresColourOutsideTheMirrorAnnulusAndTinyBlobs) {
+  const Scene scene;
+  cv::Mat image(scene.camera.image_height(), scene.camera.image_width(), CV_8UC3, cv::Scalar(128, 128, 128));
+  cv::rectangle(image, cv::Rect(0, 0, 40, 40), cv::Scalar(kGreen), cv::FILLED);       // beyond the rim
+  cv::circle(image, cv::Point(320, 240), 20, cv::Scalar(kPink), cv::FILLED);          // blind disc
+  cv::rectangle(image, cv::Rect(400, 240, 3, 3), cv::Scalar(kBlue), cv::FILLED);      // 9 px
+  const BlobDetector detector(scene.camera, scene.classes);
+  EXPECT_TRUE(detector.Detect(image, 0).empty());
+}
+
+TEST(BlobDetector, WrongFrameSizeIsAnError) {
+  const Scene scene;
+  const BlobDetector detector(scene.camera, scene.classes);
+  EXPECT_THROW(detector.Detect(cv::Mat(10, 10, CV_8UC3), 0), Error);
+  BlobDetectorOptions bad;
+  bad.min_area_px = 0;
+  EXPECT_THROW(BlobDetector(scene.camera, scene.classes, bad), Error);
+}
+
+TEST(ColourModel, LearntBoxRecoversMeanAndSpread) {
+  cv::Mat image(200, 200, CV_8UC3);
+  cv::RNG rng(5);
+  rng.fill(image, cv::RNG::NORMAL, cv::Scalar(100, 150, 80), cv::Scalar(5, 5, 5));
+  const cv::Mat mask(200, 200, CV_8UC1, cv::Scalar(255));
+  const ColourBox box = LearnColourBox({image}, {mask}, 3.0);
+  cv::Mat yuv;
+  cv::cvtColor(cv::Mat(1, 1, CV_8UC3, cv::Scalar(100, 150, 80)), yuv, cv::COLOR_BGR2YUV);
+  for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(box.yuv_mean[ch], yuv.at<cv::Vec3b>(0, 0)[ch], 1.0);
+  EXPECT_GT(box.yuv_std[0], 2.0);  // Y mixes the three channels' noise
+  EXPECT_LT(box.yuv_std[0], 6.0);
+  EXPECT_EQ(box.k_sigma, 3.0);
+}
+
+TEST(ColourConfusion, RowsAreDistributionsWithTheTrueClassMostLikely) {
+  std::vector<ObjectClass> classes = {ClassWithColour("orange door", cv::Vec3b(0, 128, 255), 10),
+                                      ClassWithColour("orange ball", cv::Vec3b(10, 140, 250), 10),
+                                      ClassWithColour("blue ball", kBlue, 4)};
+  const auto confusion = ColourConfusion(classes, 1e-3);
+  for (size_t c = 0; c < classes.size(); ++c) {
+    double total = 0;
+    for (size_t a = 0; a < classes.size(); ++a) {
+      total += confusion[c][a];
+      EXPECT_GE(confusion[c][a], 1e-3 * 0.99);
+      if (a != c) {
+        EXPECT_GT(confusion[c][c], confusion[c][a]);
+      }
+    }
+    EXPECT_NEAR(total, 1.0, 1e-12);
+  }
+  // Look-alike oranges confuse each other far more than orange and blue do.
+  EXPECT_GT(confusion[0][1], 0.05);
+  EXPECT_LT(confusion[0][2], 0.002);
+}
+
+TEST(Detections, CsvRoundTripAndUnknownClass) {
+  const Scene scene;
+  const BlobDetector detector(scene.camera, scene.classes);
+  const std::vector<Detection> detections = detector.Detect(scene.Render(1), 12);
+  testing::TempDir dir;
+  WriteDetections(detections, dir.Path("detections.csv"));
+  const std::vector<Detection> read = ReadDetections(dir.Path("detections.csv"), scene.classes);
+  ASSERT_EQ(read.size(), detections.size());
+  for (size_t i = 0; i < read.size(); ++i) {
+    EXPECT_EQ(read[i].frame, 12);
+    EXPECT_EQ(read[i].class_index, detections[i].class_index);
+    EXPECT_EQ(read[i].slice.s_phi_rad, detections[i].slice.s_phi_rad);
+  }
+  std::vector<ObjectClass> fewer = {scene.classes[0]};
+  EXPECT_THROW(ReadDetections(dir.Path("detections.csv"), fewer), Error);
+}
+
+}  // namespace
+}  // namespace oslam
