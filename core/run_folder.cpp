@@ -67,7 +67,7 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
 
 std::vector<ObjectClass> ReadClasses(const std::string& path) {
   YamlFile file(path);
-  file.RequireOnlyKeys(file.root(), "", {"classes"});
+  file.RequireOnlyKeys(file.root(), "", {"classes", "confusion"});
   const cv::FileNode list = file.Seq(file.root(), "classes");
   if (list.size() == 0) file.Fail("classes", "no classes listed");
   std::vector<ObjectClass> classes;
@@ -81,7 +81,37 @@ std::vector<ObjectClass> ReadClasses(const std::string& path) {
   return classes;
 }
 
-void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& path) {
+std::optional<ConfusionMatrix> ReadConfusion(const std::string& path) {
+  const size_t num_classes = ReadClasses(path).size();
+  YamlFile file(path);
+  const cv::FileNode node = file.root()["confusion"];
+  if (node.empty() || node.isNone()) return std::nullopt;
+  if (!node.isSeq() || node.size() != num_classes)
+    file.Fail("confusion", "must be a list of " + std::to_string(num_classes) + " rows, one per class");
+  ConfusionMatrix matrix;
+  for (size_t c = 0; c < num_classes; ++c) {
+    const std::string key = "confusion[" + std::to_string(c) + "]";
+    const cv::FileNode row = node[static_cast<int>(c)];
+    if (!row.isSeq() || row.size() != num_classes)
+      file.Fail(key, "must list " + std::to_string(num_classes) + " probabilities");
+    std::vector<double> probabilities;
+    double total = 0;
+    for (size_t a = 0; a < num_classes; ++a) {
+      const cv::FileNode value = row[static_cast<int>(a)];
+      const double p = static_cast<double>(value);
+      if ((!value.isReal() && !value.isInt()) || !(p >= 0.0 && p <= 1.0))
+        file.Fail(key, "entries must be probabilities in [0, 1]");
+      probabilities.push_back(p);
+      total += p;
+    }
+    if (std::abs(total - 1.0) > 1e-6) file.Fail(key, "must sum to 1, sums to " + std::to_string(total));
+    matrix.push_back(std::move(probabilities));
+  }
+  return matrix;
+}
+
+void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& path,
+                  const std::optional<ConfusionMatrix>& confusion) {
   WriteAtomically(path, [&](const std::string& temp_path) {
     cv::FileStorage fs(temp_path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
     if (!fs.isOpened()) throw Error::InFile(path, "cannot open for writing");
@@ -102,6 +132,11 @@ void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& pa
       fs << "}";
     }
     fs << "]";
+    if (confusion) {
+      fs << "confusion" << "[";
+      for (const std::vector<double>& row : *confusion) fs << row;
+      fs << "]";
+    }
     fs.release();
   });
 }

@@ -35,8 +35,16 @@ struct ObjectClass {
   std::optional<ColourBox> colour;  // detector settings, once trained
 };
 
+// P(detected class a | true class c) as matrix[c][a], rows in the order of
+// the classes (spec §7.1); stored under `confusion:` in classes.yaml.
+using ConfusionMatrix = std::vector<std::vector<double>>;
+
 std::vector<ObjectClass> ReadClasses(const std::string& path);
-void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& path);
+// The optional confusion matrix of classes.yaml: N rows of N probabilities
+// summing to 1 (checked), N = number of classes.
+std::optional<ConfusionMatrix> ReadConfusion(const std::string& path);
+void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& path,
+                  const std::optional<ConfusionMatrix>& confusion = std::nullopt);
 // Index of `name`, or -1.
 int FindClass(const std::vector<ObjectClass>& classes, const std::string& name);
 

@@ -191,3 +191,31 @@ TEST(GroundTruth, WriteThenReadRoundTrips) {
 
 }  // namespace
 }  // namespace oslam
+
+namespace oslam {
+namespace {
+
+TEST(Classes, ConfusionMatrixRoundTripsAndIsChecked) {
+  testing::TempDir dir;
+  ObjectClass door = GreenBox();
+  door.name = "orange door";
+  const ConfusionMatrix confusion = {{0.9, 0.1}, {0.25, 0.75}};
+  WriteClasses({GreenBox(), door}, dir.Path("classes.yaml"), confusion);
+  EXPECT_EQ(ReadClasses(dir.Path("classes.yaml")).size(), 2u);
+  const std::optional<ConfusionMatrix> read = ReadConfusion(dir.Path("classes.yaml"));
+  ASSERT_TRUE(read.has_value());
+  EXPECT_EQ(*read, confusion);
+
+  WriteClasses({GreenBox(), door}, dir.Path("plain.yaml"));
+  EXPECT_FALSE(ReadConfusion(dir.Path("plain.yaml")).has_value());
+
+  WriteClasses({GreenBox(), door}, dir.Path("bad.yaml"), ConfusionMatrix{{0.9, 0.2}, {0.25, 0.75}});
+  EXPECT_EQ(ErrorOf([&] { ReadConfusion(dir.Path("bad.yaml")); }),
+            dir.Path("bad.yaml") + ": confusion[0]: must sum to 1, sums to 1.100000");
+  WriteClasses({GreenBox(), door}, dir.Path("short.yaml"), ConfusionMatrix{{1.0}});
+  EXPECT_EQ(ErrorOf([&] { ReadConfusion(dir.Path("short.yaml")); }),
+            dir.Path("short.yaml") + ": confusion: must be a list of 2 rows, one per class");
+}
+
+}  // namespace
+}  // namespace oslam
