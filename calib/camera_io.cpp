@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include "calib/hyperbolic_camera.h"
+#include "calib/mei_camera.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/yaml.h"
@@ -15,12 +16,15 @@ namespace oslam {
 std::unique_ptr<CameraModel> CreateCameraModel(const std::string& model_name) {
   // The one place camera models are registered.
   if (model_name == HyperbolicCamera::kModelName) return std::make_unique<HyperbolicCamera>();
+  if (model_name == MeiCamera::kModelName) return std::make_unique<MeiCamera>();
   std::string known;
   for (const auto& name : CameraModelNames()) known += (known.empty() ? "" : ", ") + name;
   throw Error("unknown camera model '" + model_name + "' (known: " + known + ")");
 }
 
-std::vector<std::string> CameraModelNames() { return {HyperbolicCamera::kModelName}; }
+std::vector<std::string> CameraModelNames() {
+  return {HyperbolicCamera::kModelName, MeiCamera::kModelName};
+}
 
 std::unique_ptr<CameraModel> LoadCamera(const std::string& path) {
   YamlFile file(path);
