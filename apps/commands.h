@@ -18,5 +18,8 @@ const std::vector<Command>& Commands();
 
 // One function per subcommand, each in its own file.
 int RunCameraCommand(const std::vector<std::string>& args);
+int RunDetectCommand(const std::vector<std::string>& args);
+int RunTrainColorsCommand(const std::vector<std::string>& args);
+int RunSimulateCommand(const std::vector<std::string>& args);
 
 }  // namespace oslam

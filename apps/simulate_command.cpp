@@ -1,0 +1,81 @@
+// oslam simulate: render a scene into a run folder with ground truth.
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "apps/arguments.h"
+#include "apps/commands.h"
+#include "core/error.h"
+#include "samples/scene.h"
+#include "samples/simulator.h"
+
+namespace oslam {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A folder that already holds frames would mix two runs: refuse it.
+void CheckOutputFolder(const std::string& run_dir) {
+  if (fs::exists(run_dir) && !fs::is_directory(run_dir))
+    throw Error::InFile(run_dir, "exists and is not a folder");
+  const fs::path frames = fs::path(run_dir) / "frames";
+  if (fs::is_directory(frames) && !fs::is_empty(frames))
+    throw Error::InFile(run_dir, "already holds a run (frames/ is not empty); choose a new folder");
+}
+
+// Progress on stderr: updates overwrite one line on a terminal, and only the
+// final line of each stage is printed otherwise (logs stay short).
+void PrintProgress(const std::string& line, bool final) {
+  static const bool terminal = ::isatty(STDERR_FILENO) != 0;
+  if (terminal) {
+    std::fprintf(stderr, "\r\033[K%s%s", line.c_str(), final ? "\n" : "");
+  } else if (final) {
+    std::fprintf(stderr, "%s\n", line.c_str());
+  }
+  std::fflush(stderr);
+}
+
+}  // namespace
+
+int RunSimulateCommand(const std::vector<std::string>& args) {
+  Arguments arguments("oslam simulate SCENE.yaml -o RUN_DIR [options]",
+                      "Renders a simulated omnidirectional robot run (frames, odometry, camera,\n"
+                      "classes and ground truth) from a scene file; see docs/simulator.md.");
+  arguments.AddPositional("scene", "scene file (e.g. samples/scenes/lab.yaml)");
+  arguments.AddOption("output", "-o", "RUN_DIR", "run folder to write (new or empty)");
+  arguments.AddOption("seed", "", "N", "random seed (default: the scene's seed)");
+  arguments.AddOption("frames", "", "N", "render at most N frames (default: the whole path)");
+  arguments.AddFlag("quiet", "print nothing but errors");
+  if (!arguments.Parse(args)) return 0;
+  if (!arguments.Has("output")) throw UsageError("missing -o RUN_DIR");
+  const std::string run_dir = arguments.Get("output");
+
+  const Scene scene = LoadScene(arguments.Get("scene"));
+  SimulationOptions options;
+  options.seed = scene.seed;
+  if (arguments.Has("seed")) {
+    const long seed = arguments.GetInt("seed");
+    if (seed < 0) throw UsageError("--seed must not be negative");
+    options.seed = static_cast<std::uint64_t>(seed);
+  }
+  if (arguments.Has("frames")) {
+    options.max_frames = arguments.GetInt("frames");
+    if (options.max_frames < 1) throw UsageError("--frames must be at least 1");
+  }
+  CheckOutputFolder(run_dir);
+  const bool quiet = arguments.Flag("quiet");
+  if (!quiet) {
+    options.progress = PrintProgress;
+    std::fprintf(stderr,
+                 "scene %s: %zu objects, %zu walls, %zu classes, camera %s %dx%d, seed %llu\n",
+                 scene.name.c_str(), scene.objects.size(), scene.walls.size(), scene.classes.size(),
+                 scene.camera_description.c_str(), scene.camera->image_width(),
+                 scene.camera->image_height(), static_cast<unsigned long long>(options.seed));
+  }
+  Simulate(scene, run_dir, options);
+  return 0;
+}
+
+}  // namespace oslam

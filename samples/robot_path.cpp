@@ -1,0 +1,122 @@
+#include "samples/robot_path.h"
+
+#include <cctype>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+
+#include "core/error.h"
+
+namespace oslam {
+
+MotionNoiseOptions ScaledNoise(const OdometryNoise& noise) {
+  MotionNoiseOptions options = noise.model;
+  // Variances scale with the square of a standard-deviation factor.
+  const double factor = options.entries_are_variances ? noise.scale * noise.scale : noise.scale;
+  options.additive_std *= factor;
+  options.multiplicative *= factor;
+  return options;
+}
+
+Eigen::Vector3d SampleMotionError(double previous_heading_rad, const OdometryIncrement& increment,
+                                  const OdometryNoise& noise, std::mt19937_64& rng) {
+  if (noise.scale == 0.0) return Eigen::Vector3d::Zero();
+  const Eigen::Matrix3d q = MotionCovariance(previous_heading_rad, increment, ScaledNoise(noise));
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::Vector3d standard;
+  for (int k = 0; k < 3; ++k) standard[k] = normal(rng);
+  return q.llt().matrixL() * standard;
+}
+
+namespace {
+
+// Appends one stop-and-go step: the true robot moves by the command plus the
+// motion error, the odometry reports the command.
+void Step(const OdometryIncrement& command, const OdometryNoise& noise, std::mt19937_64& rng,
+          DrivenPath* path) {
+  const Pose2& previous = path->true_poses.back();
+  const Eigen::Vector3d error = SampleMotionError(previous.theta, command, noise, rng);
+  path->true_poses.push_back(Pose2::FromVector(ApplyIncrement(previous, command).Vector() + error));
+  path->increments.push_back(command);
+  path->odometry_poses.push_back(ApplyIncrement(path->odometry_poses.back(), command));
+}
+
+bool Full(const DrivenPath& path, long max_frames) {
+  return max_frames > 0 && static_cast<long>(path.true_poses.size()) >= max_frames;
+}
+
+void RunCommands(const PathSpec& spec, const OdometryNoise& noise, long max_frames,
+                 std::mt19937_64& rng, DrivenPath* path) {
+  const std::string& text = spec.commands;
+  size_t i = 0;
+  while (i < text.size() && !Full(*path, max_frames)) {
+    const char letter = text[i++];
+    if (letter == ' ' || letter == ',') continue;
+    long count = 0;
+    while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i])))
+      count = count * 10 + (text[i++] - '0');
+    if (count == 0) count = 1;
+    OdometryIncrement command;
+    if (letter == 'F') command.distance_m = spec.step_m;
+    if (letter == 'B') command.distance_m = -spec.step_m;
+    if (letter == 'L') command.turn_rad = spec.turn_step_rad;
+    if (letter == 'R') command.turn_rad = -spec.turn_step_rad;
+    for (long k = 0; k < count && !Full(*path, max_frames); ++k) Step(command, noise, rng, path);
+  }
+}
+
+// The driver's choice at the true pose: turn towards the waypoint until it is
+// within half a turn step of straight ahead, then drive one step.
+OdometryIncrement SteerTowards(const Pose2& pose, const Eigen::Vector2d& target,
+                               const PathSpec& spec) {
+  const double bearing = std::atan2(target.y() - pose.y, target.x() - pose.x);
+  const double error = WrapAngle(bearing - pose.theta);
+  OdometryIncrement command;
+  if (std::abs(error) > 0.5 * spec.turn_step_rad)
+    command.turn_rad = error > 0 ? spec.turn_step_rad : -spec.turn_step_rad;
+  else
+    command.distance_m = spec.step_m;
+  return command;
+}
+
+void FollowWaypoints(const PathSpec& spec, const OdometryNoise& noise, long max_frames,
+                     std::mt19937_64& rng, DrivenPath* path) {
+  // Reached = closer than 3/4 step, so one more step cannot overshoot by more.
+  const double reach_m = 0.75 * spec.step_m;
+  double planned_m = 0.0;
+  Eigen::Vector2d from(spec.start.x, spec.start.y);
+  for (const Eigen::Vector2d& w : spec.waypoints) planned_m += (w - from).norm(), from = w;
+  // Generous: a path needing 20x its planned steps plus turning is lost.
+  const long step_limit = 200 + static_cast<long>(20.0 * planned_m / spec.step_m) +
+                          40 * static_cast<long>(spec.waypoints.size());
+  size_t next = 0;
+  while (next < spec.waypoints.size() && !Full(*path, max_frames)) {
+    const Pose2& pose = path->true_poses.back();
+    const Eigen::Vector2d& target = spec.waypoints[next];
+    if (std::hypot(target.x() - pose.x, target.y() - pose.y) < reach_m) {
+      ++next;
+      continue;
+    }
+    if (static_cast<long>(path->true_poses.size()) > step_limit)
+      throw Error("path: waypoint " + std::to_string(next) + " not reached after " +
+                  std::to_string(step_limit) + " steps (step_m too large, or noise too high?)");
+    Step(SteerTowards(pose, target, spec), noise, rng, path);
+  }
+}
+
+}  // namespace
+
+DrivenPath DrivePath(const PathSpec& spec, const OdometryNoise& noise, long max_frames,
+                     std::mt19937_64& rng) {
+  DrivenPath path;
+  path.true_poses.push_back(spec.start);
+  path.increments.push_back(OdometryIncrement{});
+  path.odometry_poses.push_back(spec.start);
+  if (spec.commands.empty())
+    FollowWaypoints(spec, noise, max_frames, rng, &path);
+  else
+    RunCommands(spec, noise, max_frames, rng, &path);
+  return path;
+}
+
+}  // namespace oslam

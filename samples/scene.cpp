@@ -1,0 +1,438 @@
+#include "samples/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "calib/camera_io.h"
+#include "calib/hyperbolic_camera.h"
+#include "core/error.h"
+#include "core/yaml.h"
+
+namespace oslam {
+
+const char* ShapeName(ShapeKind kind) {
+  switch (kind) {
+    case ShapeKind::kCylinder:
+      return "cylinder";
+    case ShapeKind::kBox:
+      return "box";
+    case ShapeKind::kSphere:
+      return "sphere";
+    case ShapeKind::kPanel:
+      return "panel";
+  }
+  return "?";
+}
+
+GroundTruthObject GroundTruthOf(const SceneObject& object, int id) {
+  GroundTruthObject truth;
+  truth.id = id;
+  truth.class_name = object.class_name;
+  truth.shape = ShapeName(object.shape);
+  truth.base_world = {object.position.x(), object.position.y(), object.base_z_m};
+  truth.yaw_rad = object.yaw_rad;
+  switch (object.shape) {
+    case ShapeKind::kCylinder:
+      truth.diameter_m = object.diameter_m;
+      truth.height_m = object.height_m;
+      break;
+    case ShapeKind::kSphere:
+      truth.diameter_m = truth.height_m = object.diameter_m;
+      break;
+    case ShapeKind::kBox:
+      truth.diameter_m = std::hypot(object.length_m, object.width_m);
+      truth.height_m = object.height_m;
+      truth.length_m = object.length_m;
+      truth.width_m = object.width_m;
+      break;
+    case ShapeKind::kPanel:
+      truth.diameter_m = object.length_m;
+      truth.height_m = object.height_m;
+      truth.length_m = object.length_m;
+      break;
+  }
+  return truth;
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Parsing context: the file (for messages) and the folder relative paths start from.
+struct Reader {
+  const YamlFile& file;
+  fs::path folder;
+
+  bool Has(const cv::FileNode& node, const std::string& key) const {
+    const cv::FileNode value = node[key];
+    return !value.empty() && !value.isNone();
+  }
+  double Positive(const cv::FileNode& node, const std::string& key,
+                  const std::string& prefix) const {
+    const double value = file.Double(node, key, prefix);
+    if (!(value > 0)) file.Fail(prefix + key, "must be positive");
+    return value;
+  }
+  double NonNegative(const cv::FileNode& node, const std::string& key, double fallback,
+                     const std::string& prefix) const {
+    const double value = file.OptionalDouble(node, key, fallback, prefix);
+    if (value < 0) file.Fail(prefix + key, "must not be negative");
+    return value;
+  }
+  Eigen::Vector2d Point2(const cv::FileNode& node, const std::string& key,
+                         const std::string& prefix) const {
+    const std::vector<double> v = file.Doubles(node, key, 2, prefix);
+    return {v[0], v[1]};
+  }
+  Eigen::Vector3f Colour(const cv::FileNode& node, const std::string& key,
+                         const std::string& prefix) const {
+    const std::vector<double> rgb = file.Doubles(node, key, 3, prefix);
+    for (double c : rgb)
+      if (c < 0 || c > 255) file.Fail(prefix + key, "entries must be 0..255");
+    return Eigen::Vector3f(rgb[0], rgb[1], rgb[2]) / 255.0f;
+  }
+  cv::FileNode MapOrFail(const cv::FileNode& node, const std::string& key_path) const {
+    if (!node.isMap()) file.Fail(key_path, "must be a mapping of key: value");
+    return node;
+  }
+};
+
+TexturePattern ParsePattern(const Reader& r, const std::string& text, const std::string& key) {
+  if (text == "none") return TexturePattern::kNone;
+  if (text == "checker") return TexturePattern::kChecker;
+  if (text == "stripes") return TexturePattern::kStripes;
+  if (text == "noise") return TexturePattern::kNoise;
+  if (text == "image") return TexturePattern::kImage;
+  r.file.Fail(key, "unknown pattern '" + text + "' (known: none, checker, stripes, noise, image)");
+}
+
+void ParseTexture(const Reader& r, const cv::FileNode& node, const std::string& prefix,
+                  Material* material) {
+  r.MapOrFail(node, prefix.substr(0, prefix.size() - 1));
+  r.file.RequireOnlyKeys(node, prefix, {"pattern", "colour2", "scale_m", "seed", "file", "size_m"});
+  material->pattern = ParsePattern(r, r.file.String(node, "pattern", prefix), prefix + "pattern");
+  if (r.Has(node, "colour2")) material->albedo2_rgb = r.Colour(node, "colour2", prefix);
+  if (r.Has(node, "scale_m")) material->scale_m = r.Positive(node, "scale_m", prefix);
+  material->seed = static_cast<std::uint64_t>(r.file.OptionalInt(node, "seed", 0, prefix));
+  if (material->pattern != TexturePattern::kImage) {
+    if (r.Has(node, "file")) r.file.Fail(prefix + "file", "only used by pattern: image");
+    return;
+  }
+  const std::string name = r.file.String(node, "file", prefix);
+  const std::string image_path = (r.folder / name).string();
+  cv::Mat bgr = cv::imread(image_path, cv::IMREAD_COLOR);
+  if (bgr.empty()) r.file.Fail(prefix + "file", "cannot read image '" + image_path + "'");
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  auto image = std::make_shared<cv::Mat>();
+  rgb.convertTo(*image, CV_32FC3, 1.0 / 255.0);
+  material->image = image;
+  const std::vector<double> size = r.file.Doubles(node, "size_m", 2, prefix);
+  if (!(size[0] > 0 && size[1] > 0)) r.file.Fail(prefix + "size_m", "must be positive");
+  material->image_width_m = size[0];
+  material->image_height_m = size[1];
+}
+
+// Reads "colour" and "texture" of `node` (both optional) into a material.
+Material ParseMaterial(const Reader& r, const cv::FileNode& node, const std::string& prefix,
+                       const Eigen::Vector3f& default_rgb) {
+  Material material;
+  material.albedo_rgb = r.Has(node, "colour") ? r.Colour(node, "colour", prefix) : default_rgb;
+  if (r.Has(node, "texture")) ParseTexture(r, node["texture"], prefix + "texture.", &material);
+  return material;
+}
+
+std::unique_ptr<CameraModel> ParseCamera(const Reader& r, const cv::FileNode& root,
+                                         std::string* description) {
+  const cv::FileNode node = r.file.Map(root, "camera");
+  r.file.RequireOnlyKeys(node, "camera.", {"preset", "file"});
+  if (r.Has(node, "preset") == r.Has(node, "file"))
+    r.file.Fail("camera", "give exactly one of preset (lpa, cogniron) and file");
+  if (r.Has(node, "preset")) {
+    const std::string name = r.file.String(node, "preset", "camera.");
+    *description = "preset " + name;
+    try {
+      return HyperbolicCamera::Preset(name).Clone();
+    } catch (const Error& e) {
+      r.file.Fail("camera.preset", e.what());
+    }
+  }
+  const std::string camera_path = (r.folder / r.file.String(node, "file", "camera.")).string();
+  *description = camera_path;
+  return LoadCamera(camera_path);
+}
+
+std::vector<ObjectClass> ParseClasses(const Reader& r, const cv::FileNode& root) {
+  std::vector<ObjectClass> classes;
+  if (!r.Has(root, "classes")) return classes;
+  const cv::FileNode list = r.file.Seq(root, "classes");
+  for (int i = 0; i < static_cast<int>(list.size()); ++i) {
+    const std::string prefix = "classes[" + std::to_string(i) + "].";
+    const cv::FileNode node = r.MapOrFail(list[i], prefix.substr(0, prefix.size() - 1));
+    r.file.RequireOnlyKeys(node, prefix,
+                           {"name", "display_rgb", "diameter_mean_m", "diameter_std_m",
+                            "height_mean_m", "height_std_m"});
+    ObjectClass c;
+    c.name = r.file.String(node, "name", prefix);
+    if (c.name.empty() || c.name.find(',') != std::string::npos)
+      r.file.Fail(prefix + "name", "must be non-empty and without commas");
+    if (FindClass(classes, c.name) >= 0)
+      r.file.Fail(prefix + "name", "duplicate class '" + c.name + "'");
+    const Eigen::Vector3f rgb = r.Colour(node, "display_rgb", prefix) * 255.0f;
+    for (int k = 0; k < 3; ++k) c.display_rgb[k] = static_cast<int>(std::lround(rgb[k]));
+    c.diameter_mean_m = r.Positive(node, "diameter_mean_m", prefix);
+    c.diameter_std_m = r.Positive(node, "diameter_std_m", prefix);
+    c.height_mean_m = r.Positive(node, "height_mean_m", prefix);
+    c.height_std_m = r.Positive(node, "height_std_m", prefix);
+    classes.push_back(c);
+  }
+  return classes;
+}
+
+// walls: polylines of vertical walls; a gap between two polylines is a doorway.
+std::vector<WallSegment> ParseWalls(const Reader& r, const cv::FileNode& root) {
+  std::vector<WallSegment> walls;
+  if (!r.Has(root, "walls")) return walls;
+  const cv::FileNode list = r.file.Seq(root, "walls");
+  for (int i = 0; i < static_cast<int>(list.size()); ++i) {
+    const std::string prefix = "walls[" + std::to_string(i) + "].";
+    const cv::FileNode node = r.MapOrFail(list[i], prefix.substr(0, prefix.size() - 1));
+    r.file.RequireOnlyKeys(node, prefix, {"points_m", "closed", "height_m", "colour", "texture"});
+    const cv::FileNode points = r.file.Seq(node, "points_m", prefix);
+    std::vector<Eigen::Vector2d> corners;
+    for (int k = 0; k < static_cast<int>(points.size()); ++k) {
+      const std::string key = prefix + "points_m[" + std::to_string(k) + "]";
+      if (!points[k].isSeq() || points[k].size() != 2)
+        r.file.Fail(key, "expected [x, y] in metres");
+      if (!points[k][0].isReal() && !points[k][0].isInt()) r.file.Fail(key, "expected numbers");
+      if (!points[k][1].isReal() && !points[k][1].isInt()) r.file.Fail(key, "expected numbers");
+      corners.emplace_back(static_cast<double>(points[k][0]), static_cast<double>(points[k][1]));
+    }
+    if (corners.size() < 2) r.file.Fail(prefix + "points_m", "needs at least 2 points");
+    const bool closed = r.file.OptionalInt(node, "closed", 0, prefix) != 0;
+    const double height = r.Has(node, "height_m") ? r.Positive(node, "height_m", prefix) : 2.5;
+    const Material material = ParseMaterial(r, node, prefix, {0.75f, 0.75f, 0.72f});
+    const size_t count = closed ? corners.size() : corners.size() - 1;
+    for (size_t k = 0; k < count; ++k) {
+      WallSegment wall{corners[k], corners[(k + 1) % corners.size()], height, material};
+      if ((wall.to - wall.from).norm() < 1e-6)
+        r.file.Fail(prefix + "points_m", "two consecutive points coincide");
+      walls.push_back(wall);
+    }
+  }
+  return walls;
+}
+
+ShapeKind ParseShape(const Reader& r, const std::string& text, const std::string& key) {
+  if (text == "cylinder") return ShapeKind::kCylinder;
+  if (text == "box") return ShapeKind::kBox;
+  if (text == "sphere") return ShapeKind::kSphere;
+  if (text == "panel") return ShapeKind::kPanel;
+  r.file.Fail(key, "unknown shape '" + text + "' (known: cylinder, box, sphere, panel)");
+}
+
+// Which size keys each shape needs; any other size key is an error, so a
+// "width_m" on a cylinder is not silently ignored.
+std::vector<std::string> SizeKeysOf(ShapeKind shape) {
+  switch (shape) {
+    case ShapeKind::kCylinder:
+      return {"diameter_m", "height_m"};
+    case ShapeKind::kSphere:
+      return {"diameter_m"};
+    case ShapeKind::kBox:
+      return {"length_m", "width_m", "height_m"};
+    case ShapeKind::kPanel:
+      return {"length_m", "height_m"};
+  }
+  return {};
+}
+
+SceneObject ParseObject(const Reader& r, const cv::FileNode& node, const std::string& prefix,
+                        const std::vector<ObjectClass>& classes) {
+  const std::vector<std::string> size_keys = {"diameter_m", "length_m", "width_m", "height_m"};
+  r.file.RequireOnlyKeys(node, prefix,
+                         {"class", "shape", "position_m", "base_z_m", "diameter_m", "length_m",
+                          "width_m", "height_m", "yaw_rad", "colour", "texture"});
+  SceneObject object;
+  object.class_name = r.file.OptionalString(node, "class", "", prefix);
+  if (!object.class_name.empty() && FindClass(classes, object.class_name) < 0)
+    r.file.Fail(prefix + "class", "'" + object.class_name + "' is not listed under classes");
+  object.shape = ParseShape(r, r.file.String(node, "shape", prefix), prefix + "shape");
+  object.position = r.Point2(node, "position_m", prefix);
+  object.base_z_m = r.NonNegative(node, "base_z_m", 0.0, prefix);
+  object.yaw_rad = r.file.OptionalDouble(node, "yaw_rad", 0.0, prefix);
+  const std::vector<std::string> needed = SizeKeysOf(object.shape);
+  for (const std::string& key : size_keys) {
+    const bool wanted = std::find(needed.begin(), needed.end(), key) != needed.end();
+    if (!wanted && r.Has(node, key))
+      r.file.Fail(prefix + key, std::string("not used by shape ") + ShapeName(object.shape));
+  }
+  auto size = [&](const std::string& key) {
+    return std::find(needed.begin(), needed.end(), key) != needed.end()
+               ? r.Positive(node, key, prefix)
+               : 0.0;
+  };
+  object.diameter_m = size("diameter_m");
+  object.length_m = size("length_m");
+  object.width_m = size("width_m");
+  object.height_m = object.shape == ShapeKind::kSphere ? object.diameter_m : size("height_m");
+  object.material = ParseMaterial(r, node, prefix, {0.5f, 0.5f, 0.5f});
+  return object;
+}
+
+Lighting ParseLighting(const Reader& r, const cv::FileNode& root) {
+  Lighting lighting;
+  if (!r.Has(root, "lighting")) return lighting;
+  const cv::FileNode node = r.file.Map(root, "lighting");
+  r.file.RequireOnlyKeys(node, "lighting.", {"ambient", "lights"});
+  lighting.ambient = r.NonNegative(node, "ambient", lighting.ambient, "lighting.");
+  if (!r.Has(node, "lights")) return lighting;
+  const cv::FileNode list = r.file.Seq(node, "lights", "lighting.");
+  for (int i = 0; i < static_cast<int>(list.size()); ++i) {
+    const std::string prefix = "lighting.lights[" + std::to_string(i) + "].";
+    const cv::FileNode light_node = r.MapOrFail(list[i], prefix.substr(0, prefix.size() - 1));
+    r.file.RequireOnlyKeys(light_node, prefix, {"position_m", "intensity", "range_m"});
+    PointLight light;
+    const std::vector<double> p = r.file.Doubles(light_node, "position_m", 3, prefix);
+    light.position = {p[0], p[1], p[2]};
+    light.intensity = r.NonNegative(light_node, "intensity", 1.0, prefix);
+    light.range_m = r.NonNegative(light_node, "range_m", 0.0, prefix);
+    lighting.lights.push_back(light);
+  }
+  return lighting;
+}
+
+SensorEffects ParseSensor(const Reader& r, const cv::FileNode& root) {
+  SensorEffects sensor;
+  if (!r.Has(root, "sensor")) return sensor;
+  const cv::FileNode node = r.file.Map(root, "sensor");
+  r.file.RequireOnlyKeys(node, "sensor.", {"noise_std", "blur_sigma_px", "exposure_std", "gain"});
+  sensor.noise_std = r.NonNegative(node, "noise_std", sensor.noise_std, "sensor.");
+  sensor.blur_sigma_px = r.NonNegative(node, "blur_sigma_px", sensor.blur_sigma_px, "sensor.");
+  sensor.exposure_std = r.NonNegative(node, "exposure_std", sensor.exposure_std, "sensor.");
+  sensor.gain = r.NonNegative(node, "gain", sensor.gain, "sensor.");
+  return sensor;
+}
+
+// Command strings are checked here so a typo fails before any rendering.
+void CheckCommands(const Reader& r, const std::string& commands) {
+  for (size_t i = 0; i < commands.size(); ++i) {
+    const char c = commands[i];
+    if (c == ' ' || c == ',' || (c >= '0' && c <= '9')) continue;
+    if (c == 'F' || c == 'B' || c == 'L' || c == 'R') continue;
+    r.file.Fail("path.commands",
+                std::string("unknown command letter '") + c +
+                    "' (use F, B, L, R with an optional repeat count, e.g. F5 L9)");
+  }
+}
+
+PathSpec ParsePath(const Reader& r, const cv::FileNode& root) {
+  const cv::FileNode node = r.file.Map(root, "path");
+  r.file.RequireOnlyKeys(node, "path.",
+                         {"start_pose", "step_m", "turn_step_rad", "waypoints_m", "commands"});
+  PathSpec spec;
+  const std::vector<double> start = r.file.Doubles(node, "start_pose", 3, "path.");
+  spec.start = {start[0], start[1], WrapAngle(start[2])};
+  if (r.Has(node, "step_m")) spec.step_m = r.Positive(node, "step_m", "path.");
+  if (r.Has(node, "turn_step_rad")) spec.turn_step_rad = r.Positive(node, "turn_step_rad", "path.");
+  if (r.Has(node, "waypoints_m") == r.Has(node, "commands"))
+    r.file.Fail("path", "give exactly one of waypoints_m and commands");
+  if (r.Has(node, "commands")) {
+    spec.commands = r.file.String(node, "commands", "path.");
+    CheckCommands(r, spec.commands);
+    return spec;
+  }
+  const cv::FileNode points = r.file.Seq(node, "waypoints_m", "path.");
+  for (int k = 0; k < static_cast<int>(points.size()); ++k) {
+    const std::string key = "path.waypoints_m[" + std::to_string(k) + "]";
+    if (!points[k].isSeq() || points[k].size() != 2 ||
+        !(points[k][0].isReal() || points[k][0].isInt()) ||
+        !(points[k][1].isReal() || points[k][1].isInt())) {
+      r.file.Fail(key, "expected [x, y] in metres");
+    }
+    spec.waypoints.emplace_back(static_cast<double>(points[k][0]),
+                                static_cast<double>(points[k][1]));
+  }
+  if (spec.waypoints.empty()) r.file.Fail("path.waypoints_m", "needs at least one waypoint");
+  return spec;
+}
+
+OdometryNoise ParseOdometry(const Reader& r, const cv::FileNode& root) {
+  OdometryNoise noise;
+  if (!r.Has(root, "odometry")) return noise;
+  const cv::FileNode node = r.file.Map(root, "odometry");
+  r.file.RequireOnlyKeys(node, "odometry.", {"noise_scale", "additive_std", "multiplicative"});
+  noise.scale = r.NonNegative(node, "noise_scale", 1.0, "odometry.");
+  for (const char* key : {"additive_std", "multiplicative"}) {
+    if (!r.Has(node, key)) continue;
+    const std::vector<double> v = r.file.Doubles(node, key, 3, "odometry.");
+    const Eigen::Vector3d vector(v[0], v[1], v[2]);
+    if (std::string(key) == "additive_std")
+      noise.model.additive_std = vector;
+    else
+      noise.model.multiplicative = vector;
+  }
+  std::string why;
+  if (noise.scale > 0 && !noise.model.Validate(&why)) r.file.Fail("odometry", why);
+  return noise;
+}
+
+void ParseSurfaces(const Reader& r, const cv::FileNode& root, Scene* scene) {
+  if (r.Has(root, "floor")) {
+    const cv::FileNode node = r.file.Map(root, "floor");
+    r.file.RequireOnlyKeys(node, "floor.", {"colour", "texture"});
+    scene->floor = ParseMaterial(r, node, "floor.", {0.45f, 0.42f, 0.4f});
+  } else {
+    scene->floor.albedo_rgb = {0.45f, 0.42f, 0.4f};
+  }
+  if (r.Has(root, "ceiling")) {
+    const cv::FileNode node = r.file.Map(root, "ceiling");
+    r.file.RequireOnlyKeys(node, "ceiling.", {"height_m", "colour", "texture"});
+    scene->has_ceiling = true;
+    scene->ceiling_height_m = r.Positive(node, "height_m", "ceiling.");
+    scene->ceiling = ParseMaterial(r, node, "ceiling.", {0.9f, 0.9f, 0.9f});
+  }
+  if (r.Has(root, "background")) scene->background_rgb = r.Colour(root, "background", "");
+}
+
+}  // namespace
+
+Scene LoadScene(const std::string& path) {
+  const YamlFile file(path);
+  const Reader r{file, fs::path(path).parent_path()};
+  const cv::FileNode root = file.root();
+  file.RequireOnlyKeys(root, "",
+                       {"name", "seed", "frames", "camera", "classes", "walls", "floor", "ceiling",
+                        "background", "objects", "lighting", "sensor", "path", "odometry"});
+  Scene scene;
+  scene.path = path;
+  scene.name = file.OptionalString(root, "name", fs::path(path).stem().string());
+  const int seed = file.OptionalInt(root, "seed", 1);
+  if (seed < 0) file.Fail("seed", "must not be negative");
+  scene.seed = static_cast<std::uint64_t>(seed);
+  scene.max_frames = file.OptionalInt(root, "frames", -1);
+  if (r.Has(root, "frames") && scene.max_frames < 1) file.Fail("frames", "must be at least 1");
+  scene.camera = ParseCamera(r, root, &scene.camera_description);
+  scene.classes = ParseClasses(r, root);
+  scene.walls = ParseWalls(r, root);
+  ParseSurfaces(r, root, &scene);
+  if (r.Has(root, "objects")) {
+    const cv::FileNode list = file.Seq(root, "objects");
+    for (int i = 0; i < static_cast<int>(list.size()); ++i) {
+      const std::string prefix = "objects[" + std::to_string(i) + "].";
+      r.MapOrFail(list[i], prefix.substr(0, prefix.size() - 1));
+      scene.objects.push_back(ParseObject(r, list[i], prefix, scene.classes));
+    }
+  }
+  scene.lighting = ParseLighting(r, root);
+  scene.sensor = ParseSensor(r, root);
+  scene.path_spec = ParsePath(r, root);
+  scene.odometry = ParseOdometry(r, root);
+  return scene;
+}
+
+}  // namespace oslam

@@ -1,0 +1,148 @@
+#include "samples/simulator.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "calib/camera_io.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/run_folder.h"
+#include "mapping/observation_model.h"
+#include "samples/renderer.h"
+#include "samples/robot_path.h"
+#include "samples/texture.h"
+
+namespace oslam {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Independent random streams per purpose, so adding a draw to one (say, a new
+// exposure effect) does not change the robot's path for the same seed.
+std::mt19937_64 StreamFor(std::uint64_t seed, std::uint64_t purpose) {
+  std::seed_seq sequence{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
+                         static_cast<std::uint32_t>(purpose)};
+  return std::mt19937_64(sequence);
+}
+
+std::string FramePath(const std::string& run_dir, long frame) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%06ld.png", frame);
+  return (fs::path(run_dir) / "frames" / name).string();
+}
+
+void WriteFrame(const cv::Mat& image, const std::string& path) {
+  WriteAtomically(path, [&](const std::string& temp_path) {
+    // Fast compression: frames are large and noisy, level 1 is within a few % of 9.
+    if (!cv::imwrite(temp_path, image, {cv::IMWRITE_PNG_COMPRESSION, 1}))
+      throw Error::InFile(path, "cannot write PNG");
+  });
+}
+
+// Sightings of one frame: every object with at least one visible pixel whose
+// cylinder-model slice exists (base and top imaged by the mirror).
+void AddSightings(const Scene& scene, const Renderer& renderer, const Pose2& pose, long frame,
+                  const FrameRender& render, const std::vector<GroundTruthObject>& objects,
+                  std::vector<GroundTruthSighting>* sightings) {
+  for (size_t j = 0; j < objects.size(); ++j) {
+    const long visible = render.visible_pixels[j];
+    if (visible == 0) continue;
+    const GroundTruthObject& object = objects[j];
+    BoundingSlice slice;
+    if (!PredictSlice(*scene.camera, pose, {object.base_world, object.diameter_m, object.height_m},
+                      &slice)) {
+      continue;
+    }
+    const long footprint = std::max(visible, renderer.FootprintPixels(pose, static_cast<int>(j)));
+    sightings->push_back({frame, object.id, slice.u_r_px, slice.u_phi_rad, slice.s_r_px,
+                          slice.s_phi_rad, static_cast<double>(visible) / footprint});
+  }
+}
+
+double PathLength(const std::vector<Pose2>& poses) {
+  double length = 0.0;
+  for (size_t i = 1; i < poses.size(); ++i)
+    length += std::hypot(poses[i].x - poses[i - 1].x, poses[i].y - poses[i - 1].y);
+  return length;
+}
+
+}  // namespace
+
+SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
+                           const SimulationOptions& options) {
+  const Clock::time_point start = Clock::now();
+  auto report = [&](const std::string& line, bool final) {
+    if (options.progress) options.progress(line, final);
+  };
+  SimulationSummary summary;
+  const long max_frames = options.max_frames > 0 ? options.max_frames : scene.max_frames;
+
+  std::mt19937_64 path_rng = StreamFor(options.seed, 1);
+  const DrivenPath path = DrivePath(scene.path_spec, scene.odometry, max_frames, path_rng);
+  summary.frames = static_cast<long>(path.true_poses.size());
+  summary.path_length_m = PathLength(path.true_poses);
+  const Pose2& last_truth = path.true_poses.back();
+  const Pose2& last_odometry = path.odometry_poses.back();
+  summary.odometry_final_error_m =
+      std::hypot(last_truth.x - last_odometry.x, last_truth.y - last_odometry.y);
+  char line[256];
+  std::snprintf(line, sizeof(line),
+                "path: %ld frames, %.1f m driven, odometry off by %.2f m at the end",
+                summary.frames, summary.path_length_m, summary.odometry_final_error_m);
+  report(line, true);
+
+  fs::create_directories(fs::path(run_dir) / "frames");
+  SaveCamera(*scene.camera, RunFolderPaths::Of(run_dir).camera);
+  WriteClasses(scene.classes, RunFolderPaths::Of(run_dir).classes);
+
+  GroundTruth truth;
+  truth.trajectory = path.true_poses;
+  for (size_t j = 0; j < scene.objects.size(); ++j)
+    truth.objects.push_back(GroundTruthOf(scene.objects[j], static_cast<int>(j)));
+
+  const Renderer renderer(scene);
+  std::mt19937_64 exposure_rng = StreamFor(options.seed, 2);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  FrameRender render;
+  for (long frame = 0; frame < summary.frames; ++frame) {
+    const Clock::time_point frame_start = Clock::now();
+    FrameConditions conditions;
+    conditions.gain = std::exp(scene.sensor.exposure_std * normal(exposure_rng));
+    conditions.noise_key =
+        MixBits(options.seed * 0x100000001b3ULL + static_cast<std::uint64_t>(frame));
+    renderer.Render(path.true_poses[frame], conditions, &render);
+    AddSightings(scene, renderer, path.true_poses[frame], frame, render, truth.objects,
+                 &truth.sightings);
+    summary.render_seconds += SecondsSince(frame_start);
+    WriteFrame(render.image, FramePath(run_dir, frame));
+    if ((frame + 1) % 10 == 0 || frame + 1 == summary.frames) {
+      std::snprintf(line, sizeof(line), "render: frame %ld/%ld (%.1f frames/s rendering)",
+                    frame + 1, summary.frames,
+                    (frame + 1) / std::max(1e-9, summary.render_seconds));
+      report(line, frame + 1 == summary.frames);
+    }
+  }
+  summary.sightings = static_cast<long>(truth.sightings.size());
+
+  // Odometry and ground truth last: a run folder with odometry.csv is complete.
+  WriteGroundTruth(truth, run_dir);
+  WriteOdometryPoses(path.odometry_poses, RunFolderPaths::Of(run_dir).odometry);
+  summary.total_seconds = SecondsSince(start);
+  std::snprintf(line, sizeof(line), "ground truth: %zu objects, %ld sightings; wrote %s in %.1f s",
+                truth.objects.size(), summary.sightings, run_dir.c_str(), summary.total_seconds);
+  report(line, true);
+  return summary;
+}
+
+}  // namespace oslam

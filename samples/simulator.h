@@ -1,0 +1,35 @@
+// The simulator: drives the robot through a scene, renders every frame and
+// writes a complete run folder (frames/, odometry.csv, camera.yaml,
+// classes.yaml, ground_truth/). Same scene and seed, same bytes.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "samples/scene.h"
+
+namespace oslam {
+
+struct SimulationOptions {
+  std::uint64_t seed = 1;
+  long max_frames = -1;  // -1: the scene's frames (or the whole path)
+  // Called with one line per stage and, during rendering, with progress
+  // updates (final = true for the stage's last line).
+  std::function<void(const std::string& line, bool final)> progress;
+};
+
+struct SimulationSummary {
+  long frames = 0;
+  double path_length_m = 0.0;
+  double odometry_final_error_m = 0.0;  // |odometry - truth| at the last frame
+  long sightings = 0;
+  double render_seconds = 0.0;  // ray casting and ground truth, without PNG writing
+  double total_seconds = 0.0;
+};
+
+// Writes into run_dir (created if needed); each file is written atomically.
+SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
+                           const SimulationOptions& options);
+
+}  // namespace oslam
