@@ -1,0 +1,111 @@
+// oslam detect: colour-blob detections (bounding slices) for every frame of a
+// run folder.
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "apps/arguments.h"
+#include "apps/commands.h"
+#include "calib/camera_io.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "core/run_folder.h"
+#include "detect/blob_detector.h"
+
+namespace oslam {
+namespace {
+
+void SaveDebugImage(const cv::Mat& frame, const std::vector<Detection>& detections,
+                    const CameraModel& camera, const std::vector<ObjectClass>& classes,
+                    const std::string& path) {
+  cv::Mat image = frame.clone();
+  for (const Detection& d : detections) {
+    const auto& rgb = classes[d.class_index].display_rgb;
+    const cv::Scalar colour(rgb[2], rgb[1], rgb[0]);
+    DrawSlice(&image, camera, d.slice, cv::Scalar(255, 255, 255), 3);
+    DrawSlice(&image, camera, d.slice, colour, 1);
+    const Eigen::Vector2d base = camera.PolarToPixel({d.slice.u_r_px, d.slice.u_phi_rad});
+    cv::circle(image, cv::Point(cvRound(base.x()), cvRound(base.y())), 3, cv::Scalar(0, 0, 255),
+               cv::FILLED);
+    cv::putText(image, d.class_name, cv::Point(cvRound(base.x()) + 4, cvRound(base.y()) - 4),
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  }
+  WriteAtomically(path, [&](const std::string& temp) {
+    if (!cv::imwrite(temp, image)) throw Error::InFile(path, "cannot write image");
+  });
+}
+
+}  // namespace
+
+int RunDetectCommand(const std::vector<std::string>& args) {
+  Arguments arguments("oslam detect RUN_DIR [-o detections.csv] [options]",
+                      "Detects objects by colour in every frame of RUN_DIR and writes their "
+                      "bounding slices as CSV.\nNeeds camera.yaml and classes.yaml with colour "
+                      "models (see 'oslam train-colors').");
+  arguments.AddPositional("RUN_DIR", "the run folder");
+  arguments.AddOption("output", "-o", "FILE", "detections CSV", "RUN_DIR/detections.csv");
+  arguments.AddOption("debug-images", "", "DIR", "also write each frame with its slices drawn");
+  arguments.AddOption("min-area", "", "PX", "smallest blob kept, in pixels", "40");
+  arguments.AddOption("opening", "", "PX", "radius of the morphological opening, 0 = off", "1");
+  arguments.AddFlag("skip-bad-frames", "warn about unreadable frames and go on");
+  arguments.AddFlag("quiet", "print nothing but errors");
+  if (!arguments.Parse(args)) return 0;
+
+  const std::string run_dir = arguments.Get("RUN_DIR");
+  const RunFolderPaths paths = RunFolderPaths::Of(run_dir);
+  const std::string output =
+      arguments.Has("output") ? arguments.Get("output") : run_dir + "/detections.csv";
+  BlobDetectorOptions options;
+  options.min_area_px = static_cast<int>(arguments.GetInt("min-area"));
+  options.opening_radius_px = static_cast<int>(arguments.GetInt("opening"));
+  std::string why;
+  if (!options.Validate(&why)) throw UsageError(why);
+  const bool quiet = arguments.Flag("quiet");
+
+  const FrameSource frames(run_dir);
+  const std::unique_ptr<CameraModel> camera = LoadCamera(paths.camera);
+  const std::vector<ObjectClass> classes = ReadClasses(paths.classes);
+  if (std::none_of(classes.begin(), classes.end(), [](const auto& c) { return c.colour.has_value(); }))
+    throw Error::InFile(paths.classes, "no class has a colour model (run 'oslam train-colors' first)");
+  const BlobDetector detector(*camera, classes, options);
+
+  std::vector<Detection> all;
+  size_t skipped = 0;
+  Progress progress("detect", frames.size(), "frames", quiet);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    cv::Mat frame;
+    try {
+      frame = frames.Read(i);
+    } catch (const Error& e) {
+      if (!arguments.Flag("skip-bad-frames")) throw;
+      std::cerr << "oslam detect: warning: skipping frame " << i << ": " << e.what() << "\n";
+      ++skipped;
+      continue;
+    }
+    if (frame.cols != camera->image_width() || frame.rows != camera->image_height())
+      throw Error::InFile(frames.Name(i), "image is " + std::to_string(frame.cols) + "x" +
+                                              std::to_string(frame.rows) + " but camera.yaml says " +
+                                              std::to_string(camera->image_width()) + "x" +
+                                              std::to_string(camera->image_height()));
+    std::vector<Detection> detections = detector.Detect(frame, static_cast<long>(i));
+    if (arguments.Has("debug-images")) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06zu.png", i);
+      SaveDebugImage(frame, detections, *camera, classes,
+                     (std::filesystem::path(arguments.Get("debug-images")) / name).string());
+    }
+    all.insert(all.end(), detections.begin(), detections.end());
+    progress.Update(i + 1);
+  }
+  progress.Done(std::to_string(all.size()) + " detections" +
+                (skipped ? ", " + std::to_string(skipped) + " frames skipped" : ""));
+  WriteDetections(all, output);
+  if (!quiet) std::printf("wrote %s\n", output.c_str());
+  return 0;
+}
+
+}  // namespace oslam

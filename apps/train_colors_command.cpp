@@ -1,0 +1,53 @@
+// oslam train-colors: learn the classes' YUV colour boxes from example regions
+// and store them, with the class-confusion matrix, in classes.yaml.
+#include <cstdio>
+
+#include "apps/arguments.h"
+#include "apps/commands.h"
+#include "core/error.h"
+#include "core/run_folder.h"
+#include "detect/colour_classifier.h"
+#include "detect/colour_training.h"
+
+namespace oslam {
+
+int RunTrainColorsCommand(const std::vector<std::string>& args) {
+  Arguments arguments("oslam train-colors CLASSES.yaml --examples EXAMPLES.yaml [-o OUT.yaml]",
+                      "Learns each class's colour model (YUV mean and standard deviation of its "
+                      "example pixels;\nbox = mean ± k·σ) and the class-confusion matrix, and "
+                      "writes them into classes.yaml.");
+  arguments.AddPositional("CLASSES.yaml", "the classes to train (updated in place unless -o)");
+  arguments.AddOption("examples", "", "EXAMPLES.yaml", "example regions per class (docs/formats.md)");
+  arguments.AddOption("k-sigma", "", "K", "half-width of the colour box in standard deviations", "3");
+  arguments.AddOption("output", "-o", "OUT.yaml", "where to write (default: CLASSES.yaml)");
+  arguments.AddFlag("quiet", "print nothing but errors");
+  if (!arguments.Parse(args)) return 0;
+  if (!arguments.Has("examples")) throw UsageError("--examples is required");
+  const double k_sigma = arguments.GetDouble("k-sigma");
+  if (!(k_sigma > 0)) throw UsageError("--k-sigma must be positive");
+
+  const std::string classes_path = arguments.Get("CLASSES.yaml");
+  const std::vector<ObjectClass> classes = ReadClasses(classes_path);
+  const std::vector<ColourExample> examples =
+      ReadColourExamples(arguments.Get("examples"), classes);
+  const std::vector<ObjectClass> trained = TrainColourModels(classes, examples, k_sigma);
+  const ConfusionMatrix confusion = ColourConfusion(trained);
+  const std::string output = arguments.Has("output") ? arguments.Get("output") : classes_path;
+  WriteClasses(trained, output, confusion);
+  if (!arguments.Flag("quiet")) {
+    for (size_t c = 0; c < trained.size(); ++c) {
+      if (!trained[c].colour) {
+        std::printf("%-16s no colour model\n", trained[c].name.c_str());
+        continue;
+      }
+      const ColourBox& box = *trained[c].colour;
+      std::printf("%-16s YUV mean (%.1f, %.1f, %.1f) std (%.1f, %.1f, %.1f)  P(correct) %.3f\n",
+                  trained[c].name.c_str(), box.yuv_mean[0], box.yuv_mean[1], box.yuv_mean[2],
+                  box.yuv_std[0], box.yuv_std[1], box.yuv_std[2], confusion[c][c]);
+    }
+    std::printf("wrote %s\n", output.c_str());
+  }
+  return 0;
+}
+
+}  // namespace oslam

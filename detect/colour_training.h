@@ -1,0 +1,39 @@
+// Learning class colour boxes from example regions (thesis §6.1.2: mean and
+// 3 standard deviations of each YUV channel over a hand-selected ROI).
+//
+// examples.yaml:
+//   examples:
+//     - image: frames/000012.png   # relative to examples.yaml's folder
+//       class: green box
+//       roi: [x, y, width, height]  # pixels; or
+//       mask: masks/000012_green.png  # non-zero pixels are examples
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "core/run_folder.h"
+
+namespace oslam {
+
+struct ColourExample {
+  std::string image_path;
+  std::string class_name;
+  cv::Rect roi;            // used when mask_path is empty
+  std::string mask_path;
+};
+
+// Throws oslam::Error naming the file and key (unknown class, missing image, ROI
+// outside the image, ...). `classes` are the known classes.
+std::vector<ColourExample> ReadColourExamples(const std::string& path,
+                                              const std::vector<ObjectClass>& classes);
+
+// Returns `classes` with the colour box of every class that has examples
+// replaced by the learnt one (classes without examples keep theirs).
+std::vector<ObjectClass> TrainColourModels(const std::vector<ObjectClass>& classes,
+                                           const std::vector<ColourExample>& examples,
+                                           double k_sigma);
+
+}  // namespace oslam
