@@ -1,0 +1,209 @@
+#include "mapping/geometric_slam.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/angles.h"
+#include "core/error.h"
+#include "mapping/factors.h"
+
+namespace oslam {
+
+bool GeometricSlamOptions::Validate(std::string* why) const {
+  if (!motion.Validate(why)) return false;
+  if (!(pixel_std_px > 0.0) || !std::isfinite(pixel_std_px)) {
+    if (why) *why = "pixel_std_px (E) must be positive";
+    return false;
+  }
+  return solver.Validate(why);
+}
+
+std::vector<Pose2> ComposeOdometry(const Pose2& first,
+                                   const std::vector<OdometryIncrement>& increments) {
+  std::vector<Pose2> poses;
+  poses.reserve(increments.size());
+  for (size_t i = 0; i < increments.size(); ++i)
+    poses.push_back(i == 0 ? first : ApplyIncrement(poses.back(), increments[i]));
+  return poses;
+}
+
+bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
+                                const BoundingSlice& slice, const ClassPrior& prior,
+                                CylinderGeometry* object) {
+  Ray ray;
+  const Eigen::Vector2d pixel = camera.PolarToPixel({slice.u_r_px, slice.u_phi_rad});
+  if (!camera.BackProjectPixel(pixel, &ray)) return false;
+  const double bearing = std::atan2(ray.direction_robot.y(), ray.direction_robot.x());
+  const Eigen::Vector3d direction(std::cos(bearing), std::sin(bearing), 0.0);
+
+  // 1-D search on the range (spec §5.4): the size prior alone gives a range
+  // from s_phi; u_r (at the prior height of the base) and s_r add to it. The
+  // weights are the measurement noise plus the prior's relative spread, in
+  // units that need no camera-specific tuning.
+  const double d = std::max(prior.size_mean_m.x(), 1e-3), h = std::max(prior.size_mean_m.y(), 1e-3);
+  const double rel_d = prior.size_std_m.x() / d, rel_h = prior.size_std_m.y() / h;
+  const double sigma_ur = 30.0;  // px; only the ratio between terms matters here
+  auto cost_at = [&](double range, double* cost) {
+    CylinderGeometry candidate;
+    candidate.base_world =
+        pose.RobotToWorld(direction * range + Eigen::Vector3d(0, 0, prior.location_mean_m.z()));
+    candidate.diameter_m = d;
+    candidate.height_m = h;
+    BoundingSlice predicted;
+    if (!PredictSlice(camera, pose, candidate, &predicted)) return false;
+    const double sigma_sr = std::sqrt(2.0) * sigma_ur + std::abs(slice.s_r_px) * rel_h;
+    const double sigma_sphi =
+        std::sqrt(2.0) * sigma_ur / slice.u_r_px + std::abs(slice.s_phi_rad) * rel_d;
+    *cost = std::pow((predicted.u_r_px - slice.u_r_px) / sigma_ur, 2) +
+            std::pow((predicted.s_r_px - slice.s_r_px) / sigma_sr, 2) +
+            std::pow((predicted.s_phi_rad - slice.s_phi_rad) / sigma_sphi, 2);
+    return std::isfinite(*cost);
+  };
+  double best_range = -1.0, best_cost = 0.0;
+  constexpr int kSteps = 120;
+  const double min_range = 0.1, max_range = 100.0;
+  for (int s = 0; s <= kSteps; ++s) {
+    const double range = min_range * std::pow(max_range / min_range, double(s) / kSteps);
+    double cost;
+    if (cost_at(range, &cost) && (best_range < 0 || cost < best_cost)) {
+      best_range = range;
+      best_cost = cost;
+    }
+  }
+  if (best_range < 0) {
+    // No range gives an image at the prior height: fall back to the size prior.
+    if (!(slice.s_phi_rad > 1e-6)) return false;
+    best_range = std::clamp(d / (2.0 * std::tan(0.5 * slice.s_phi_rad)), min_range, max_range);
+  }
+  object->base_world =
+      pose.RobotToWorld(direction * best_range + Eigen::Vector3d(0, 0, prior.location_mean_m.z()));
+  object->diameter_m = d;
+  object->height_m = h;
+  return true;
+}
+
+GeometricSlam::GeometricSlam(const CameraModel& camera, const GeometricSlamOptions& options)
+    : camera_(camera), options_(options), solver_(options.solver) {}
+
+GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
+                                         const GeometricSlamResult* warm_start) {
+  std::string why;
+  if (!options_.Validate(&why)) throw Error("geometric SLAM options: " + why);
+  const long num_poses = static_cast<long>(problem.increments.size());
+  if (num_poses < 1) throw Error("geometric SLAM: no poses (odometry is empty)");
+  for (const auto& [id, class_index] : problem.object_class)
+    if (class_index < 0 || class_index >= static_cast<int>(problem.classes.size()))
+      throw Error("geometric SLAM: object " + std::to_string(id) + " has an unknown class");
+
+  // Observations per object, in frame order (the first one initialises it).
+  std::map<int, std::vector<const SliceObservation*>> by_object;
+  for (const auto& observation : problem.observations) {
+    if (observation.frame < 0 || observation.frame >= num_poses)
+      throw Error("geometric SLAM: detection in frame " + std::to_string(observation.frame) +
+                  " outside the " + std::to_string(num_poses) + " odometry frames");
+    if (!problem.object_class.count(observation.object_id))
+      throw Error("geometric SLAM: object " + std::to_string(observation.object_id) +
+                  " has no class");
+    by_object[observation.object_id].push_back(&observation);
+  }
+  for (auto& [id, list] : by_object)
+    std::stable_sort(list.begin(), list.end(),
+                     [](const auto* a, const auto* b) { return a->frame < b->frame; });
+
+  // ---- variables and initial values ----
+  FactorGraph graph;
+  std::vector<Pose2> initial_poses =
+      (warm_start && warm_start->trajectory.size() == problem.increments.size())
+          ? warm_start->trajectory
+          : ComposeOdometry(problem.first_pose, problem.increments);
+  initial_poses[0] = problem.first_pose;
+  std::vector<int> pose_keys(num_poses);
+  for (long i = 0; i < num_poses; ++i)
+    pose_keys[i] = graph.AddPose(initial_poses[i].x, initial_poses[i].y, initial_poses[i].theta,
+                                 /*fixed=*/i == 0);  // gauge: x_1 excluded (spec §14)
+
+  std::map<int, const MappedObject*> previous;
+  if (warm_start)
+    for (const auto& object : warm_start->objects) previous[object.id] = &object;
+  struct ObjectKeys {
+    int id, class_index, base, size, count;
+  };
+  std::vector<ObjectKeys> objects;
+  for (const auto& [id, list] : by_object) {
+    const int class_index = problem.object_class.at(id);
+    const ClassPrior& prior = problem.classes[class_index];
+    CylinderGeometry initial;
+    const auto found = previous.find(id);
+    if (found != previous.end() && found->second->class_index == class_index) {
+      initial = found->second->geometry;
+    } else {
+      const SliceObservation& first = *list.front();
+      if (!InitialObjectFromDetection(camera_, initial_poses[first.frame], first.slice, prior,
+                                      &initial)) {
+        // A slice with no ray: start at the prior, the solver will report.
+        initial.base_world = prior.location_mean_m;
+        initial.diameter_m = prior.size_mean_m.x();
+        initial.height_m = prior.size_mean_m.y();
+      }
+    }
+    const int base = graph.AddVariable(initial.base_world);
+    const int size = graph.AddVariable(Eigen::Vector2d(initial.diameter_m, initial.height_m));
+    objects.push_back({id, class_index, base, size, static_cast<int>(list.size())});
+  }
+
+  // ---- factors ----
+  for (long i = 1; i < num_poses; ++i)
+    graph.Emplace<OdometryFactor>(pose_keys[i - 1], pose_keys[i], problem.increments[i],
+                                  options_.motion);
+  for (const auto& object : objects) {
+    const ClassPrior& prior = problem.classes[object.class_index];
+    graph.Add(MakeLocationPrior(object.base, prior.location_mean_m, prior.location_std_m));
+    graph.Add(MakeSizePrior(object.size, prior.size_mean_m, prior.size_std_m));
+    for (const SliceObservation* observation : by_object[object.id])
+      graph.Emplace<BoundingSliceFactor>(&camera_, pose_keys[observation->frame], object.base,
+                                         object.size, observation->slice, options_.pixel_std_px);
+  }
+
+  // ---- solve and read out ----
+  solver_.set_options(options_.solver);
+  const SolveResult solved = solver_.Solve(&graph);
+  GeometricSlamResult result;
+  result.summary = solved.summary;
+  result.evidence = solved.evidence;
+  const Values& values = graph.values();
+  result.trajectory.reserve(num_poses);
+  for (int key : pose_keys) {
+    const double* p = values.Data(key);
+    result.trajectory.push_back({p[0], p[1], p[2]});
+  }
+  for (const auto& object : objects) {
+    MappedObject mapped;
+    mapped.id = object.id;
+    mapped.class_index = object.class_index;
+    mapped.geometry.base_world = values.Get(object.base);
+    mapped.geometry.diameter_m = values.Data(object.size)[0];
+    mapped.geometry.height_m = values.Data(object.size)[1];
+    mapped.num_observations = object.count;
+    result.objects.push_back(mapped);
+  }
+  if (!result.summary.IsUsable()) return result;
+
+  if (options_.compute_object_covariances && !objects.empty()) {
+    std::vector<std::vector<int>> groups;
+    for (const auto& object : objects) groups.push_back({object.base, object.size});
+    std::vector<Eigen::MatrixXd> blocks;
+    if (solver_.MarginalCovariances(groups, &blocks, &result.covariance_message))
+      for (size_t j = 0; j < objects.size(); ++j) result.objects[j].covariance = blocks[j];
+  }
+  if (options_.compute_pose_covariances) {
+    std::vector<std::vector<int>> groups;
+    for (long i = 1; i < num_poses; ++i) groups.push_back({pose_keys[i]});
+    std::vector<Eigen::MatrixXd> blocks;
+    result.pose_covariances.assign(num_poses, Eigen::Matrix3d::Zero());
+    if (groups.empty() || solver_.MarginalCovariances(groups, &blocks, &result.covariance_message))
+      for (size_t i = 0; i < blocks.size(); ++i) result.pose_covariances[i + 1] = blocks[i];
+  }
+  return result;
+}
+
+}  // namespace oslam

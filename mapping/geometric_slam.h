@@ -1,0 +1,113 @@
+// Geometric O-SLAM with known classes and association (spec §5, setup 1):
+// builds the factor graph from odometry and bounding slices, initialises it
+// (poses from odometry, objects from their first detection), solves it, and
+// returns the MAP map, covariances and the Laplace log-evidence (spec §8.2).
+//
+// The same object serves the MCMC (spec §9): Solve() with a `warm_start`
+// reuses the previous estimate for every pose and every object id still
+// present, and the solver keeps its symbolic analysis when the new block
+// pattern fits in the old one.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "calib/camera_model.h"
+#include "core/bounding_slice.h"
+#include "core/motion_model.h"
+#include "core/pose2.h"
+#include "mapping/observation_model.h"
+#include "mapping/sparse_solver.h"
+
+namespace oslam {
+
+// One detection with its association J(i, k) = object_id.
+struct SliceObservation {
+  long frame = 0;
+  int object_id = 0;
+  BoundingSlice slice;
+};
+
+// Class priors (spec §5.1): size g ~ N(size_mean, diag(size_std^2)),
+// location l ~ N(location_mean, diag(location_std^2)).
+struct ClassPrior {
+  std::string name;
+  Eigen::Vector2d size_mean_m{0.3, 0.3};  // (diameter, height)
+  Eigen::Vector2d size_std_m{0.1, 0.1};
+  Eigen::Vector3d location_mean_m = Eigen::Vector3d::Zero();  // gamma(c), spec: 0
+  Eigen::Vector3d location_std_m{10.0, 10.0, 2.0};            // Gamma(c), spec §5.1 [G]
+};
+
+struct GeometricSlamProblem {
+  // increments[i] takes pose i-1 to pose i; increments[0] is ignored. Its
+  // size is the number of poses T.
+  std::vector<OdometryIncrement> increments;
+  std::vector<SliceObservation> observations;
+  std::vector<ClassPrior> classes;
+  std::map<int, int> object_class;  // object id -> index into classes
+  Pose2 first_pose;                 // x_1, clamped (spec §3.4)
+};
+
+struct GeometricSlamOptions {
+  MotionNoiseOptions motion;
+  double pixel_std_px = 30.0;  // E of spec §4.2 (thesis: 30 px)
+  SolverOptions solver;
+  bool compute_object_covariances = true;
+  bool compute_pose_covariances = false;
+
+  bool Validate(std::string* why) const;
+};
+
+struct MappedObject {
+  int id = 0;
+  int class_index = 0;
+  CylinderGeometry geometry;
+  // Joint covariance of (x, y, z, d, h); zero when not computed.
+  Eigen::Matrix<double, 5, 5> covariance = Eigen::Matrix<double, 5, 5>::Zero();
+  int num_observations = 0;
+};
+
+struct GeometricSlamResult {
+  std::vector<Pose2> trajectory;
+  std::vector<Eigen::Matrix3d> pose_covariances;  // empty unless asked; pose 0 is zero
+  std::vector<MappedObject> objects;              // sorted by id
+  SolverSummary summary;
+  Evidence evidence;
+  std::string covariance_message;  // why covariances are missing, if they are
+};
+
+// Objects' initial geometry from a first detection (spec §5.4): bearing from
+// u_phi (through the camera), range from the class's diameter prior and the
+// angular width, height above the floor chosen so that the base point lies
+// on the ray of u_r, size = prior mean. False when the slice has no ray.
+bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
+                                const BoundingSlice& slice, const ClassPrior& prior,
+                                CylinderGeometry* object);
+
+class GeometricSlam {
+ public:
+  // The camera must outlive this object.
+  GeometricSlam(const CameraModel& camera, const GeometricSlamOptions& options);
+
+  // Throws oslam::Error for invalid input (options, unknown classes, frames
+  // out of range); numerical trouble is reported in the summary.
+  GeometricSlamResult Solve(const GeometricSlamProblem& problem,
+                            const GeometricSlamResult* warm_start = nullptr);
+
+  SparseSolver& solver() { return solver_; }
+
+ private:
+  const CameraModel& camera_;
+  GeometricSlamOptions options_;
+  SparseSolver solver_;
+};
+
+// Odometry composed from `first` (the initial trajectory, spec §5.4).
+std::vector<Pose2> ComposeOdometry(const Pose2& first,
+                                   const std::vector<OdometryIncrement>& increments);
+
+}  // namespace oslam

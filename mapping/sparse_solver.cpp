@@ -1,0 +1,688 @@
+#include "mapping/sparse_solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include <cholmod.h>
+#include <SuiteSparseQR.hpp>
+
+namespace oslam {
+
+namespace {
+
+constexpr double kLog2Pi = 1.8378770664093454836;
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// log det of the matrix factored in L (LL' or LDL', simplicial or supernodal).
+double LogDetOfFactor(const cholmod_factor* factor) {
+  double log_det = 0.0;
+  const double* x = static_cast<const double*>(factor->x);
+  if (factor->is_super) {
+    const auto* super = static_cast<const int*>(factor->super);
+    const auto* pi = static_cast<const int*>(factor->pi);
+    const auto* px = static_cast<const int*>(factor->px);
+    for (size_t s = 0; s < factor->nsuper; ++s) {
+      const int columns = super[s + 1] - super[s];
+      const int rows = pi[s + 1] - pi[s];
+      for (int j = 0; j < columns; ++j)
+        log_det += 2.0 * std::log(std::abs(x[px[s] + j + j * rows]));
+    }
+  } else {
+    const auto* p = static_cast<const int*>(factor->p);
+    const double scale = factor->is_ll ? 2.0 : 1.0;  // LDL' keeps D on the diagonal
+    for (size_t j = 0; j < factor->n; ++j) log_det += scale * std::log(std::abs(x[p[j]]));
+  }
+  return log_det;
+}
+
+}  // namespace
+
+const char* TerminationName(TerminationType type) {
+  switch (type) {
+    case TerminationType::kConverged:
+      return "converged";
+    case TerminationType::kMaxIterations:
+      return "max_iterations";
+    case TerminationType::kFailure:
+      return "failure";
+  }
+  return "unknown";
+}
+
+bool SolverOptions::Validate(std::string* why) const {
+  auto fail = [why](const char* message) {
+    if (why) *why = message;
+    return false;
+  };
+  if (max_iterations < 0) return fail("max_iterations must be >= 0");
+  if (!(step_tolerance >= 0) || !(function_tolerance >= 0) || !(gradient_tolerance >= 0))
+    return fail("tolerances must be >= 0");
+  if (!(initial_damping > 0) || !(max_damping >= initial_damping))
+    return fail("need 0 < initial_damping <= max_damping");
+  if (!(min_diagonal > 0) || !(max_diagonal >= min_diagonal))
+    return fail("need 0 < min_diagonal <= max_diagonal");
+  if (!(min_relative_decrease > 0) || !(min_relative_decrease < 1))
+    return fail("min_relative_decrease must be in (0, 1)");
+  return true;
+}
+
+// ---------------------------------------------------------------------------
+
+struct SparseSolver::Impl {
+  // One (variable a, variable b) block of J^T J that a factor contributes to,
+  // with a <= b in column order.
+  struct BlockPair {
+    int a_column, a_dim, a_offset;  // column in the factor's Jacobian, size, offset in delta
+    int b_column, b_dim, b_offset;
+    int row_prefix;  // position of a's first row inside each column of b
+    bool diagonal;
+  };
+
+  cholmod_common cc;
+  cholmod_common cc_long;  // SPQR works with SuiteSparse_long indices
+
+  // ---- structure (cached across solves) ----
+  std::vector<int> pattern_dims;                 // dimension per free variable
+  std::vector<std::vector<int>> pattern_rows;    // block rows (free variable) per block column
+  std::vector<std::vector<int>> pattern_prefix;  // scalar row prefix per block row
+  std::vector<int> offsets;                      // scalar offset per free variable
+  int n = 0;
+  cholmod_sparse* hessian = nullptr;
+  cholmod_factor* factor = nullptr;
+  std::vector<int> diagonal_position;
+  bool factor_is_final = false;  // holds the undamped factor at the final point
+
+  // ---- per solve ----
+  std::vector<int> free_index;  // per key: free variable index or -1
+  std::vector<int> pair_begin;  // per factor, range into pairs
+  std::vector<BlockPair> pairs;
+  std::vector<Eigen::VectorXd> errors;
+  std::vector<Eigen::MatrixXd> jacobians;
+  std::vector<int> factor_row;  // first row of each factor in J
+  int m = 0;
+  Eigen::VectorXd gradient, diagonal;
+  cholmod_dense* rhs = nullptr;
+  cholmod_dense *solution = nullptr, *work_y = nullptr, *work_e = nullptr;
+
+  Impl() {
+    cholmod_start(&cc);
+    // AMD only: METIS costs more than it saves at our sizes.
+    cc.nmethods = 1;
+    cc.method[0].ordering = CHOLMOD_AMD;
+    cc.postorder = 1;
+    cc.print = 0;
+    cc.error_handler = nullptr;
+    cholmod_l_start(&cc_long);
+    cc_long.print = 0;
+    cc_long.error_handler = nullptr;
+  }
+  ~Impl() {
+    FreeStructure();
+    FreeWork();
+    cholmod_finish(&cc);
+    cholmod_l_finish(&cc_long);
+  }
+  void FreeWork() {
+    if (rhs) cholmod_free_dense(&rhs, &cc);
+    if (solution) cholmod_free_dense(&solution, &cc);
+    if (work_y) cholmod_free_dense(&work_y, &cc);
+    if (work_e) cholmod_free_dense(&work_e, &cc);
+  }
+  void FreeStructure() {
+    if (hessian) cholmod_free_sparse(&hessian, &cc);
+    if (factor) cholmod_free_factor(&factor, &cc);
+    pattern_dims.clear();
+    pattern_rows.clear();
+    pattern_prefix.clear();
+    factor_is_final = false;
+  }
+
+  // Builds the free-variable layout and block pattern of `graph`; reuses the
+  // cached CHOLMOD structure and analysis when the pattern fits in it.
+  // Returns false with `why` for a graph that cannot be solved.
+  bool SetUp(const FactorGraph& graph, bool allow_reuse, bool* reused, double* analyze_s,
+             std::string* why) {
+    const int num_keys = graph.num_variables();
+    free_index.assign(num_keys, -1);
+    std::vector<int> dims;
+    for (int key = 0; key < num_keys; ++key) {
+      if (graph.IsFixed(key)) continue;
+      free_index[key] = static_cast<int>(dims.size());
+      dims.push_back(graph.values().Dim(key));
+    }
+    const int num_free = static_cast<int>(dims.size());
+    if (num_free == 0) {
+      *why = "the graph has no free variable";
+      return false;
+    }
+    std::vector<std::vector<int>> rows(num_free);
+    std::vector<char> constrained(num_free, 0);
+    const auto& factors = graph.factors();
+    m = 0;
+    factor_row.resize(factors.size());
+    for (size_t f = 0; f < factors.size(); ++f) {
+      factor_row[f] = m;
+      m += factors[f]->Dimension();
+      std::vector<int> free;
+      for (int key : factors[f]->keys())
+        if (free_index[key] >= 0) free.push_back(free_index[key]);
+      for (int a : free) {
+        constrained[a] = 1;
+        for (int b : free)
+          if (a <= b) rows[b].push_back(a);
+      }
+    }
+    for (int v = 0; v < num_free; ++v) {
+      if (!constrained[v]) {
+        *why = "a free variable is constrained by no factor (add a prior or fix it)";
+        return false;
+      }
+      rows[v].push_back(v);
+      std::sort(rows[v].begin(), rows[v].end());
+      rows[v].erase(std::unique(rows[v].begin(), rows[v].end()), rows[v].end());
+    }
+
+    bool fits = allow_reuse && hessian && factor && dims == pattern_dims;
+    for (int v = 0; fits && v < num_free; ++v)
+      fits = std::includes(pattern_rows[v].begin(), pattern_rows[v].end(), rows[v].begin(),
+                           rows[v].end());
+    *reused = fits;
+    if (!fits) {
+      FreeStructure();
+      pattern_dims = dims;
+      pattern_rows = std::move(rows);
+      BuildHessianStructure();
+      const auto start = Clock::now();
+      factor = cholmod_analyze(hessian, &cc);
+      *analyze_s = Seconds(start);
+      if (!factor) {
+        *why = "CHOLMOD analysis failed (out of memory?)";
+        FreeStructure();
+        return false;
+      }
+    }
+    factor_is_final = false;
+
+    // Where every factor's blocks go.
+    pairs.clear();
+    pair_begin.assign(factors.size() + 1, 0);
+    errors.resize(factors.size());
+    jacobians.resize(factors.size());
+    for (size_t f = 0; f < factors.size(); ++f) {
+      pair_begin[f] = static_cast<int>(pairs.size());
+      const auto& keys = factors[f]->keys();
+      int total = 0;
+      std::vector<int> columns;
+      for (int key : keys) {
+        columns.push_back(total);
+        total += graph.values().Dim(key);
+      }
+      errors[f].resize(factors[f]->Dimension());
+      jacobians[f].resize(factors[f]->Dimension(), total);
+      for (size_t i = 0; i < keys.size(); ++i) {
+        for (size_t j = 0; j < keys.size(); ++j) {
+          int a = free_index[keys[i]], b = free_index[keys[j]];
+          if (a < 0 || b < 0 || a > b || (a == b && i > j)) continue;
+          const auto& col_rows = pattern_rows[b];
+          const size_t position =
+              std::lower_bound(col_rows.begin(), col_rows.end(), a) - col_rows.begin();
+          pairs.push_back({columns[i], pattern_dims[a], offsets[a], columns[j], pattern_dims[b],
+                           offsets[b], pattern_prefix[b][position], a == b});
+        }
+      }
+    }
+    pair_begin[factors.size()] = static_cast<int>(pairs.size());
+    gradient.resize(n);
+    diagonal.resize(n);
+    return true;
+  }
+
+  void BuildHessianStructure() {
+    const int num_free = static_cast<int>(pattern_dims.size());
+    offsets.assign(num_free, 0);
+    for (int v = 1; v < num_free; ++v) offsets[v] = offsets[v - 1] + pattern_dims[v - 1];
+    n = offsets.back() + pattern_dims.back();
+    pattern_prefix.assign(num_free, {});
+    size_t nnz = 0;
+    for (int b = 0; b < num_free; ++b) {
+      int prefix = 0;
+      for (int a : pattern_rows[b]) {
+        pattern_prefix[b].push_back(prefix);
+        prefix += pattern_dims[a];
+      }
+      // Off-diagonal rows are full; the diagonal block is upper-triangular.
+      const int off_rows = prefix - pattern_dims[b];
+      const int d = pattern_dims[b];
+      nnz += static_cast<size_t>(off_rows) * d + static_cast<size_t>(d) * (d + 1) / 2;
+    }
+    hessian = cholmod_allocate_sparse(n, n, nnz, 1, 1, 1, CHOLMOD_REAL, &cc);
+    auto* p = static_cast<int*>(hessian->p);
+    auto* i = static_cast<int*>(hessian->i);
+    diagonal_position.resize(n);
+    int next = 0;
+    for (int b = 0; b < num_free; ++b) {
+      for (int q = 0; q < pattern_dims[b]; ++q) {
+        const int column = offsets[b] + q;
+        p[column] = next;
+        for (int a : pattern_rows[b]) {
+          const int last = (a == b) ? q : pattern_dims[a] - 1;
+          for (int r = 0; r <= last; ++r) i[next++] = offsets[a] + r;
+        }
+        diagonal_position[column] = next - 1;
+      }
+    }
+    p[n] = next;
+    FreeWork();
+    rhs = cholmod_zeros(n, 1, CHOLMOD_REAL, &cc);
+  }
+
+  // 1/2 sum ||e||^2 at `values`; false when a factor cannot be evaluated.
+  bool Cost(const FactorGraph& graph, const Values& values, double* cost) {
+    double sum = 0.0;
+    const auto& factors = graph.factors();
+    for (size_t f = 0; f < factors.size(); ++f) {
+      if (!factors[f]->Linearize(values, errors[f], nullptr)) return false;
+      sum += errors[f].squaredNorm();
+    }
+    *cost = 0.5 * sum;
+    return std::isfinite(*cost);
+  }
+
+  // Fills errors, jacobians, J^T J (into hessian), gradient J^T e and the
+  // undamped diagonal; returns false when a factor cannot be evaluated.
+  bool Linearize(const FactorGraph& graph, const Values& values, double* cost) {
+    auto* x = static_cast<double*>(hessian->x);
+    const auto* p = static_cast<const int*>(hessian->p);
+    std::fill(x, x + p[n], 0.0);
+    gradient.setZero();
+    double sum = 0.0;
+    const auto& factors = graph.factors();
+    for (size_t f = 0; f < factors.size(); ++f) {
+      Eigen::MatrixXd& jacobian = jacobians[f];
+      const Eigen::VectorXd& error = errors[f];
+      if (!factors[f]->Linearize(values, errors[f], &jacobian)) return false;
+      sum += error.squaredNorm();
+      for (int k = pair_begin[f]; k < pair_begin[f + 1]; ++k) {
+        const BlockPair& pair = pairs[k];
+        for (int q = 0; q < pair.b_dim; ++q) {
+          const auto column_b = jacobian.col(pair.b_column + q);
+          double* out = x + p[pair.b_offset + q] + pair.row_prefix;
+          const int last = pair.diagonal ? q : pair.a_dim - 1;
+          for (int r = 0; r <= last; ++r) out[r] += jacobian.col(pair.a_column + r).dot(column_b);
+        }
+        if (pair.diagonal)
+          for (int r = 0; r < pair.a_dim; ++r)
+            gradient[pair.a_offset + r] += jacobian.col(pair.a_column + r).dot(error);
+      }
+    }
+    *cost = 0.5 * sum;
+    for (int c = 0; c < n; ++c) diagonal[c] = x[diagonal_position[c]];
+    return std::isfinite(*cost) && gradient.allFinite();
+  }
+
+  // Factors J^T J + lambda D (lambda = 0: undamped); false if not positive definite.
+  bool Factorize(double lambda, const SolverOptions& options) {
+    auto* x = static_cast<double*>(hessian->x);
+    for (int c = 0; c < n; ++c)
+      x[diagonal_position[c]] = diagonal[c] + lambda * std::clamp(diagonal[c], options.min_diagonal,
+                                                                  options.max_diagonal);
+    const int ok = cholmod_factorize(hessian, factor, &cc);
+    for (int c = 0; c < n; ++c) x[diagonal_position[c]] = diagonal[c];
+    return ok && cc.status == CHOLMOD_OK && factor->minor == factor->n;
+  }
+
+  // Solves (factored matrix) out = in.
+  bool SolveFactored(const Eigen::VectorXd& in, Eigen::VectorXd* out) {
+    Eigen::Map<Eigen::VectorXd>(static_cast<double*>(rhs->x), n) = in;
+    if (!cholmod_solve2(CHOLMOD_A, factor, rhs, nullptr, &solution, nullptr, &work_y, &work_e, &cc))
+      return false;
+    *out = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(solution->x), n);
+    return out->allFinite();
+  }
+
+  // Least-squares step by SPQR on [J; sqrt(lambda D)] delta = [-e; 0]. With
+  // lambda = 0 also returns ||r||^2 and sum log|r_ii| (spec §5.3).
+  bool SolveByQr(double lambda, const SolverOptions& options, Eigen::VectorXd* delta,
+                 double* squared_residual, double* log_abs_det_r) {
+    const int rows = m + (lambda > 0 ? n : 0);
+    size_t nnz = 0;
+    for (const auto& jacobian : jacobians) nnz += jacobian.size();
+    cholmod_triplet* triplet =
+        cholmod_l_allocate_triplet(rows, n, nnz + n, 0, CHOLMOD_REAL, &cc_long);
+    auto* ti = static_cast<SuiteSparse_long*>(triplet->i);
+    auto* tj = static_cast<SuiteSparse_long*>(triplet->j);
+    auto* tx = static_cast<double*>(triplet->x);
+    size_t k = 0;
+    cholmod_dense* b = cholmod_l_zeros(rows, 1, CHOLMOD_REAL, &cc_long);
+    auto* bx = static_cast<double*>(b->x);
+    for (size_t f = 0; f < jacobians.size(); ++f) {
+      const int row0 = factor_row[f];
+      for (int r = 0; r < errors[f].size(); ++r) bx[row0 + r] = -errors[f][r];
+      for (int pk = pair_begin[f]; pk < pair_begin[f + 1]; ++pk) {
+        const BlockPair& pair = pairs[pk];
+        if (!pair.diagonal) continue;  // each free key has exactly one diagonal pair
+        for (int c = 0; c < pair.a_dim; ++c)
+          for (int r = 0; r < errors[f].size(); ++r) {
+            const double value = jacobians[f](r, pair.a_column + c);
+            if (value == 0.0) continue;
+            ti[k] = row0 + r;
+            tj[k] = pair.a_offset + c;
+            tx[k++] = value;
+          }
+      }
+    }
+    if (lambda > 0)
+      for (int c = 0; c < n; ++c) {
+        ti[k] = m + c;
+        tj[k] = c;
+        tx[k++] =
+            std::sqrt(lambda * std::clamp(diagonal[c], options.min_diagonal, options.max_diagonal));
+      }
+    triplet->nnz = k;
+    cholmod_sparse* a = cholmod_l_triplet_to_sparse(triplet, k, &cc_long);
+    cholmod_l_free_triplet(&triplet, &cc_long);
+    cholmod_dense* z = nullptr;
+    cholmod_sparse* r = nullptr;
+    SuiteSparse_long* e = nullptr;
+    const bool want_r = log_abs_det_r != nullptr;
+    const SuiteSparse_long rank = SuiteSparseQR<double>(
+        SPQR_ORDERING_DEFAULT, SPQR_NO_TOL, n, 2, a, nullptr, b, nullptr, &z, want_r ? &r : nullptr,
+        want_r ? &e : nullptr, nullptr, nullptr, nullptr, &cc_long);
+    bool ok = z != nullptr && rank == n;
+    if (ok) {
+      *delta = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(z->x), n);
+      ok = delta->allFinite();
+    }
+    if (ok && squared_residual) {
+      // ||J delta + e||^2 over the J rows (the damping rows are absent here).
+      double sum = 0.0;
+      for (size_t f = 0; f < jacobians.size(); ++f) {
+        Eigen::VectorXd residual = errors[f];
+        for (int pk = pair_begin[f]; pk < pair_begin[f + 1]; ++pk) {
+          const BlockPair& pair = pairs[pk];
+          if (pair.diagonal)
+            residual += jacobians[f].middleCols(pair.a_column, pair.a_dim) *
+                        delta->segment(pair.a_offset, pair.a_dim);
+        }
+        sum += residual.squaredNorm();
+      }
+      *squared_residual = sum;
+    }
+    if (ok && want_r) {
+      // |det R| = prod |r_jj|, whatever the column permutation E.
+      const auto* rp = static_cast<const SuiteSparse_long*>(r->p);
+      const auto* ri = static_cast<const SuiteSparse_long*>(r->i);
+      const auto* rx = static_cast<const double*>(r->x);
+      double sum = 0.0;
+      for (int j = 0; j < n && ok; ++j) {
+        double d = 0.0;
+        for (SuiteSparse_long q = rp[j]; q < rp[j + 1]; ++q)
+          if (ri[q] == j) d = rx[q];
+        ok = d != 0.0;
+        sum += std::log(std::abs(d));
+      }
+      *log_abs_det_r = sum;
+    }
+    if (z) cholmod_l_free_dense(&z, &cc_long);
+    if (r) cholmod_l_free_sparse(&r, &cc_long);
+    if (e) cholmod_l_free(n, sizeof(SuiteSparse_long), e, &cc_long);
+    cholmod_l_free_sparse(&a, &cc_long);
+    cholmod_l_free_dense(&b, &cc_long);
+    return ok;
+  }
+};
+
+// ---------------------------------------------------------------------------
+
+SparseSolver::SparseSolver(const SolverOptions& options)
+    : options_(options), impl_(std::make_unique<Impl>()) {}
+SparseSolver::~SparseSolver() = default;
+
+void SparseSolver::ClearCache() {
+  impl_->FreeStructure();
+}
+
+SolveResult SparseSolver::Solve(FactorGraph* graph) {
+  const auto start = Clock::now();
+  SolveResult result;
+  SolverSummary& summary = result.summary;
+  Impl& impl = *impl_;
+  auto finish = [&](TerminationType type, const std::string& message) {
+    summary.termination = type;
+    summary.message = message;
+    summary.total_time_s = Seconds(start);
+    return result;
+  };
+  std::string why;
+  if (!options_.Validate(&why)) return finish(TerminationType::kFailure, "invalid options: " + why);
+  if (!graph) return finish(TerminationType::kFailure, "no graph");
+  summary.num_factors = static_cast<int>(graph->factors().size());
+
+  double analyze_s = 0.0;
+  if (!impl.SetUp(*graph, options_.reuse_symbolic_analysis, &summary.reused_symbolic_analysis,
+                  &analyze_s, &why))
+    return finish(TerminationType::kFailure, why);
+  summary.analyze_time_s = analyze_s;
+  summary.num_residuals = impl.m;
+  summary.num_parameters = impl.n;
+  const int num_keys = graph->num_variables();
+  const bool use_qr = options_.linear_solver == LinearSolverType::kSparseQR;
+
+  Values& values = graph->mutable_values();
+  Values trial;
+  double cost = 0.0;
+  auto linearize = [&]() {
+    const auto t = Clock::now();
+    const bool ok = impl.Linearize(*graph, values, &cost);
+    summary.linearize_time_s += Seconds(t);
+    return ok;
+  };
+  if (!linearize())
+    return finish(TerminationType::kFailure,
+                  "a factor cannot be evaluated at the initial values (e.g. an object has no "
+                  "image from a pose that saw it)");
+  summary.initial_cost = summary.final_cost = cost;
+
+  double lambda = options_.initial_damping, nu = 2.0;
+  TerminationType termination = TerminationType::kMaxIterations;
+  std::string message = "reached max_iterations";
+  Eigen::VectorXd delta;
+  while (true) {
+    if (impl.gradient.lpNorm<Eigen::Infinity>() <= options_.gradient_tolerance) {
+      termination = TerminationType::kConverged;
+      message = "gradient tolerance reached";
+      break;
+    }
+    if (summary.iterations >= options_.max_iterations) break;
+    ++summary.iterations;
+    const auto t_factor = Clock::now();
+    bool solved;
+    if (use_qr) {
+      solved = impl.SolveByQr(lambda, options_, &delta, nullptr, nullptr);
+    } else {
+      solved = impl.Factorize(lambda, options_) && impl.SolveFactored(-impl.gradient, &delta);
+    }
+    summary.factorize_time_s += Seconds(t_factor);
+    bool accepted = false;
+    double new_cost = 0.0, rho = 0.0;
+    if (solved) {
+      // Model reduction of 1/2||e + J d||^2 for d solving (H + lambda D) d = -g.
+      double damping_term = 0.0;
+      for (int c = 0; c < impl.n; ++c)
+        damping_term += std::clamp(impl.diagonal[c], options_.min_diagonal, options_.max_diagonal) *
+                        delta[c] * delta[c];
+      const double predicted = -0.5 * impl.gradient.dot(delta) + 0.5 * lambda * damping_term;
+      trial = values;
+      for (int key = 0; key < num_keys; ++key) {
+        const int v = impl.free_index[key];
+        if (v >= 0) trial.Retract(key, delta.data() + impl.offsets[v]);
+      }
+      const auto t_cost = Clock::now();
+      const bool evaluated = impl.Cost(*graph, trial, &new_cost);
+      summary.linearize_time_s += Seconds(t_cost);
+      if (evaluated && predicted > 0.0) {
+        rho = (cost - new_cost) / predicted;
+        accepted = rho > options_.min_relative_decrease;
+      }
+    }
+    if (!accepted) {
+      lambda *= nu;
+      nu *= 2.0;
+      if (lambda > options_.max_damping) {
+        message = "no further decrease possible (damping limit)";
+        termination = TerminationType::kConverged;
+        break;
+      }
+      continue;
+    }
+    std::swap(values, trial);
+    ++summary.successful_steps;
+    const double old_cost = cost;
+    if (!linearize()) {
+      // The cost evaluated fine a moment ago, so this is not expected.
+      std::swap(values, trial);
+      linearize();
+      termination = TerminationType::kFailure;
+      message = "linearisation failed at an accepted point";
+      break;
+    }
+    lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
+    lambda = std::max(lambda, 1e-15);
+    nu = 2.0;
+    if (delta.lpNorm<Eigen::Infinity>() <= options_.step_tolerance) {
+      termination = TerminationType::kConverged;
+      message = "step tolerance reached";
+      break;
+    }
+    if (old_cost - cost <= options_.function_tolerance * old_cost) {
+      termination = TerminationType::kConverged;
+      message = "function tolerance reached";
+      break;
+    }
+  }
+  summary.final_cost = cost;
+
+  // The undamped Gauss-Newton system at the final point: evidence, the
+  // factor later used for covariances, and the final step of Algorithm 1
+  // (steps 4-5: theta* = theta0 + delta).
+  const auto t_evidence = Clock::now();
+  const bool factored = impl.Factorize(0.0, options_);
+  impl.factor_is_final = factored;
+  Evidence& evidence = result.evidence;
+  evidence.num_rows = impl.m;
+  evidence.num_parameters = impl.n;
+  for (const auto& factor : graph->factors()) evidence.log_det_noise += factor->LogDetCovariance();
+  evidence.normaliser = 0.5 * (impl.n - impl.m) * kLog2Pi;
+  bool have_step = false;
+  if (use_qr) {
+    double log_abs_det_r = 0.0;
+    have_step = impl.SolveByQr(0.0, options_, &delta, &evidence.squared_residual,
+                               options_.compute_evidence ? &log_abs_det_r : nullptr);
+    evidence.valid = have_step && options_.compute_evidence;
+    evidence.log_det_information = 2.0 * log_abs_det_r;
+  } else if (factored && impl.SolveFactored(impl.gradient, &delta)) {
+    // min ||e + J d||^2 = ||e||^2 - g' H^{-1} g, at d = -H^{-1} g.
+    have_step = true;
+    evidence.squared_residual = std::max(0.0, 2.0 * cost - impl.gradient.dot(delta));
+    delta = -delta;
+    if (options_.compute_evidence) {
+      evidence.log_det_information = LogDetOfFactor(impl.factor);
+      evidence.valid = std::isfinite(evidence.log_det_information);
+    }
+  }
+  if (evidence.valid)
+    evidence.log_evidence = -0.5 * evidence.squared_residual - 0.5 * evidence.log_det_noise -
+                            0.5 * evidence.log_det_information + evidence.normaliser;
+  if (have_step && options_.apply_final_step && termination != TerminationType::kFailure) {
+    trial = values;
+    for (int key = 0; key < num_keys; ++key) {
+      const int v = impl.free_index[key];
+      if (v >= 0) trial.Retract(key, delta.data() + impl.offsets[v]);
+    }
+    double new_cost = 0.0;
+    if (impl.Cost(*graph, trial, &new_cost) && new_cost <= cost) {
+      std::swap(values, trial);
+      summary.final_cost = new_cost;
+    }
+  }
+  summary.evidence_time_s = Seconds(t_evidence);
+  if (!factored && termination != TerminationType::kFailure) {
+    message +=
+        "; the final information matrix is not positive definite (no evidence or "
+        "covariance)";
+  }
+  return finish(termination, message);
+}
+
+bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_groups,
+                                       std::vector<Eigen::MatrixXd>* blocks, std::string* why) {
+  Impl& impl = *impl_;
+  if (!impl.factor_is_final) {
+    if (why) *why = "no valid final factorisation (call Solve first)";
+    return false;
+  }
+  blocks->assign(key_groups.size(), Eigen::MatrixXd());
+  // Scalar columns of each group (-1 for the rows/columns of fixed keys).
+  std::vector<std::vector<int>> columns(key_groups.size());
+  for (size_t g = 0; g < key_groups.size(); ++g) {
+    for (int key : key_groups[g]) {
+      if (key < 0 || key >= static_cast<int>(impl.free_index.size())) {
+        if (why) *why = "unknown key " + std::to_string(key);
+        return false;
+      }
+      const int v = impl.free_index[key];
+      const int dim = v >= 0 ? impl.pattern_dims[v] : 0;
+      if (v < 0) {
+        // Fixed: its dimension is not in the pattern; ask the key's size via
+        // the Jacobian bookkeeping is not possible here, so callers pass free keys.
+        if (why) *why = "key " + std::to_string(key) + " is fixed";
+        return false;
+      }
+      for (int r = 0; r < dim; ++r) columns[g].push_back(impl.offsets[v] + r);
+    }
+  }
+  // Solve H X = E for batches of unit columns; pick the groups' rows.
+  constexpr int kBatch = 64;
+  size_t g = 0;
+  while (g < key_groups.size()) {
+    size_t end = g;
+    int width = 0;
+    while (end < key_groups.size() &&
+           (width == 0 || width + static_cast<int>(columns[end].size()) <= kBatch))
+      width += static_cast<int>(columns[end++].size());
+    cholmod_dense* unit = cholmod_zeros(impl.n, width, CHOLMOD_REAL, &impl.cc);
+    auto* ux = static_cast<double*>(unit->x);
+    int c = 0;
+    for (size_t h = g; h < end; ++h)
+      for (int column : columns[h]) ux[static_cast<size_t>(c++) * impl.n + column] = 1.0;
+    cholmod_dense* x = cholmod_solve(CHOLMOD_A, impl.factor, unit, &impl.cc);
+    cholmod_free_dense(&unit, &impl.cc);
+    if (!x) {
+      if (why) *why = "CHOLMOD solve failed";
+      return false;
+    }
+    const auto* xx = static_cast<const double*>(x->x);
+    c = 0;
+    for (size_t h = g; h < end; ++h) {
+      const int size = static_cast<int>(columns[h].size());
+      Eigen::MatrixXd& block = (*blocks)[h];
+      block.resize(size, size);
+      for (int q = 0; q < size; ++q)
+        for (int r = 0; r < size; ++r)
+          block(r, q) = xx[static_cast<size_t>(c + q) * impl.n + columns[h][r]];
+      block = 0.5 * (block + block.transpose()).eval();
+      c += size;
+    }
+    cholmod_free_dense(&x, &impl.cc);
+    g = end;
+  }
+  return true;
+}
+
+}  // namespace oslam
