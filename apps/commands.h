@@ -18,7 +18,9 @@ const std::vector<Command>& Commands();
 
 // One function per subcommand, each in its own file.
 int RunCameraCommand(const std::vector<std::string>& args);
+int RunCalibrateCommand(const std::vector<std::string>& args);
 int RunDetectCommand(const std::vector<std::string>& args);
+int RunMapCommand(const std::vector<std::string>& args);
 int RunTrainColorsCommand(const std::vector<std::string>& args);
 int RunSimulateCommand(const std::vector<std::string>& args);
 
