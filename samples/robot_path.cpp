@@ -30,10 +30,15 @@ Eigen::Vector3d SampleMotionError(double previous_heading_rad, const OdometryInc
 
 namespace {
 
-// Appends one stop-and-go step: the true robot moves by the command plus the
-// motion error, the odometry reports the command.
-void Step(const OdometryIncrement& command, const OdometryNoise& noise, std::mt19937_64& rng,
-          DrivenPath* path) {
+// Appends one stop-and-go step. The robot executes the command with some
+// jitter, which the encoders measure (the reported increment v_i); the true
+// pose is f(x_{i-1}, v_i) plus the motion error e_i ~ N(0, Q(v_i)), exactly
+// the model O-SLAM assumes.
+void Step(const PathSpec& spec, OdometryIncrement command, const OdometryNoise& noise,
+          std::mt19937_64& rng, DrivenPath* path) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  if (command.distance_m != 0.0) command.distance_m += spec.step_jitter_m * normal(rng);
+  if (command.turn_rad != 0.0) command.turn_rad += spec.turn_jitter_rad * normal(rng);
   const Pose2& previous = path->true_poses.back();
   const Eigen::Vector3d error = SampleMotionError(previous.theta, command, noise, rng);
   path->true_poses.push_back(Pose2::FromVector(ApplyIncrement(previous, command).Vector() + error));
@@ -61,7 +66,8 @@ void RunCommands(const PathSpec& spec, const OdometryNoise& noise, long max_fram
     if (letter == 'B') command.distance_m = -spec.step_m;
     if (letter == 'L') command.turn_rad = spec.turn_step_rad;
     if (letter == 'R') command.turn_rad = -spec.turn_step_rad;
-    for (long k = 0; k < count && !Full(*path, max_frames); ++k) Step(command, noise, rng, path);
+    for (long k = 0; k < count && !Full(*path, max_frames); ++k)
+      Step(spec, command, noise, rng, path);
   }
 }
 
@@ -100,7 +106,7 @@ void FollowWaypoints(const PathSpec& spec, const OdometryNoise& noise, long max_
     if (static_cast<long>(path->true_poses.size()) > step_limit)
       throw Error("path: waypoint " + std::to_string(next) + " not reached after " +
                   std::to_string(step_limit) + " steps (step_m too large, or noise too high?)");
-    Step(SteerTowards(pose, target, spec), noise, rng, path);
+    Step(spec, SteerTowards(pose, target, spec), noise, rng, path);
   }
 }
 

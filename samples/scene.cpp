@@ -333,12 +333,15 @@ void CheckCommands(const Reader& r, const std::string& commands) {
 PathSpec ParsePath(const Reader& r, const cv::FileNode& root) {
   const cv::FileNode node = r.file.Map(root, "path");
   r.file.RequireOnlyKeys(node, "path.",
-                         {"start_pose", "step_m", "turn_step_rad", "waypoints_m", "commands"});
+                         {"start_pose", "step_m", "turn_step_rad", "step_jitter_m",
+                          "turn_jitter_rad", "waypoints_m", "commands"});
   PathSpec spec;
   const std::vector<double> start = r.file.Doubles(node, "start_pose", 3, "path.");
   spec.start = {start[0], start[1], WrapAngle(start[2])};
   if (r.Has(node, "step_m")) spec.step_m = r.Positive(node, "step_m", "path.");
   if (r.Has(node, "turn_step_rad")) spec.turn_step_rad = r.Positive(node, "turn_step_rad", "path.");
+  spec.step_jitter_m = r.NonNegative(node, "step_jitter_m", spec.step_jitter_m, "path.");
+  spec.turn_jitter_rad = r.NonNegative(node, "turn_jitter_rad", spec.turn_jitter_rad, "path.");
   if (r.Has(node, "waypoints_m") == r.Has(node, "commands"))
     r.file.Fail("path", "give exactly one of waypoints_m and commands");
   if (r.Has(node, "commands")) {

@@ -88,6 +88,11 @@ struct PathSpec {
   Pose2 start;
   double step_m = 0.2;
   double turn_step_rad = 0.17453292519943295;  // 10 degrees
+  // How much an executed command differs from the nominal one (standard
+  // deviations); the wheel encoders see this, so it shows in the odometry
+  // but is not odometry error. 0 gives exact 20 cm / 10 degree increments.
+  double step_jitter_m = 0.01;
+  double turn_jitter_rad = 0.008726646259971648;  // 0.5 degrees
   // Either waypoints (the driver steers towards each in turn, looking at the
   // true robot) or a fixed command string such as "F5 L9 B2 R1".
   std::vector<Eigen::Vector2d> waypoints;

@@ -1,0 +1,130 @@
+#include "samples/scene.h"
+
+#include <fstream>
+#include <functional>
+
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "test_util.h"
+
+namespace oslam {
+namespace {
+
+const char* kGoodScene = R"(name: tiny
+camera: {preset: lpa}
+classes:
+  - {name: red can, display_rgb: [200, 30, 30], diameter_mean_m: 0.3, diameter_std_m: 0.1, height_mean_m: 0.5, height_std_m: 0.1}
+objects:
+  - {class: red can, shape: cylinder, position_m: [2, 1], diameter_m: 0.3, height_m: 0.5, colour: [200, 30, 30]}
+path: {start_pose: [0, 0, 0], commands: "F3 L2"}
+)";
+
+// Writes `text` as a scene file and returns the error LoadScene raises ("" if none).
+std::string LoadError(const testing::TempDir& dir, const std::string& text) {
+  const std::string path = dir.Path("scene.yaml");
+  std::ofstream(path) << text;
+  try {
+    LoadScene(path);
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.find('\n'), std::string::npos) << "error must be one line: " << message;
+    return message;
+  }
+  return "";
+}
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+TEST(Scene, ParsesAGoodSceneWithDefaults) {
+  testing::TempDir dir;
+  std::ofstream(dir.Path("scene.yaml")) << kGoodScene;
+  const Scene scene = LoadScene(dir.Path("scene.yaml"));
+  EXPECT_EQ(scene.name, "tiny");
+  EXPECT_EQ(scene.seed, 1u);
+  ASSERT_EQ(scene.objects.size(), 1u);
+  EXPECT_EQ(scene.objects[0].class_name, "red can");
+  EXPECT_EQ(scene.objects[0].shape, ShapeKind::kCylinder);
+  EXPECT_DOUBLE_EQ(scene.objects[0].diameter_m, 0.3);
+  EXPECT_EQ(scene.camera->image_width(), 640);
+  EXPECT_DOUBLE_EQ(scene.path_spec.step_m, 0.2);
+  EXPECT_NEAR(scene.path_spec.turn_step_rad, DegToRad(10.0), 1e-12);
+  EXPECT_EQ(scene.odometry.scale, 1.0);
+  EXPECT_EQ(scene.path_spec.commands, "F3 L2");
+}
+
+TEST(Scene, BadInputGivesOneLineErrorsNamingFileAndKey) {
+  testing::TempDir dir;
+  const std::string file = dir.Path("scene.yaml") + ": ";
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "shape: cylinder", "shape: cone")),
+            file + "objects[0].shape: unknown shape 'cone' (known: cylinder, box, sphere, panel)");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "class: red can,", "class: blue can,")),
+            file + "objects[0].class: 'blue can' is not listed under classes");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "height_m: 0.5, colour", "width_m: 0.5, colour")),
+            file + "objects[0].width_m: not used by shape cylinder");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "diameter_m: 0.3, height_m",
+                                   "diameter_m: -0.3, height_m")),
+            file + "objects[0].diameter_m: must be positive");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "position_m: [2, 1]", "position_m: [2]")),
+            file + "objects[0].position_m: expected 2 numbers, found 1");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "colour: [200, 30, 30]}", "colour: [300, 30, 30]}")),
+            file + "objects[0].colour: entries must be 0..255");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "colour: [200, 30, 30]}", "colur: [200, 30, 30]}"))
+                .rfind(file + "objects[0].colur: unknown key (allowed: class, shape,", 0),
+            0u);
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "{preset: lpa}", "{preset: fisheye}")),
+            file + "camera.preset: unknown camera preset 'fisheye' (known: lpa, cogniron)");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "camera: {preset: lpa}\n", "")),
+            file + "camera: missing");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "\"F3 L2\"", "\"F3 X2\"")),
+            file +
+                "path.commands: unknown command letter 'X' (use F, B, L, R with an optional "
+                "repeat count, e.g. F5 L9)");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "commands: \"F3 L2\"", "step_m: 0.2")),
+            file + "path: give exactly one of waypoints_m and commands");
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "path:", "odometry: {noise_scale: -1}\npath:")),
+            file + "odometry.noise_scale: must not be negative");
+  EXPECT_EQ(
+      LoadError(dir, Replace(kGoodScene, "objects:", "walls:\n  - {points_m: [[0, 0]]}\nobjects:")),
+      file + "walls[0].points_m: needs at least 2 points");
+  EXPECT_EQ(
+      LoadError(dir, Replace(kGoodScene, "colour: [200, 30, 30]}",
+                             "colour: [200, 30, 30], texture: {pattern: image, file: nothere.png, "
+                             "size_m: [1, 1]}}")),
+      file + "objects[0].texture.file: cannot read image '" + dir.Path("nothere.png") + "'");
+}
+
+TEST(Scene, BoxGroundTruthDiameterIsTheFootprintDiagonal) {
+  SceneObject box;
+  box.shape = ShapeKind::kBox;
+  box.length_m = 0.49;
+  box.width_m = 0.47;
+  box.height_m = 0.57;
+  const GroundTruthObject truth = GroundTruthOf(box, 3);
+  EXPECT_NEAR(truth.diameter_m, 0.679, 1e-3);  // spec Table 6.3, green box: 0.68 m
+  EXPECT_EQ(truth.shape, "box");
+  EXPECT_EQ(truth.id, 3);
+}
+
+TEST(Scene, ShippedScenesLoad) {
+  for (const char* name : {"lab", "long_loop", "house"}) {
+    const std::string path = std::string(OSLAM_SOURCE_DIR) + "/samples/scenes/" + name + ".yaml";
+    SCOPED_TRACE(path);
+    const Scene scene = LoadScene(path);
+    EXPECT_FALSE(scene.classes.empty());
+    // LoadScene checks every object's class is listed; here every listed
+    // class must also appear in the scene.
+    for (const ObjectClass& c : scene.classes) {
+      bool used = false;
+      for (const SceneObject& object : scene.objects) used = used || object.class_name == c.name;
+      EXPECT_TRUE(used) << c.name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace oslam
