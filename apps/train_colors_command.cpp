@@ -18,18 +18,22 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
                       "writes them into classes.yaml.");
   arguments.AddPositional("CLASSES.yaml", "the classes to train (updated in place unless -o)");
   arguments.AddOption("examples", "", "EXAMPLES.yaml", "example regions per class (docs/formats.md)");
+  arguments.AddOption("from-ground-truth", "", "RUN_DIR",
+                      "instead of --examples: ROIs on the ground-truth objects of a simulated run");
   arguments.AddOption("k-sigma", "", "K", "half-width of the colour box in standard deviations", "3");
   arguments.AddOption("output", "-o", "OUT.yaml", "where to write (default: CLASSES.yaml)");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
-  if (!arguments.Has("examples")) throw UsageError("--examples is required");
+  if (arguments.Has("examples") == arguments.Has("from-ground-truth"))
+    throw UsageError("give exactly one of --examples and --from-ground-truth");
   const double k_sigma = arguments.GetDouble("k-sigma");
   if (!(k_sigma > 0)) throw UsageError("--k-sigma must be positive");
 
   const std::string classes_path = arguments.Get("CLASSES.yaml");
   const std::vector<ObjectClass> classes = ReadClasses(classes_path);
   const std::vector<ColourExample> examples =
-      ReadColourExamples(arguments.Get("examples"), classes);
+      arguments.Has("examples") ? ReadColourExamples(arguments.Get("examples"), classes)
+                                : ExamplesFromGroundTruth(arguments.Get("from-ground-truth"), classes);
   const std::vector<ObjectClass> trained = TrainColourModels(classes, examples, k_sigma);
   const ConfusionMatrix confusion = ColourConfusion(trained);
   const std::string output = arguments.Has("output") ? arguments.Get("output") : classes_path;

@@ -1,9 +1,13 @@
 #include "detect/colour_training.h"
 
+#include <algorithm>
 #include <filesystem>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
+#include "calib/camera_io.h"
+#include "core/angles.h"
 #include "core/error.h"
 #include "core/yaml.h"
 #include "detect/colour_classifier.h"
@@ -49,6 +53,86 @@ std::vector<ColourExample> ReadColourExamples(const std::string& path,
   return examples;
 }
 
+namespace {
+
+// Keeps the mask pixels whose chroma (U, V) is within `max_distance` of the
+// class's display colour: a textured object (stripes, patches of a second
+// colour) is detected by its main colour, as a person picking an ROI would.
+void KeepPixelsNearDisplayColour(const cv::Mat& bgr, const ObjectClass& object_class,
+                                 double max_distance, cv::Mat* mask) {
+  const auto& rgb = object_class.display_rgb;
+  cv::Mat reference(1, 1, CV_8UC3, cv::Scalar(rgb[2], rgb[1], rgb[0])), reference_yuv, yuv;
+  cv::cvtColor(reference, reference_yuv, cv::COLOR_BGR2YUV);
+  cv::cvtColor(bgr, yuv, cv::COLOR_BGR2YUV);
+  const cv::Vec3b target = reference_yuv.at<cv::Vec3b>(0, 0);
+  for (int y = 0; y < mask->rows; ++y)
+    for (int x = 0; x < mask->cols; ++x) {
+      if (!mask->at<uint8_t>(y, x)) continue;
+      const cv::Vec3b& p = yuv.at<cv::Vec3b>(y, x);
+      if (std::hypot(double(p[1]) - target[1], double(p[2]) - target[2]) > max_distance)
+        mask->at<uint8_t>(y, x) = 0;
+    }
+}
+
+cv::Mat CentralSliceMask(const CameraModel& camera, const GroundTruthSighting& s) {
+  cv::Mat mask = cv::Mat::zeros(camera.image_height(), camera.image_width(), CV_8UC1);
+  const double r_low = s.u_r_px + 0.25 * s.s_r_px, r_high = s.u_r_px + 0.75 * s.s_r_px;
+  const double half_angle = 0.25 * s.s_phi_rad;
+  for (int y = 0; y < mask.rows; ++y)
+    for (int x = 0; x < mask.cols; ++x) {
+      const Eigen::Vector2d pixel(x, y);
+      const PolarPoint p = camera.PixelToPolar(pixel);
+      if (p.radius_px >= r_low && p.radius_px <= r_high &&
+          std::abs(WrapAngle(p.angle_rad - s.u_phi_rad)) <= half_angle && camera.IsInAnnulus(pixel))
+        mask.at<uint8_t>(y, x) = 255;
+    }
+  return mask;
+}
+
+}  // namespace
+
+std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
+                                                   const std::vector<ObjectClass>& classes,
+                                                   int per_class) {
+  const RunFolderPaths paths = RunFolderPaths::Of(run_dir);
+  const std::optional<GroundTruth> truth = ReadGroundTruth(run_dir);
+  if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder to learn colours from");
+  const std::unique_ptr<CameraModel> camera = LoadCamera(paths.camera);
+  const FrameSource frames(run_dir);
+  if (frames.is_video()) throw Error::InFile(run_dir, "learning from ground truth needs frames/, not a video");
+  std::vector<ColourExample> examples;
+  for (const ObjectClass& object_class : classes) {
+    std::vector<const GroundTruthSighting*> candidates;
+    for (const GroundTruthSighting& s : truth->sightings) {
+      const auto object = std::find_if(truth->objects.begin(), truth->objects.end(),
+                                       [&](const auto& o) { return o.id == s.object_id; });
+      if (object->class_name != object_class.name || s.visible_fraction < 0.999) continue;
+      if (s.s_r_px < 12 || s.s_phi_rad * s.u_r_px < 12 || s.frame >= static_cast<long>(frames.size()))
+        continue;
+      candidates.push_back(&s);
+    }
+    std::sort(candidates.begin(), candidates.end(), [](const auto* a, const auto* b) {
+      return a->s_r_px * a->s_phi_rad * a->u_r_px > b->s_r_px * b->s_phi_rad * b->u_r_px;
+    });
+    std::vector<long> used_frames;
+    for (const GroundTruthSighting* s : candidates) {
+      if (static_cast<int>(used_frames.size()) >= per_class) break;
+      if (std::find(used_frames.begin(), used_frames.end(), s->frame) != used_frames.end()) continue;
+      cv::Mat mask = CentralSliceMask(*camera, *s);
+      const cv::Mat frame = frames.Read(static_cast<size_t>(s->frame));
+      KeepPixelsNearDisplayColour(frame, object_class, 40.0, &mask);
+      if (cv::countNonZero(mask) < 20) continue;  // mostly beyond the rim or another colour
+      ColourExample example;
+      example.image_path = frames.Name(static_cast<size_t>(s->frame));
+      example.class_name = object_class.name;
+      example.mask = mask;
+      examples.push_back(example);
+      used_frames.push_back(s->frame);
+    }
+  }
+  return examples;
+}
+
 std::vector<ObjectClass> TrainColourModels(const std::vector<ObjectClass>& classes,
                                            const std::vector<ColourExample>& examples,
                                            double k_sigma) {
@@ -60,7 +144,9 @@ std::vector<ObjectClass> TrainColourModels(const std::vector<ObjectClass>& class
       cv::Mat image = cv::imread(example.image_path, cv::IMREAD_COLOR);
       if (image.empty()) throw Error::InFile(example.image_path, "cannot read image");
       cv::Mat mask;
-      if (example.mask_path.empty()) {
+      if (!example.mask.empty()) {
+        mask = example.mask;
+      } else if (example.mask_path.empty()) {
         if ((example.roi & cv::Rect(0, 0, image.cols, image.rows)) != example.roi)
           throw Error::InFile(example.image_path, "ROI lies outside the image");
         mask = cv::Mat::zeros(image.size(), CV_8UC1);

@@ -14,6 +14,7 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "calib/camera_model.h"
 #include "core/run_folder.h"
 
 namespace oslam {
@@ -23,12 +24,23 @@ struct ColourExample {
   std::string class_name;
   cv::Rect roi;            // used when mask_path is empty
   std::string mask_path;
+  cv::Mat mask;  // in-memory mask (8-bit, non-zero = example); overrides roi and mask_path
 };
 
 // Throws oslam::Error naming the file and key (unknown class, missing image, ROI
 // outside the image, ...). `classes` are the known classes.
 std::vector<ColourExample> ReadColourExamples(const std::string& path,
                                               const std::vector<ObjectClass>& classes);
+
+// Examples for a simulated run: per class, the central part of the largest
+// fully visible ground-truth slices (up to `per_class`, from different frames):
+// the middle half of the slice radially and angularly, inside the annulus. For
+// the simulator's convex shapes that region lies on the object. Only pixels
+// whose chroma is near the class's display colour are kept, so a striped
+// object is learnt by its main colour.
+std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
+                                                   const std::vector<ObjectClass>& classes,
+                                                   int per_class = 8);
 
 // Returns `classes` with the colour box of every class that has examples
 // replaced by the learnt one (classes without examples keep theirs).

@@ -1,0 +1,41 @@
+// oslam eval-detect: a run's detections against its ground truth.
+#include <cstdio>
+
+#include "apps/arguments.h"
+#include "apps/commands.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/run_folder.h"
+#include "detect/evaluation.h"
+
+namespace oslam {
+
+int RunEvalDetectCommand(const std::vector<std::string>& args) {
+  Arguments arguments("oslam eval-detect RUN_DIR [--detections FILE] [--json FILE]",
+                      "Precision and recall per class and bounding-slice errors of a run's "
+                      "detections,\nagainst the run's ground_truth/ (simulated runs).");
+  arguments.AddPositional("RUN_DIR", "the run folder (with ground_truth/)");
+  arguments.AddOption("detections", "", "FILE", "detections CSV", "RUN_DIR/detections.csv");
+  arguments.AddOption("max-range", "", "M", "objects farther than this do not count for recall", "3");
+  arguments.AddOption("min-visible", "", "F", "sightings less visible do not count for recall", "0.9");
+  arguments.AddOption("json", "", "FILE", "also write the figures as JSON");
+  arguments.AddFlag("quiet", "print nothing but errors");
+  if (!arguments.Parse(args)) return 0;
+  const std::string run_dir = arguments.Get("RUN_DIR");
+  DetectionEvaluationOptions options;
+  options.max_range_m = arguments.GetDouble("max-range");
+  options.min_visible_fraction = arguments.GetDouble("min-visible");
+
+  const std::optional<GroundTruth> truth = ReadGroundTruth(run_dir);
+  if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder");
+  const std::vector<ObjectClass> classes = ReadClasses(RunFolderPaths::Of(run_dir).classes);
+  const std::string detections_path =
+      arguments.Has("detections") ? arguments.Get("detections") : run_dir + "/detections.csv";
+  const DetectionEvaluation evaluation =
+      EvaluateDetections(ReadDetections(detections_path, classes), *truth, classes, options);
+  if (!arguments.Flag("quiet")) std::fputs(evaluation.Table().c_str(), stdout);
+  if (arguments.Has("json")) WriteTextFileAtomically(arguments.Get("json"), evaluation.Json());
+  return 0;
+}
+
+}  // namespace oslam

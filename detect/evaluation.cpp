@@ -1,0 +1,174 @@
+#include "detect/evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+
+#include "core/angles.h"
+
+namespace oslam {
+namespace {
+
+struct SightingInfo {
+  const GroundTruthSighting* sighting;
+  int class_index;  // -1 for objects of no class
+  bool counts_for_recall;
+};
+
+// Overlap of two intervals, each given by its start and length.
+double Overlap(double begin_a, double length_a, double begin_b, double length_b) {
+  return std::min(begin_a + length_a, begin_b + length_b) - std::max(begin_a, begin_b);
+}
+
+// The detection's slice and the true slice overlap, radially and angularly
+// (with `slack_px` of tolerance). The base points themselves may differ: a box
+// close to the robot shows its near edge well inside the base centre's radius.
+bool Matches(const Detection& d, const GroundTruthSighting& s, double slack_px) {
+  const double radius = std::max(1.0, s.u_r_px);
+  const double angle_offset = WrapAngle(d.slice.u_phi_rad - s.u_phi_rad);
+  const double angular = Overlap(-0.5 * s.s_phi_rad, s.s_phi_rad,
+                                 angle_offset - 0.5 * d.slice.s_phi_rad, d.slice.s_phi_rad);
+  const double radial = Overlap(s.u_r_px, s.s_r_px, d.slice.u_r_px, d.slice.s_r_px);
+  return angular * radius > -slack_px && radial > -slack_px;
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+}  // namespace
+
+DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
+                                       const GroundTruth& truth,
+                                       const std::vector<ObjectClass>& classes,
+                                       const DetectionEvaluationOptions& options) {
+  DetectionEvaluation result;
+  result.per_class.resize(classes.size());
+  for (size_t c = 0; c < classes.size(); ++c) result.per_class[c].class_name = classes[c].name;
+  result.total.class_name = "all";
+
+  std::map<int, const GroundTruthObject*> objects;
+  for (const GroundTruthObject& o : truth.objects) objects[o.id] = &o;
+  std::map<long, std::vector<SightingInfo>> sightings_by_frame;
+  for (const GroundTruthSighting& s : truth.sightings) {
+    const GroundTruthObject& object = *objects.at(s.object_id);
+    const int class_index = object.class_name.empty() ? -1 : FindClass(classes, object.class_name);
+    bool counts = false;
+    if (class_index >= 0 && s.frame < static_cast<long>(truth.trajectory.size())) {
+      const Pose2& pose = truth.trajectory[s.frame];
+      const double range = std::hypot(object.base_world.x() - pose.x, object.base_world.y() - pose.y);
+      counts = s.visible_fraction >= options.min_visible_fraction && range <= options.max_range_m;
+    }
+    sightings_by_frame[s.frame].push_back({&s, class_index, counts});
+  }
+
+  std::map<long, std::vector<const Detection*>> detections_by_frame;
+  for (const Detection& d : detections) {
+    detections_by_frame[d.frame].push_back(&d);
+    ClassDetectionStats& stats = result.per_class[d.class_index];
+    ++stats.detections;
+    const auto& frame_sightings = sightings_by_frame[d.frame];
+    bool same = false, other = false;
+    for (const SightingInfo& info : frame_sightings) {
+      if (info.class_index < 0 || !Matches(d, *info.sighting, options.slack_px)) continue;
+      (info.class_index == d.class_index ? same : other) = true;
+    }
+    if (same) {
+      ++stats.true_positives;
+    } else if (other) {
+      ++stats.confused;
+    } else {
+      ++stats.spurious;
+    }
+  }
+
+  std::vector<double> u_r, u_phi, s_r, s_phi, position;
+  for (const auto& [frame, infos] : sightings_by_frame) {
+    for (const SightingInfo& info : infos) {
+      if (!info.counts_for_recall) continue;
+      ClassDetectionStats& stats = result.per_class[info.class_index];
+      ++stats.sightings;
+      const Detection* best = nullptr;
+      for (const Detection* d : detections_by_frame[frame])
+        if (d->class_index == info.class_index && Matches(*d, *info.sighting, options.slack_px) &&
+            (!best || d->area_px > best->area_px))
+          best = d;
+      if (!best) continue;
+      ++stats.sightings_found;
+      const GroundTruthSighting& s = *info.sighting;
+      const double dphi = WrapAngle(best->slice.u_phi_rad - s.u_phi_rad);
+      u_r.push_back(std::abs(best->slice.u_r_px - s.u_r_px));
+      u_phi.push_back(std::abs(dphi) * s.u_r_px);
+      s_r.push_back(std::abs(best->slice.s_r_px - s.s_r_px));
+      s_phi.push_back(std::abs(best->slice.s_phi_rad - s.s_phi_rad) * s.u_r_px);
+      // Distance between the two base points in the image (law of cosines).
+      const double a = best->slice.u_r_px, b = s.u_r_px;
+      position.push_back(std::sqrt(std::max(0.0, a * a + b * b - 2 * a * b * std::cos(dphi))));
+    }
+  }
+  for (const ClassDetectionStats& stats : result.per_class) {
+    result.total.sightings += stats.sightings;
+    result.total.sightings_found += stats.sightings_found;
+    result.total.detections += stats.detections;
+    result.total.true_positives += stats.true_positives;
+    result.total.confused += stats.confused;
+    result.total.spurious += stats.spurious;
+  }
+  result.median_u_r_error_px = Median(u_r);
+  result.median_u_phi_error_px = Median(u_phi);
+  result.median_s_r_error_px = Median(s_r);
+  result.median_s_phi_error_px = Median(s_phi);
+  result.median_position_error_px = Median(position);
+  return result;
+}
+
+std::string DetectionEvaluation::Table() const {
+  std::ostringstream out;
+  char line[200];
+  std::snprintf(line, sizeof(line), "%-16s %9s %7s %10s %9s %8s %8s %8s\n", "class", "sightings",
+                "recall", "detections", "precision", "correct", "confused", "spurious");
+  out << line;
+  auto row = [&](const ClassDetectionStats& s) {
+    std::snprintf(line, sizeof(line), "%-16s %9d %7.3f %10d %9.3f %8d %8d %8d\n",
+                  s.class_name.c_str(), s.sightings, s.Recall(), s.detections, s.Precision(),
+                  s.true_positives, s.confused, s.spurious);
+    out << line;
+  };
+  for (const ClassDetectionStats& s : per_class) row(s);
+  row(total);
+  std::snprintf(line, sizeof(line),
+                "median |error| px: base position %.2f (u_r %.2f, u_phi %.2f), s_r %.2f, s_phi %.2f\n",
+                median_position_error_px, median_u_r_error_px, median_u_phi_error_px,
+                median_s_r_error_px, median_s_phi_error_px);
+  out << line;
+  return out.str();
+}
+
+std::string DetectionEvaluation::Json() const {
+  std::ostringstream out;
+  auto stats = [&](const ClassDetectionStats& s) {
+    out << "{\"class\": \"" << s.class_name << "\", \"sightings\": " << s.sightings
+        << ", \"recall\": " << s.Recall() << ", \"detections\": " << s.detections
+        << ", \"precision\": " << s.Precision() << ", \"correct\": " << s.true_positives
+        << ", \"confused\": " << s.confused << ", \"spurious\": " << s.spurious << "}";
+  };
+  out << "{\n  \"per_class\": [";
+  for (size_t i = 0; i < per_class.size(); ++i) {
+    out << (i ? ",\n    " : "\n    ");
+    stats(per_class[i]);
+  }
+  out << "\n  ],\n  \"total\": ";
+  stats(total);
+  out << ",\n  \"median_position_error_px\": " << median_position_error_px
+      << ",\n  \"median_u_r_error_px\": " << median_u_r_error_px
+      << ",\n  \"median_u_phi_error_px\": " << median_u_phi_error_px
+      << ",\n  \"median_s_r_error_px\": " << median_s_r_error_px
+      << ",\n  \"median_s_phi_error_px\": " << median_s_phi_error_px << "\n}\n";
+  return out.str();
+}
+
+}  // namespace oslam
