@@ -78,7 +78,7 @@ int RunCalibrateCommand(const std::vector<std::string>& args) {
                       "write one PNG per view (corners and reprojections)");
   arguments.AddOption("output", "-o", "CAMERA.yaml", "write the calibrated camera here");
   arguments.AddFlag("compare-opencv", "also run cv::omnidir::calibrate on the same corners");
-  arguments.AddFlag("no-subpix", "do not refine corners with cv::cornerSubPix");
+  arguments.AddFlag("subpix", "also refine corners with cv::cornerSubPix (worse on our sets)");
   arguments.AddFlag("no-rim", "do not detect the mirror rim / blind disc for the annulus");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
@@ -101,7 +101,7 @@ int RunCalibrateCommand(const std::vector<std::string>& args) {
   // 1. Corners.
   const std::vector<std::filesystem::path> paths = ListImages(arguments.Get("IMAGES_DIR"));
   CornerDetectionOptions corner_options;
-  corner_options.refine_with_corner_subpix = !arguments.Flag("no-subpix");
+  corner_options.refine_with_corner_subpix = arguments.Flag("subpix");
   std::vector<CalibrationView> views;
   std::vector<cv::Mat> images;
   int width = 0, height = 0;
