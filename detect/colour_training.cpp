@@ -106,8 +106,8 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
     for (const GroundTruthSighting& s : truth->sightings) {
       const auto object = std::find_if(truth->objects.begin(), truth->objects.end(),
                                        [&](const auto& o) { return o.id == s.object_id; });
-      if (object->class_name != object_class.name || s.visible_fraction < 0.999) continue;
-      if (s.s_r_px < 12 || s.s_phi_rad * s.u_r_px < 12 || s.frame >= static_cast<long>(frames.size()))
+      if (object->class_name != object_class.name || s.visible_fraction < 0.95) continue;
+      if (s.s_r_px < 8 || s.s_phi_rad * s.u_r_px < 6 || s.frame >= static_cast<long>(frames.size()))
         continue;
       candidates.push_back(&s);
     }
@@ -121,7 +121,7 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
       cv::Mat mask = CentralSliceMask(*camera, *s);
       const cv::Mat frame = frames.Read(static_cast<size_t>(s->frame));
       KeepPixelsNearDisplayColour(frame, object_class, 40.0, &mask);
-      if (cv::countNonZero(mask) < 20) continue;  // mostly beyond the rim or another colour
+      if (cv::countNonZero(mask) < 8) continue;  // mostly beyond the rim or another colour
       ColourExample example;
       example.image_path = frames.Name(static_cast<size_t>(s->frame));
       example.class_name = object_class.name;
