@@ -11,7 +11,7 @@ OSLAM_BUILD_DIR="${OSLAM_BUILD_DIR:-$OSLAM_ROOT/build}"
 OSLAM_PACKAGES=(
   g++ make cmake pkg-config
   libeigen3-dev libopencv-dev libsuitesparse-dev
-  libtinygltf-dev libstb-dev libpcl-dev libvtk9-dev
+  libtinygltf-dev libstb-dev nlohmann-json3-dev libpcl-dev libvtk9-dev
   libgtest-dev libbenchmark-dev
 )
 
