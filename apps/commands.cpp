@@ -8,8 +8,8 @@ const std::vector<Command>& Commands() {
       {"calibrate", "calibrate a catadioptric camera from checkerboard images", RunCalibrateCommand},
       {"train-colors", "learn class colour models from example regions", RunTrainColorsCommand},
       {"detect", "detect objects by colour in every frame of a run", RunDetectCommand},
-      {"map", "map objects and trajectory (geometric SLAM; --known-association)", RunMapCommand},
       {"eval-detect", "score a run's detections against its ground truth", RunEvalDetectCommand},
+      {"map", "map objects and trajectory (geometric SLAM; --known-association)", RunMapCommand},
       {"simulate", "render a simulated robot run (frames, odometry, ground truth) from a scene",
        RunSimulateCommand},
   };

@@ -20,8 +20,8 @@ const std::vector<Command>& Commands();
 int RunCameraCommand(const std::vector<std::string>& args);
 int RunCalibrateCommand(const std::vector<std::string>& args);
 int RunDetectCommand(const std::vector<std::string>& args);
-int RunMapCommand(const std::vector<std::string>& args);
 int RunEvalDetectCommand(const std::vector<std::string>& args);
+int RunMapCommand(const std::vector<std::string>& args);
 int RunTrainColorsCommand(const std::vector<std::string>& args);
 int RunSimulateCommand(const std::vector<std::string>& args);
 
