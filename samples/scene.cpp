@@ -167,9 +167,10 @@ std::unique_ptr<CameraModel> ParseCamera(const Reader& r, const cv::FileNode& ro
 }
 
 std::vector<ObjectClass> ParseClasses(const Reader& r, const cv::FileNode& root) {
+  // classes.yaml must list at least one class for the rest of oslam to read it.
   std::vector<ObjectClass> classes;
-  if (!r.Has(root, "classes")) return classes;
   const cv::FileNode list = r.file.Seq(root, "classes");
+  if (list.size() == 0) r.file.Fail("classes", "no classes listed");
   for (int i = 0; i < static_cast<int>(list.size()); ++i) {
     const std::string prefix = "classes[" + std::to_string(i) + "].";
     const cv::FileNode node = r.MapOrFail(list[i], prefix.substr(0, prefix.size() - 1));

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <random>
 
 #include <opencv2/imgcodecs.hpp>
@@ -115,6 +116,9 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
   std::mt19937_64 exposure_rng = StreamFor(options.seed, 2);
   std::normal_distribution<double> normal(0.0, 1.0);
   FrameRender render;
+  // PNG encoding of frame i overlaps the rendering of frame i + 1; the bytes
+  // do not depend on the timing.
+  std::future<void> pending_write;
   for (long frame = 0; frame < summary.frames; ++frame) {
     const Clock::time_point frame_start = Clock::now();
     FrameConditions conditions;
@@ -125,7 +129,9 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
     AddSightings(scene, renderer, path.true_poses[frame], frame, render, truth.objects,
                  &truth.sightings);
     summary.render_seconds += SecondsSince(frame_start);
-    WriteFrame(render.image, FramePath(run_dir, frame));
+    if (pending_write.valid()) pending_write.get();  // rethrows a failed write
+    pending_write =
+        std::async(std::launch::async, WriteFrame, render.image.clone(), FramePath(run_dir, frame));
     if ((frame + 1) % 10 == 0 || frame + 1 == summary.frames) {
       std::snprintf(line, sizeof(line), "render: frame %ld/%ld (%.1f frames/s rendering)",
                     frame + 1, summary.frames,
@@ -133,6 +139,7 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
       report(line, frame + 1 == summary.frames);
     }
   }
+  if (pending_write.valid()) pending_write.get();
   summary.sightings = static_cast<long>(truth.sightings.size());
 
   // Odometry and ground truth last: a run folder with odometry.csv is complete.

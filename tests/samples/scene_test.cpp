@@ -80,6 +80,8 @@ TEST(Scene, BadInputGivesOneLineErrorsNamingFileAndKey) {
             file + "camera.preset: unknown camera preset 'fisheye' (known: lpa, cogniron)");
   EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "camera: {preset: lpa}\n", "")),
             file + "camera: missing");
+  EXPECT_EQ(LoadError(dir, "camera: {preset: lpa}\nclasses: []\n"),
+            file + "classes: no classes listed");
   EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "\"F3 L2\"", "\"F3 X2\"")),
             file +
                 "path.commands: unknown command letter 'X' (use F, B, L, R with an optional "
