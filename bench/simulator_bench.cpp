@@ -57,6 +57,24 @@ void BM_RenderLabFrameWithGroundTruth(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderLabFrameWithGroundTruth)->Unit(benchmark::kMillisecond);
 
+// The same frames testing every primitive for every pixel: what the bearing
+// bins save.
+void BM_RenderLabFrameBruteForce(benchmark::State& state) {
+  RendererOptions options;
+  options.brute_force = true;
+  const Renderer renderer(LabScene(), options);
+  const std::vector<Pose2> poses = LabPoses();
+  FrameRender render;
+  size_t frame = 0;
+  for (auto _ : state) {
+    renderer.Render(poses[frame % poses.size()], {1.0, frame}, &render);
+    benchmark::DoNotOptimize(render.image.data);
+    ++frame;
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()));
+}
+BENCHMARK(BM_RenderLabFrameBruteForce)->Unit(benchmark::kMillisecond);
+
 void BM_RendererSetup(benchmark::State& state) {
   for (auto _ : state) {
     const Renderer renderer(LabScene());
