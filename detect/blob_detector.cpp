@@ -52,39 +52,49 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
   }
   cv::Mat yuv, class_bits;
   cv::cvtColor(bgr, yuv, cv::COLOR_BGR2YUV);
-  std::vector<int> counts;
-  classifier_.Classify(yuv, mask_, &class_bits, &counts);
+  std::vector<ColourClassifier::ClassExtent> extents;
+  classifier_.Classify(yuv, mask_, &class_bits, &extents);
 
   std::vector<Detection> detections;
-  const cv::Mat kernel = cv::getStructuringElement(
-      cv::MORPH_ELLIPSE, cv::Size(2 * options_.opening_radius_px + 1, 2 * options_.opening_radius_px + 1));
+  const int radius = options_.opening_radius_px;
+  const cv::Mat kernel =
+      cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
   for (int c = 0; c < classifier_.num_classes(); ++c) {
-    if (counts[c] < options_.min_area_px) continue;
-    cv::Mat class_mask = (class_bits & cv::Scalar(static_cast<int>(1u << c))) != 0;
-    if (options_.opening_radius_px > 0) cv::morphologyEx(class_mask, class_mask, cv::MORPH_OPEN, kernel);
+    if (extents[c].count < options_.min_area_px) continue;
+    // Work on the class's bounding box only (plus a margin for the opening).
+    const cv::Rect roi = (extents[c].box + cv::Size(2 * radius, 2 * radius) - cv::Point(radius, radius)) &
+                         cv::Rect(0, 0, bgr.cols, bgr.rows);
+    cv::Mat class_mask = (class_bits(roi) & cv::Scalar(static_cast<int>(1u << c))) != 0;
+    if (radius > 0) cv::morphologyEx(class_mask, class_mask, cv::MORPH_OPEN, kernel);
     cv::Mat labels, stats, centroids;
-    const int num_labels = cv::connectedComponentsWithStats(class_mask, labels, stats, centroids, 8, CV_32S);
+    const int num_labels =
+        cv::connectedComponentsWithStats(class_mask, labels, stats, centroids, 8, CV_32S);
     for (int label = 1; label < num_labels; ++label) {
       if (stats.at<int>(label, cv::CC_STAT_AREA) < options_.min_area_px) continue;
       const cv::Rect box(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
-                         stats.at<int>(label, cv::CC_STAT_WIDTH), stats.at<int>(label, cv::CC_STAT_HEIGHT));
-      detections.push_back(DescribeBlob(labels, label, box, yuv, c, frame));
+                         stats.at<int>(label, cv::CC_STAT_WIDTH),
+                         stats.at<int>(label, cv::CC_STAT_HEIGHT));
+      detections.push_back(DescribeBlob(labels, label, box, roi.tl(), yuv, c, frame));
     }
   }
   return detections;
 }
 
 Detection BlobDetector::DescribeBlob(const cv::Mat& labels, int label, const cv::Rect& box,
-                                     const cv::Mat& yuv, int class_index, long frame) const {
+                                     const cv::Point& offset, const cv::Mat& yuv, int class_index,
+                                     long frame) const {
   std::vector<double> radii, angles;
   std::array<double, 3> sum{};
   for (int y = box.y; y < box.y + box.height; ++y) {
     const int* row = labels.ptr<int>(y);
+    const float* radius_row = radius_px_.ptr<float>(y + offset.y);
+    const float* angle_row = angle_rad_.ptr<float>(y + offset.y);
+    const cv::Vec3b* colour_row = yuv.ptr<cv::Vec3b>(y + offset.y);
     for (int x = box.x; x < box.x + box.width; ++x) {
       if (row[x] != label) continue;
-      radii.push_back(radius_px_.at<float>(y, x));
-      angles.push_back(angle_rad_.at<float>(y, x));
-      const cv::Vec3b& colour = yuv.at<cv::Vec3b>(y, x);
+      radii.push_back(radius_row[x + offset.x]);
+      angles.push_back(angle_row[x + offset.x]);
+      const cv::Vec3b& colour = colour_row[x + offset.x];
       for (int ch = 0; ch < 3; ++ch) sum[ch] += colour[ch];
     }
   }

@@ -49,8 +49,10 @@ class BlobDetector {
   const cv::Mat& annulus_mask() const { return mask_; }
 
  private:
-  Detection DescribeBlob(const cv::Mat& labels, int label, const cv::Rect& box, const cv::Mat& yuv,
-                         int class_index, long frame) const;
+  // `labels` covers the image region starting at `offset`; `box` is in labels' coordinates.
+  Detection DescribeBlob(const cv::Mat& labels, int label, const cv::Rect& box,
+                         const cv::Point& offset, const cv::Mat& yuv, int class_index,
+                         long frame) const;
 
   std::vector<ObjectClass> classes_;
   BlobDetectorOptions options_;

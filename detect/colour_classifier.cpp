@@ -27,12 +27,13 @@ ColourClassifier::ColourClassifier(const std::vector<ObjectClass>& classes)
 }
 
 void ColourClassifier::Classify(const cv::Mat& yuv, const cv::Mat& mask, cv::Mat* class_bits,
-                                std::vector<int>* counts) const {
+                                std::vector<ClassExtent>* extents) const {
   CV_Assert(yuv.type() == CV_8UC3);
   CV_Assert(mask.empty() || (mask.type() == CV_8UC1 && mask.size() == yuv.size()));
   class_bits->create(yuv.size(), CV_32SC1);
-  counts->assign(num_classes_, 0);
-  uint32_t seen = 0;
+  std::vector<int> count(num_classes_, 0);
+  std::vector<int> min_x(num_classes_, yuv.cols), min_y(num_classes_, yuv.rows);
+  std::vector<int> max_x(num_classes_, -1), max_y(num_classes_, -1);
   for (int y = 0; y < yuv.rows; ++y) {
     const cv::Vec3b* in = yuv.ptr<cv::Vec3b>(y);
     const uint8_t* use = mask.empty() ? nullptr : mask.ptr<uint8_t>(y);
@@ -41,18 +42,22 @@ void ColourClassifier::Classify(const cv::Mat& yuv, const cv::Mat& mask, cv::Mat
       uint32_t bits = tables_[0][in[x][0]] & tables_[1][in[x][1]] & tables_[2][in[x][2]];
       if (use && !use[x]) bits = 0;
       out[x] = bits;
-      seen |= bits;
+      // Most pixels belong to no class, so this loop rarely runs.
+      for (uint32_t rest = bits; rest; rest &= rest - 1) {
+        const int c = __builtin_ctz(rest);
+        ++count[c];
+        min_x[c] = std::min(min_x[c], x);
+        max_x[c] = std::max(max_x[c], x);
+        min_y[c] = std::min(min_y[c], y);
+        max_y[c] = std::max(max_y[c], y);
+      }
     }
   }
-  // Count only for classes that occur (most frames show few classes).
+  extents->assign(num_classes_, ClassExtent{});
   for (int c = 0; c < num_classes_; ++c) {
-    if (!(seen & (1u << c))) continue;
-    int count = 0;
-    for (int y = 0; y < yuv.rows; ++y) {
-      const uint32_t* row = reinterpret_cast<const uint32_t*>(class_bits->ptr<int32_t>(y));
-      for (int x = 0; x < yuv.cols; ++x) count += (row[x] >> c) & 1u;
-    }
-    (*counts)[c] = count;
+    if (count[c] == 0) continue;
+    (*extents)[c] = {count[c], cv::Rect(min_x[c], min_y[c], max_x[c] - min_x[c] + 1,
+                                        max_y[c] - min_y[c] + 1)};
   }
 }
 

@@ -22,12 +22,19 @@ class ColourClassifier {
   // there are more than kMaxClasses classes.
   explicit ColourClassifier(const std::vector<ObjectClass>& classes);
 
+  // Where each class occurs in an image: pixel count and bounding box.
+  struct ClassExtent {
+    int count = 0;
+    cv::Rect box;
+  };
+
   // Per pixel, bit c set when the pixel is inside class c's box. `yuv` is an
-  // 8-bit 3-channel YUV image (cv::COLOR_BGR2YUV). `counts[c]` receives the
-  // number of pixels of class c inside `mask` (8-bit, non-zero = use; may be
-  // empty for the whole image).
+  // 8-bit 3-channel YUV image (cv::COLOR_BGR2YUV); only pixels where `mask`
+  // (8-bit) is non-zero are classified (an empty mask means all). `extents[c]`
+  // receives class c's pixel count and bounding box, so later stages can work
+  // on that box only.
   void Classify(const cv::Mat& yuv, const cv::Mat& mask, cv::Mat* class_bits,
-                std::vector<int>* counts) const;
+                std::vector<ClassExtent>* extents) const;
 
   bool InBox(int class_index, const cv::Vec3b& yuv) const;
   int num_classes() const { return num_classes_; }
