@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "core/bounding_slice.h"
 #include "mapping/observation_model.h"
@@ -177,6 +178,78 @@ TEST(Renderer, OccludedObjectGetsItsVisibleFraction) {
                            {truth->objects[0].base_world, 0.3, 1.2}, &model));
   EXPECT_NEAR(truth->sightings[0].u_r_px, model.u_r_px, 1e-9);
   EXPECT_NEAR(truth->sightings[0].s_phi_rad, model.s_phi_rad, 1e-12);
+}
+
+}  // namespace
+}  // namespace oslam
+
+namespace oslam {
+namespace {
+
+// Pixels of one channel whose ray goes down to the floor of a flat world.
+std::vector<double> FloorValues(const CameraModel& camera, const FrameRender& render, int channel) {
+  std::vector<double> values;
+  for (int y = 0; y < render.image.rows; ++y) {
+    for (int x = 0; x < render.image.cols; ++x) {
+      Ray ray;
+      const Eigen::Vector2d pixel(x, y);
+      if (!camera.IsInAnnulus(pixel) || !camera.BackProjectPixel(pixel, &ray)) continue;
+      if (ray.direction_robot.z() < -0.05)
+        values.push_back(render.image.at<cv::Vec3b>(y, x)[channel]);
+    }
+  }
+  return values;
+}
+
+TEST(Renderer, SensorNoiseAndExposureHaveTheirStatedSize) {
+  testing::TempDir dir;
+  Scene scene = FlatScene(dir, "  []\n");
+  scene.sensor.noise_std = 4.0;
+  const Renderer renderer(scene);
+  FrameRender render;
+  renderer.Render({0, 0, 0}, {1.0, 77}, &render);
+  const std::vector<double> values = FloorValues(*scene.camera, render, 1);
+  ASSERT_GT(values.size(), 10000u);
+  double mean = 0, variance = 0;
+  for (double v : values) mean += v;
+  mean /= values.size();
+  for (double v : values) variance += (v - mean) * (v - mean);
+  variance /= values.size();
+  EXPECT_NEAR(mean, 100.0, 0.1);
+  // Quantisation adds 1/12 grey level^2 to the noise variance.
+  EXPECT_NEAR(std::sqrt(variance - 1.0 / 12.0), 4.0, 0.1);
+
+  scene.sensor.noise_std = 0.0;
+  const Renderer quiet(scene);
+  quiet.Render({0, 0, 0}, {0.5, 77}, &render);  // half exposure
+  for (double v : FloorValues(*scene.camera, render, 1)) ASSERT_EQ(v, 50.0);
+}
+
+TEST(Renderer, ImageTextureIsMappedOntoTheSurface) {
+  testing::TempDir dir;
+  // A 2 x 1 image: left half red, right half blue, tiled on a 1 x 1 m wall
+  // texture; the wall faces the robot at x = 1.5.
+  cv::Mat image(1, 2, CV_8UC3);
+  image.at<cv::Vec3b>(0, 0) = {0, 0, 255};
+  image.at<cv::Vec3b>(0, 1) = {255, 0, 0};
+  ASSERT_TRUE(cv::imwrite(dir.Path("halves.png"), image));
+  Scene scene = FlatScene(dir,
+                          "  []\nwalls:\n  - {points_m: [[1.5, 2], [1.5, -2]], colour: [0, 0, 0], "
+                          "texture: {pattern: image, file: halves.png, size_m: [1, 1]}}\n");
+  scene.path_spec.start = {0, 0, 0};
+  FrameRender render;
+  Renderer(scene).Render(scene.path_spec.start, {}, &render);
+  // Along the wall (u from (1.5, 2) towards (1.5, -2)): u in [0, 0.5) red,
+  // [0.5, 1) blue, repeating. Look at wall points at height 0.3 m.
+  auto colour_at = [&](double y) {
+    Eigen::Vector2d pixel;
+    EXPECT_TRUE(scene.camera->ProjectToPixel(Eigen::Vector3d(1.5, y, 0.3), &pixel));
+    return render.image.at<cv::Vec3b>(static_cast<int>(std::lround(pixel.y())),
+                                      static_cast<int>(std::lround(pixel.x())));
+  };
+  EXPECT_EQ(colour_at(1.75), cv::Vec3b(0, 0, 255));  // u = 0.25: red (BGR)
+  EXPECT_EQ(colour_at(1.25), cv::Vec3b(255, 0, 0));  // u = 0.75: blue
+  EXPECT_EQ(colour_at(0.75), cv::Vec3b(0, 0, 255));  // u = 1.25: red again
 }
 
 }  // namespace
