@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/bounding_slice.h"
 #include "mapping/observation_model.h"
@@ -250,6 +252,28 @@ TEST(Renderer, ImageTextureIsMappedOntoTheSurface) {
   EXPECT_EQ(colour_at(1.75), cv::Vec3b(0, 0, 255));  // u = 0.25: red (BGR)
   EXPECT_EQ(colour_at(1.25), cv::Vec3b(255, 0, 0));  // u = 0.75: blue
   EXPECT_EQ(colour_at(0.75), cv::Vec3b(0, 0, 255));  // u = 1.25: red again
+}
+
+}  // namespace
+}  // namespace oslam
+
+namespace oslam {
+namespace {
+
+TEST(Renderer, SiftFindsFeaturesOnNoiseTexturedObjects) {
+  // The lab's green box carries a noise texture; from the start pose SIFT
+  // must find keypoints on it (untextured balls give next to none).
+  const Scene scene = LoadScene(std::string(OSLAM_SOURCE_DIR) + "/samples/scenes/lab.yaml");
+  FrameRender render;
+  Renderer(scene).Render(scene.path_spec.start, {1.0, 3}, &render);
+  cv::Mat grey;
+  cv::cvtColor(render.image, grey, cv::COLOR_BGR2GRAY);
+  std::vector<cv::KeyPoint> keypoints;
+  cv::SIFT::create()->detect(grey, keypoints);
+  int on_green_box = 0;
+  for (const cv::KeyPoint& k : keypoints)
+    if (render.object_ids.at<int>(cvRound(k.pt.y), cvRound(k.pt.x)) == 0) ++on_green_box;
+  EXPECT_GE(on_green_box, 5) << keypoints.size() << " keypoints in the frame";
 }
 
 }  // namespace
