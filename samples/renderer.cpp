@@ -428,6 +428,23 @@ void Renderer::Render(const Pose2& pose, const FrameConditions& conditions,
   }
 }
 
+std::vector<BoundingSlice> Renderer::VisibleSlices(const FrameRender& render) const {
+  const size_t count = scene_.objects.size();
+  std::vector<std::vector<double>> radii(count), angles(count);
+  const int* ids = render.object_ids.ptr<int>();
+  const int width = render.object_ids.cols;
+  for (int index : pixel_index_) {
+    if (ids[index] < 0) continue;
+    const PolarPoint polar =
+        scene_.camera->PixelToPolar(Eigen::Vector2d(index % width, index / width));
+    radii[ids[index]].push_back(polar.radius_px);
+    angles[ids[index]].push_back(polar.angle_rad);
+  }
+  std::vector<BoundingSlice> slices(count);
+  for (size_t j = 0; j < count; ++j) slices[j] = SliceOfPolarPoints(radii[j], angles[j]);
+  return slices;
+}
+
 long Renderer::FootprintPixels(const Pose2& pose, int object) const {
   const Primitive* primitive = nullptr;
   for (const Primitive& candidate : primitives_)

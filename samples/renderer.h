@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <opencv2/core/mat.hpp>
 
+#include "core/bounding_slice.h"
 #include "core/pose2.h"
 #include "samples/scene.h"
 
@@ -48,6 +49,11 @@ class Renderer {
   // Annulus pixels whose ray hits `object` when nothing else is in the way:
   // the object's unoccluded image footprint, for the visible fraction.
   long FootprintPixels(const Pose2& pose, int object) const;
+
+  // Bounding slice of each object's visible pixels in a rendered frame (a
+  // zero slice for objects not seen): what an ideal pixel-exact detector
+  // would report, as opposed to the cylinder model's slice.
+  std::vector<BoundingSlice> VisibleSlices(const FrameRender& render) const;
 
   size_t num_annulus_pixels() const { return pixel_index_.size(); }
 

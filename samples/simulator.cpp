@@ -6,11 +6,13 @@
 #include <filesystem>
 #include <future>
 #include <random>
+#include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include "calib/camera_io.h"
 #include "core/atomic_file.h"
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/run_folder.h"
 #include "mapping/observation_model.h"
@@ -51,11 +53,22 @@ void WriteFrame(const cv::Mat& image, const std::string& path) {
   });
 }
 
+// One row of ground_truth/visible_slices.csv: the pixel-measured slice of a
+// sighting's visible part.
+struct VisibleSliceRow {
+  long frame = 0;
+  int object_id = 0;
+  long visible_px = 0, footprint_px = 0;
+  BoundingSlice slice;
+};
+
 // Sightings of one frame: every object with at least one visible pixel whose
 // cylinder-model slice exists (base and top imaged by the mirror).
 void AddSightings(const Scene& scene, const Renderer& renderer, const Pose2& pose, long frame,
                   const FrameRender& render, const std::vector<GroundTruthObject>& objects,
-                  std::vector<GroundTruthSighting>* sightings) {
+                  std::vector<GroundTruthSighting>* sightings,
+                  std::vector<VisibleSliceRow>* visible_rows) {
+  const std::vector<BoundingSlice> measured = renderer.VisibleSlices(render);
   for (size_t j = 0; j < objects.size(); ++j) {
     const long visible = render.visible_pixels[j];
     if (visible == 0) continue;
@@ -68,7 +81,20 @@ void AddSightings(const Scene& scene, const Renderer& renderer, const Pose2& pos
     const long footprint = std::max(visible, renderer.FootprintPixels(pose, static_cast<int>(j)));
     sightings->push_back({frame, object.id, slice.u_r_px, slice.u_phi_rad, slice.s_r_px,
                           slice.s_phi_rad, static_cast<double>(visible) / footprint});
+    visible_rows->push_back({frame, object.id, visible, footprint, measured[j]});
   }
+}
+
+void WriteVisibleSlices(const std::vector<VisibleSliceRow>& rows, const std::string& run_dir) {
+  std::ostringstream out;
+  out << "frame,object_id,visible_px,footprint_px,u_r_px,u_phi_rad,s_r_px,s_phi_rad\n";
+  for (const VisibleSliceRow& row : rows) {
+    out << row.frame << ',' << row.object_id << ',' << row.visible_px << ',' << row.footprint_px
+        << ',' << CsvNumber(row.slice.u_r_px) << ',' << CsvNumber(row.slice.u_phi_rad) << ','
+        << CsvNumber(row.slice.s_r_px) << ',' << CsvNumber(row.slice.s_phi_rad) << '\n';
+  }
+  WriteTextFileAtomically((fs::path(run_dir) / "ground_truth" / "visible_slices.csv").string(),
+                          out.str());
 }
 
 double PathLength(const std::vector<Pose2>& poses) {
@@ -116,6 +142,7 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
   std::mt19937_64 exposure_rng = StreamFor(options.seed, 2);
   std::normal_distribution<double> normal(0.0, 1.0);
   FrameRender render;
+  std::vector<VisibleSliceRow> visible_rows;
   // PNG encoding of frame i overlaps the rendering of frame i + 1; the bytes
   // do not depend on the timing.
   std::future<void> pending_write;
@@ -127,7 +154,7 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
         MixBits(options.seed * 0x100000001b3ULL + static_cast<std::uint64_t>(frame));
     renderer.Render(path.true_poses[frame], conditions, &render);
     AddSightings(scene, renderer, path.true_poses[frame], frame, render, truth.objects,
-                 &truth.sightings);
+                 &truth.sightings, &visible_rows);
     summary.render_seconds += SecondsSince(frame_start);
     if (pending_write.valid()) pending_write.get();  // rethrows a failed write
     pending_write =
@@ -143,6 +170,7 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
   summary.sightings = static_cast<long>(truth.sightings.size());
 
   // Odometry and ground truth last: a run folder with odometry.csv is complete.
+  WriteVisibleSlices(visible_rows, run_dir);
   WriteGroundTruth(truth, run_dir);
   WriteOdometryPoses(path.odometry_poses, RunFolderPaths::Of(run_dir).odometry);
   summary.total_seconds = SecondsSince(start);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "core/atomic_file.h"
+#include "core/csv.h"
 #include "core/run_folder.h"
 #include "test_util.h"
 
@@ -39,7 +40,7 @@ TEST(Simulator, SameSeedSameBytesOtherSeedOtherOdometry) {
 
   const auto a = FilesUnder(dir.Path("a")), b = FilesUnder(dir.Path("b")),
              c = FilesUnder(dir.Path("c"));
-  ASSERT_EQ(a.size(), 9u);  // 3 frames, odometry, camera, classes, 3 ground-truth files
+  ASSERT_EQ(a.size(), 10u);  // 3 frames, odometry, camera, classes, 4 ground-truth files
   EXPECT_TRUE(a == b);
   EXPECT_NE(a.at("odometry.csv"), c.at("odometry.csv"));
   EXPECT_NE(a.at("frames/000002.png"), c.at("frames/000002.png"));
@@ -64,6 +65,18 @@ TEST(Simulator, WritesARunFolderTheReadersAccept) {
   EXPECT_GT(truth->sightings.size(), 4u);
   // The run starts where the scene says; odometry starts at the true pose.
   EXPECT_DOUBLE_EQ(odometry.poses[0].x, truth->trajectory[0].x);
+  // Pixel-measured slices: one row per sighting, in the same order.
+  const CsvTable visible = CsvTable::Read(dir.Path("run") + "/ground_truth/visible_slices.csv");
+  ASSERT_EQ(visible.num_rows(), truth->sightings.size());
+  for (size_t row = 0; row < visible.num_rows(); ++row) {
+    EXPECT_EQ(visible.Integer(row, visible.ColumnIndex("object_id")),
+              truth->sightings[row].object_id);
+    const double visible_px = visible.Double(row, visible.ColumnIndex("visible_px"));
+    const double footprint_px = visible.Double(row, visible.ColumnIndex("footprint_px"));
+    EXPECT_NEAR(visible_px / footprint_px, truth->sightings[row].visible_fraction, 1e-12);
+    EXPECT_GE(visible.Double(row, visible.ColumnIndex("u_r_px")),
+              scene.camera->annulus().blind_radius_px);
+  }
   // No temporary files left behind.
   for (const auto& entry : fs::recursive_directory_iterator(dir.Path("run")))
     EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
