@@ -10,6 +10,8 @@ const std::vector<Command>& Commands() {
       {"detect", "detect objects by colour in every frame of a run", RunDetectCommand},
       {"eval-detect", "score a run's detections against its ground truth", RunEvalDetectCommand},
       {"map", "map objects and trajectory (geometric SLAM; --known-association)", RunMapCommand},
+      {"export", "write an O-Map as glTF, PLY, figures and reprojection overlays",
+       RunExportCommand},
       {"simulate", "render a simulated robot run (frames, odometry, ground truth) from a scene",
        RunSimulateCommand},
   };

@@ -24,5 +24,6 @@ int RunEvalDetectCommand(const std::vector<std::string>& args);
 int RunMapCommand(const std::vector<std::string>& args);
 int RunTrainColorsCommand(const std::vector<std::string>& args);
 int RunSimulateCommand(const std::vector<std::string>& args);
+int RunExportCommand(const std::vector<std::string>& args);
 
 }  // namespace oslam
