@@ -1,0 +1,94 @@
+// The sampler's state (C, J) over atomic tracks (spec §9.5): a partition of
+// the track ids into objects plus a class per object, kept canonical (ids
+// sorted in each block, blocks sorted by their first id) so that equal states
+// compare and hash equal. Also the class-confusion model of the tracks
+// (spec §7.1) and what a state's evaluation provides to the moves.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "mapping/geometric_slam.h"
+
+namespace oslam {
+
+struct AssociationState {
+  std::vector<std::vector<int>> blocks;  // track ids per object
+  std::vector<int> classes;              // class index per object (c_j)
+
+  void Canonicalize();
+  int BlockOf(int track) const;  // -1 when absent
+  size_t num_tracks() const;
+  bool operator==(const AssociationState& other) const {
+    return blocks == other.blocks && classes == other.classes;
+  }
+  std::string ToString() const;  // "{0,2}:1 {1}:0"
+};
+
+struct AssociationStateHash {
+  size_t operator()(const AssociationState& state) const;
+};
+
+// Every track its own object, with its detected class (Algorithm 9 step 3).
+AssociationState SeparateTracksState(const std::vector<int>& track_classes);
+
+// log P(a | c) for the tracks: a track's detections share one detected class.
+class ClassConfusionModel {
+ public:
+  // confusion[c][a] = P(a | c); entries are floored at `floor` (spec §7.1,
+  // so that no class is impossible) and rows renormalised.
+  ClassConfusionModel(const std::vector<std::vector<double>>& confusion, double floor,
+                      std::vector<int> track_class, std::vector<int> track_size);
+  // Identity confusion (known classes, spec §11.4): P(a | c) = 1 if a == c, else `floor`.
+  static ClassConfusionModel Identity(int num_classes, double floor, std::vector<int> track_class,
+                                      std::vector<int> track_size);
+
+  int num_classes() const { return static_cast<int>(log_confusion_.size()); }
+  int num_tracks() const { return static_cast<int>(track_class_.size()); }
+  int track_class(int track) const { return track_class_[track]; }
+  int track_size(int track) const { return track_size_[track]; }
+  // sum over the block's detections of log P(a_ik | c) (the penalty of eq. 4.32).
+  double BlockLogLikelihood(const std::vector<int>& block, int c) const;
+  // log q(c | Psi) for every c: q ∝ prod P(a | c) (Algorithms 5-7).
+  std::vector<double> ClassLogProposal(const std::vector<int>& block) const;
+
+ private:
+  std::vector<std::vector<double>> log_confusion_;  // [c][a]
+  std::vector<int> track_class_, track_size_;
+};
+
+// A state's target and the per-object quantities the moves need, all
+// computed on that state's solution (spec §9.2-9.3); index = block index.
+struct StateEvaluation {
+  AssociationState state;
+  bool valid = false;
+  double log_target = 0;                   // log P(Z | C, J) + log P(C, J), untempered
+  std::vector<Eigen::Vector3d> locations;  // l_j
+  std::vector<double> residual2;           // r^2(j), eq. 5.2
+  // The geometric solution, for fusion and warm starts (null in tests).
+  std::shared_ptr<const GeometricSlamResult> solution;
+  double evaluation_time_s = 0;
+};
+
+using EvaluationPtr = std::shared_ptr<const StateEvaluation>;
+
+// Computes (and caches) evaluations. One instance per chain: not thread-safe.
+class StateEvaluator {
+ public:
+  virtual ~StateEvaluator() = default;
+  // Evaluates `state`, linearised at `from` (the current state's evaluation,
+  // may be null); a cached value is returned for a revisited state.
+  virtual EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation* from) = 0;
+  // Full optimisation of `state`; replaces its cached value (spec §9.3).
+  virtual EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) = 0;
+  // Puts an evaluation computed elsewhere into the cache (chain start, swaps).
+  virtual void Remember(const EvaluationPtr& evaluation) = 0;
+  virtual size_t num_solves() const = 0;
+  virtual size_t num_cache_hits() const = 0;
+};
+
+}  // namespace oslam

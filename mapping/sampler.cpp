@@ -1,0 +1,197 @@
+#include "mapping/sampler.h"
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "core/error.h"
+
+namespace oslam {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+bool ValidProbabilities(const MoveProbabilities& p) {
+  return p.merge >= 0 && p.split >= 0 && p.switch_class >= 0 &&
+         std::abs(p.merge + p.split + p.switch_class - 1.0) < 1e-9;
+}
+
+// One random stream per chain, derived from the seed and the chain index.
+Rng ChainRng(unsigned long seed, int chain) {
+  std::seed_seq sequence{static_cast<unsigned>(seed), static_cast<unsigned>(seed >> 32),
+                         static_cast<unsigned>(chain), 0x05a1u};
+  return Rng(sequence);
+}
+
+}  // namespace
+
+bool SamplerOptions::Validate(std::string* why) const {
+  auto fail = [why](const char* what) {
+    if (why) *why = what;
+    return false;
+  };
+  if (hill_climb_steps < 0) return fail("the hill-climbing steps must be >= 0");
+  if (refine_every < 1) return fail("the refinement interval K_NL must be >= 1");
+  if (!ValidProbabilities(hill_climb_moves) || !ValidProbabilities(sampling_moves))
+    return fail("move probabilities must be >= 0 and sum to 1");
+  if (num_chains < 1) return fail("at least one chain is needed");
+  if (!(delta_temperature >= 0) || std::isinf(delta_temperature))
+    return fail("the temperature step dT must be >= 0");
+  if (num_iterations < 1) return fail("at least one iteration is needed");
+  if (burn_in < 0 || burn_in >= num_iterations)
+    return fail("the burn-in must be >= 0 and below the number of iterations");
+  return moves.Validate(why);
+}
+
+EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool greedy,
+                             StateEvaluator& evaluator, const ClassConfusionModel& model,
+                             const MoveOptions& options, const MoveProbabilities& probabilities,
+                             Rng& rng, std::array<MoveStatistics, 3>* stats) {
+  const Proposal proposal = ProposeMove(*current, model, options, probabilities, rng);
+  MoveStatistics& stat = (*stats)[static_cast<int>(proposal.type)];
+  ++stat.proposed;
+  // The uniform is drawn for every proposal so the stream does not depend on outcomes.
+  const double log_u = std::log(std::uniform_real_distribution<double>(0.0, 1.0)(rng));
+  if (proposal.self_transition) {
+    ++stat.self_transitions;
+    return current;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  EvaluationPtr proposed = evaluator.Evaluate(proposal.state, current.get());
+  stat.time_s += Seconds(start);
+  if (!proposed || !proposed->valid) return current;
+  const double delta = proposed->log_target - current->log_target;
+  bool accept;
+  if (greedy) {
+    accept = delta > 0;
+  } else {
+    const double log_reverse =
+        LogReverseProbability(proposal, *proposed, model, options, probabilities);
+    const double log_alpha = beta * delta + log_reverse - proposal.log_q_forward;
+    accept = std::isfinite(log_reverse) && log_u < std::min(0.0, log_alpha);
+  }
+  if (!accept) return current;
+  ++stat.accepted;
+  return proposed;
+}
+
+double EffectiveSampleSize(const std::vector<double>& x) {
+  const size_t n = x.size();
+  if (n < 4) return static_cast<double>(n);
+  double mean = 0;
+  for (double v : x) mean += v;
+  mean /= n;
+  auto autocovariance = [&](size_t lag) {
+    double s = 0;
+    for (size_t i = 0; i + lag < n; ++i) s += (x[i] - mean) * (x[i + lag] - mean);
+    return s / n;
+  };
+  const double c0 = autocovariance(0);
+  if (!(c0 > 0)) return static_cast<double>(n);
+  // Geyer's initial positive sequence: sum pairs of autocorrelations while positive.
+  double sum = 0;
+  for (size_t lag = 1; lag + 1 < n; lag += 2) {
+    const double pair = (autocovariance(lag) + autocovariance(lag + 1)) / c0;
+    if (pair <= 0) break;
+    sum += pair;
+  }
+  return n / (1.0 + 2.0 * sum);
+}
+
+Sampler::Sampler(const ClassConfusionModel& model, EvaluatorFactory factory,
+                 const SamplerOptions& options)
+    : model_(model), factory_(std::move(factory)), options_(options) {}
+
+SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCallback& progress) {
+  std::string why;
+  if (!options_.Validate(&why)) throw Error("sampler options: " + why);
+  SamplerResult result;
+  SamplerSummary& summary = result.summary;
+  const int chains = options_.num_chains;
+  std::vector<std::unique_ptr<StateEvaluator>> evaluators;
+  std::vector<Rng> rngs;
+  for (int i = 0; i < chains; ++i) {
+    evaluators.push_back(factory_());
+    rngs.push_back(ChainRng(options_.seed, i));
+  }
+  Rng swap_rng = ChainRng(options_.seed, -1);
+
+  // Algorithm 9 steps 3-4: full optimisation, then greedy moves, refining
+  // every K_NL steps (and replacing the cached value, spec §9.3).
+  auto clock = std::chrono::steady_clock::now();
+  AssociationState start = start_state;
+  start.Canonicalize();
+  EvaluationPtr current = evaluators[0]->Refine(start, nullptr);
+  if (!current || !current->valid) throw Error("the start state could not be evaluated");
+  summary.initial_log_target = current->log_target;
+  for (int step = 1; step <= options_.hill_climb_steps; ++step) {
+    current = MetropolisStep(current, 1.0, true, *evaluators[0], model_, options_.moves,
+                             options_.hill_climb_moves, rngs[0], &summary.hill_climb);
+    if (step % options_.refine_every == 0 || step == options_.hill_climb_steps) {
+      EvaluationPtr refined = evaluators[0]->Refine(current->state, current.get());
+      if (refined && refined->valid) current = refined;
+    }
+    summary.hill_climb_trace.push_back(current->log_target);
+    if (progress) progress("hill climbing", step, options_.hill_climb_steps);
+  }
+  result.hill_climbed = current;
+  summary.hill_climbed_log_target = current->log_target;
+  summary.hill_climb_time_s = Seconds(clock);
+
+  // Algorithm 8: every chain starts from the hill-climbed state.
+  clock = std::chrono::steady_clock::now();
+  std::vector<EvaluationPtr> states(chains, current);
+  std::vector<double> beta(chains);
+  for (int i = 0; i < chains; ++i) {
+    beta[i] = 1.0 / (1.0 + options_.delta_temperature * i);
+    evaluators[i]->Remember(current);
+  }
+  std::vector<std::array<MoveStatistics, 3>> stats(chains);
+  result.best = current;
+  for (int t = 1; t <= options_.num_iterations; ++t) {
+    auto step_chain = [&](int i) {
+      states[i] = MetropolisStep(states[i], beta[i], false, *evaluators[i], model_, options_.moves,
+                                 options_.sampling_moves, rngs[i], &stats[i]);
+    };
+    if (options_.parallel_chains && chains > 1) {
+      std::vector<std::thread> threads;
+      for (int i = 1; i < chains; ++i) threads.emplace_back(step_chain, i);
+      step_chain(0);
+      for (auto& thread : threads) thread.join();
+    } else {
+      for (int i = 0; i < chains; ++i) step_chain(i);
+    }
+    // Swaps of adjacent chains, hottest pair first (5.3); whole states move,
+    // and each evaluator learns the state it receives.
+    for (int i = chains - 1; i >= 1; --i) {
+      ++summary.swaps_proposed;
+      const double log_alpha =
+          (beta[i - 1] - beta[i]) * (states[i]->log_target - states[i - 1]->log_target);
+      const double u = std::uniform_real_distribution<double>(0.0, 1.0)(swap_rng);
+      if (std::log(u) < std::min(0.0, log_alpha)) {
+        std::swap(states[i], states[i - 1]);
+        evaluators[i]->Remember(states[i]);
+        evaluators[i - 1]->Remember(states[i - 1]);
+        ++summary.swaps_accepted;
+      }
+    }
+    summary.cold_trace.push_back(states[0]->log_target);
+    if (states[0]->log_target > result.best->log_target) result.best = states[0];
+    if (t > options_.burn_in) result.samples.push_back(states[0]);
+    if (progress) progress("MC3", t, options_.num_iterations);
+  }
+  summary.sampling = stats[0];
+  summary.sampling_time_s = Seconds(clock);
+  for (const auto& evaluator : evaluators) {
+    summary.num_solves += evaluator->num_solves();
+    summary.num_cache_hits += evaluator->num_cache_hits();
+  }
+  summary.effective_sample_size = EffectiveSampleSize(
+      std::vector<double>(summary.cold_trace.begin() + options_.burn_in, summary.cold_trace.end()));
+  summary.message = "ok";
+  return result;
+}
+
+}  // namespace oslam

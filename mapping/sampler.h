@@ -1,0 +1,89 @@
+// O-SLAM inference over (C, J) (spec §9.1, §9.4, §9.7 Algorithm 9): a
+// hill-climbing phase from the all-tracks-separate state, then
+// Metropolis-coupled MCMC (MC³; plain Metropolis-Hastings is the one-chain
+// case). Chains step in parallel threads; each chain owns its random stream
+// and its evaluator, so a run is reproducible from the seed with or without
+// threads.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "mapping/moves.h"
+
+namespace oslam {
+
+struct SamplerOptions {
+  int hill_climb_steps = 100;  // 100 (Sec. 6.2), 400 (long run)
+  int refine_every = 50;       // K_NL: full optimisation of the current state
+  MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
+  MoveProbabilities sampling_moves{0.4, 0.4, 0.2};  // 0.5/0.5/0 with known classes
+  MoveOptions moves;
+  int num_chains = 3;               // N_c; 1 = plain Metropolis-Hastings
+  double delta_temperature = 3.33;  // beta_i = 1 / (1 + dT (i - 1))
+  // Iterations t = 1..num_iterations; the cold chain's state is recorded when
+  // t > burn_in (Algorithm 8), so num_iterations counts the burn-in (#21).
+  int num_iterations = 667;
+  int burn_in = 70;
+  unsigned long seed = 1;
+  bool parallel_chains = true;
+
+  bool Validate(std::string* why) const;
+};
+
+struct MoveStatistics {
+  long proposed = 0, accepted = 0, self_transitions = 0;
+  double time_s = 0;  // spent evaluating proposals of this type
+};
+
+struct SamplerSummary {
+  std::array<MoveStatistics, 3> hill_climb{}, sampling{};  // by MoveType, cold chain
+  long swaps_proposed = 0, swaps_accepted = 0;
+  std::vector<double> hill_climb_trace;  // log target of the current state per step
+  std::vector<double> cold_trace;        // cold chain's log target per iteration
+  double initial_log_target = 0, hill_climbed_log_target = 0;
+  size_t num_solves = 0, num_cache_hits = 0;
+  double hill_climb_time_s = 0, sampling_time_s = 0;
+  double effective_sample_size = 0;  // of the cold chain's log target (after burn-in)
+  std::string message;
+};
+
+struct SamplerResult {
+  std::vector<EvaluationPtr> samples;  // cold chain, one per recorded iteration
+  EvaluationPtr hill_climbed;          // the state MC³ started from
+  EvaluationPtr best;                  // highest log target seen by the cold chain
+  SamplerSummary summary;
+};
+
+using EvaluatorFactory = std::function<std::unique_ptr<StateEvaluator>()>;
+using ProgressCallback = std::function<void(const char* stage, size_t done, size_t total)>;
+
+class Sampler {
+ public:
+  Sampler(const ClassConfusionModel& model, EvaluatorFactory factory,
+          const SamplerOptions& options);
+  // Throws oslam::Error on invalid options or an unevaluable start state.
+  SamplerResult Run(const AssociationState& start, const ProgressCallback& progress = {});
+
+ private:
+  const ClassConfusionModel& model_;
+  EvaluatorFactory factory_;
+  SamplerOptions options_;
+};
+
+// One Metropolis-Hastings step at inverse temperature beta: proposes from
+// `current` and returns the next state (the current one when rejected).
+// Counts into `stats` (indexed by MoveType). With `greedy`, accept only
+// increases of the target (hill climbing).
+EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool greedy,
+                             StateEvaluator& evaluator, const ClassConfusionModel& model,
+                             const MoveOptions& options, const MoveProbabilities& probabilities,
+                             Rng& rng, std::array<MoveStatistics, 3>* stats);
+
+// Integrated-autocorrelation effective sample size (initial positive sequence).
+double EffectiveSampleSize(const std::vector<double>& series);
+
+}  // namespace oslam

@@ -1,0 +1,72 @@
+// The O-SLAM target for the sampler (spec §8): log P(Z | C, J) by the
+// geometric solver's Laplace evidence, plus the class-confusion penalty
+// sum log P(a | c) (eq. 4.32) and log P(C, J) (uniform joint by default,
+// spec §13 #37). A state's objects are its blocks of tracks; object id = the
+// block's earliest track. Proposed states are solved from the current state's
+// solution with few iterations (spec §9.6), and every evaluated state is
+// cached by its canonical form, so a revisited state keeps one value (§9.3).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "mapping/association_state.h"
+#include "mapping/geometric_slam.h"
+#include "mapping/tracks.h"
+
+namespace oslam {
+
+struct SlamTargetOptions {
+  GeometricSlamOptions slam;  // E, motion noise, solver (full optimisation)
+  // Solver iterations for a proposed state, linearised at the current
+  // state's solution (spec §9.6: one linear step; 1 = one Gauss-Newton step).
+  int proposal_iterations = 1;
+  // #37: false = P(C, J) uniform (thesis reading); true = prod_j 1/|classes|.
+  bool class_prior_per_object = false;
+  size_t max_cache_entries = 100000;  // the cache is cleared when it grows beyond this
+
+  bool Validate(std::string* why) const;
+};
+
+// Everything the evaluator needs; shared read-only by all chains.
+struct SlamTargetData {
+  const CameraModel* camera = nullptr;
+  std::vector<OdometryIncrement> increments;
+  Pose2 first_pose;
+  std::vector<ClassPrior> classes;
+  std::vector<ClassedSlice> detections;
+  std::vector<Track> tracks;
+};
+
+class SlamEvaluator : public StateEvaluator {
+ public:
+  // data and model must outlive the evaluator.
+  SlamEvaluator(const SlamTargetData& data, const ClassConfusionModel& model,
+                const SlamTargetOptions& options);
+
+  EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation* from) override;
+  EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override;
+  void Remember(const EvaluationPtr& evaluation) override;
+  size_t num_solves() const override { return solves_; }
+  size_t num_cache_hits() const override { return hits_; }
+
+  GeometricSlamProblem BuildProblem(const AssociationState& state) const;
+
+ private:
+  EvaluationPtr Solve(const AssociationState& state, const StateEvaluation* from, bool full);
+  GeometricSlamResult WarmStart(const AssociationState& state, const StateEvaluation& from) const;
+  std::vector<double> ObjectResiduals(const AssociationState& state,
+                                      const GeometricSlamResult& solution) const;
+  void Store(const EvaluationPtr& evaluation);
+
+  const SlamTargetData& data_;
+  const ClassConfusionModel& model_;
+  SlamTargetOptions options_;
+  GeometricSlam full_, step_;
+  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
+  size_t solves_ = 0, hits_ = 0;
+};
+
+}  // namespace oslam
