@@ -263,11 +263,13 @@ cv::Mat RenderPerspective(const ExportScene& scene, const FigureOptions& options
   const ViewCamera camera(target, radius, options, size);
 
   DrawFloorLines(&image, camera, extent);
-  for (const NamedTrajectory& trajectory : SceneTrajectories(scene)) {
+  // Reference trajectories first, the estimate on top.
+  const std::vector<NamedTrajectory> trajectories = SceneTrajectories(scene);
+  for (auto it = trajectories.rbegin(); it != trajectories.rend(); ++it) {
     std::vector<cv::Point> line;
-    for (const Pose2& pose : trajectory.poses)
+    for (const Pose2& pose : it->poses)
       line.push_back(Rounded(camera.Project({pose.x, pose.y, 0.0})));
-    cv::polylines(image, line, false, Bgr(trajectory.rgb), kSupersample, cv::LINE_AA);
+    cv::polylines(image, line, false, Bgr(it->rgb), kSupersample, cv::LINE_AA);
   }
   std::vector<Face> faces;
   for (const OMapObject* object : objects)

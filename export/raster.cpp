@@ -1,5 +1,6 @@
 #include "export/raster.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -42,6 +43,11 @@ void BlendDisc(cv::Mat* image, cv::Point centre, int radius, const cv::Scalar& c
 
 void DrawLabel(cv::Mat* image, const std::string& text, cv::Point origin, const cv::Scalar& colour,
                double scale) {
+  // Shifted inside the image: a label cut off at the border is useless.
+  int baseline = 0;
+  const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 3, &baseline);
+  origin.x = std::max(2, std::min(origin.x, image->cols - 2 - size.width));
+  origin.y = std::max(size.height + 2, std::min(origin.y, image->rows - 2 - baseline));
   cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), 3,
               cv::LINE_AA);
   cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv::LINE_AA);

@@ -29,7 +29,8 @@ void BlendPolygon(cv::Mat* image, const std::vector<cv::Point>& points, const cv
 void BlendDisc(cv::Mat* image, cv::Point centre, int radius, const cv::Scalar& colour, double alpha,
                int outline_thickness = 1);
 
-// Text with a one-pixel light halo so it stays readable on any background.
+// Text with a one-pixel light halo so it stays readable on any background,
+// moved inside the image when it would cross the border.
 void DrawLabel(cv::Mat* image, const std::string& text, cv::Point origin, const cv::Scalar& colour,
                double scale = 0.4);
 

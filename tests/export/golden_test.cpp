@@ -1,0 +1,155 @@
+// Golden-image tests: fixed inputs rendered and compared with the PNGs in
+// tests/golden/. Tolerance: a pixel matches when every channel is within 2
+// grey levels of the golden; at least 99.5 % of the pixels must match (room
+// for anti-aliasing differences between OpenCV builds, none for a changed
+// drawing). Regenerate on purpose with tests/golden/regenerate.sh
+// (OSLAM_REGENERATE_GOLDEN=1), then look at the PNGs before committing.
+#include <cstdlib>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "calib/hyperbolic_camera.h"
+#include "core/error.h"
+#include "export/export_fixture.h"
+#include "export/figures.h"
+#include "export/overlay.h"
+#include "mapping/observation_model.h"
+
+namespace oslam {
+namespace {
+
+constexpr int kToleranceGreyLevels = 2;
+constexpr double kMinMatchingFraction = 0.995;
+
+std::string GoldenPath(const std::string& name) {
+  return std::string(OSLAM_SOURCE_DIR) + "/tests/golden/" + name;
+}
+
+bool Regenerating() {
+  const char* value = std::getenv("OSLAM_REGENERATE_GOLDEN");
+  return value && std::string(value) == "1";
+}
+
+// Share of pixels whose channels all lie within the tolerance; 0 when the
+// sizes or types differ.
+double MatchingFraction(const cv::Mat& image, const cv::Mat& golden) {
+  if (image.size() != golden.size() || image.type() != golden.type()) return 0.0;
+  cv::Mat difference;
+  cv::absdiff(image, golden, difference);
+  std::vector<cv::Mat> channels;
+  cv::split(difference, channels);
+  cv::Mat worst = channels[0];
+  for (const cv::Mat& c : channels) worst = cv::max(worst, c);
+  const int matching = cv::countNonZero(worst <= kToleranceGreyLevels);
+  return static_cast<double>(matching) / static_cast<double>(image.total());
+}
+
+void ExpectMatchesGolden(const cv::Mat& image, const std::string& name) {
+  const std::string path = GoldenPath(name);
+  if (Regenerating()) {
+    ASSERT_TRUE(cv::imwrite(path, image)) << path;
+    std::cout << "regenerated " << path << "\n";
+    return;
+  }
+  const cv::Mat golden = cv::imread(path, cv::IMREAD_COLOR);
+  ASSERT_FALSE(golden.empty()) << path << " missing: run tests/golden/regenerate.sh";
+  const double fraction = MatchingFraction(image, golden);
+  if (fraction < kMinMatchingFraction) {
+    const std::string actual =
+        (std::filesystem::temp_directory_path() / ("actual_" + name)).string();
+    cv::imwrite(actual, image);
+    ADD_FAILURE() << name << ": only " << 100.0 * fraction << " % of pixels within "
+                  << kToleranceGreyLevels << " grey levels (need " << 100.0 * kMinMatchingFraction
+                  << " %); rendered image saved as " << actual;
+  }
+}
+
+FigureOptions SmallFigure() {
+  FigureOptions options;
+  options.width_px = 320;
+  options.height_px = 240;
+  options.min_existence = 0.1;
+  return options;
+}
+
+TEST(Golden, BirdsEye) {
+  ExpectMatchesGolden(RenderBirdsEye(testing::FixtureScene(), SmallFigure()), "birdseye.png");
+}
+
+TEST(Golden, Perspective) {
+  ExpectMatchesGolden(RenderPerspective(testing::FixtureScene(), SmallFigure()), "perspective.png");
+}
+
+TEST(Golden, TrajectoryErrors) {
+  ExpectMatchesGolden(PlotTrajectoryErrors(testing::FixtureScene(), SmallFigure()),
+                      "trajectories.png");
+}
+
+// A plain synthetic frame (dark outside the mirror, grey annulus) seen by
+// the LPA camera from the first estimated pose, with two detections: one at
+// the green box's predicted slice (slightly off), one spurious.
+TEST(Golden, Overlay) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  cv::Mat frame(camera.image_height(), camera.image_width(), CV_8UC3, cv::Scalar(40, 40, 40));
+  const Eigen::Vector2d centre = camera.ImageCenter();
+  const cv::Point c(cvRound(centre.x()), cvRound(centre.y()));
+  cv::circle(frame, c, cvRound(camera.annulus().rim_radius_px), cv::Scalar(150, 150, 150),
+             cv::FILLED);
+  cv::circle(frame, c, cvRound(camera.annulus().blind_radius_px), cv::Scalar(20, 20, 20),
+             cv::FILLED);
+
+  const ExportScene scene = testing::FixtureScene();
+  const OMapObject& box = scene.map.objects[0];
+  BoundingSlice predicted;
+  ASSERT_TRUE(PredictSlice(camera, scene.map.trajectory[0],
+                           {box.base_world, box.diameter_m, box.height_m}, &predicted));
+  Detection near_box;
+  near_box.frame = 0;
+  near_box.class_name = "green box";
+  near_box.slice = predicted;
+  near_box.slice.u_r_px += 4.0;
+  near_box.slice.u_phi_rad += 0.05;
+  Detection spurious = near_box;
+  spurious.class_name = "pink ball";
+  spurious.slice = {150.0, -2.0, 20.0, 0.2};
+  Detection other_frame = near_box;
+  other_frame.frame = 1;  // must not be drawn
+  other_frame.slice.u_phi_rad += 1.5;
+
+  const cv::Mat overlay =
+      DrawOverlay(frame, 0, camera, scene, {near_box, spurious, other_frame}, 0.1);
+  ExpectMatchesGolden(overlay, "overlay.png");
+}
+
+// The comparison is not vacuous: the same figure with one object's pi
+// changed is rejected.
+TEST(Golden, ComparisonRejectsAChangedFigure) {
+  ExportScene scene = testing::FixtureScene();
+  const cv::Mat original = RenderBirdsEye(scene, SmallFigure());
+  scene.map.objects[0].existence_probability = 0.3;
+  scene.map.objects[0].base_world.x() += 0.2;
+  const cv::Mat changed = RenderBirdsEye(scene, SmallFigure());
+  EXPECT_EQ(MatchingFraction(original, original), 1.0);
+  EXPECT_LT(MatchingFraction(changed, original), kMinMatchingFraction);
+}
+
+TEST(Overlay, FrameWithoutEstimatedPoseIsAnError) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  const cv::Mat frame(camera.image_height(), camera.image_width(), CV_8UC3, cv::Scalar::all(0));
+  const ExportScene scene = testing::FixtureScene();
+  EXPECT_THROW(
+      DrawOverlay(frame, static_cast<long>(scene.map.trajectory.size()), camera, scene, {}, 0.1),
+      Error);
+}
+
+TEST(Figures, TrajectoryPlotNeedsGroundTruth) {
+  ExportScene scene = testing::FixtureScene();
+  scene.ground_truth.clear();
+  EXPECT_THROW(PlotTrajectoryErrors(scene, SmallFigure()), Error);
+}
+
+}  // namespace
+}  // namespace oslam
