@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -15,6 +16,7 @@
 #include "core/progress.h"
 #include "core/run_folder.h"
 #include "detect/blob_detector.h"
+#include "detect/sift_verifier.h"
 
 namespace oslam {
 namespace {
@@ -51,6 +53,8 @@ int RunDetectCommand(const std::vector<std::string>& args) {
   arguments.AddOption("debug-images", "", "DIR", "also write each frame with its slices drawn");
   arguments.AddOption("min-area", "", "PX", "smallest blob kept, in pixels", "40");
   arguments.AddOption("opening", "", "PX", "radius of the morphological opening, 0 = off", "1");
+  arguments.AddOption("sift-templates", "", "FILE.yaml",
+                      "keep a detection of a class with templates only if SIFT verifies it");
   arguments.AddFlag("skip-bad-frames", "warn about unreadable frames and go on");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
@@ -72,6 +76,10 @@ int RunDetectCommand(const std::vector<std::string>& args) {
   if (std::none_of(classes.begin(), classes.end(), [](const auto& c) { return c.colour.has_value(); }))
     throw Error::InFile(paths.classes, "no class has a colour model (run 'oslam train-colors' first)");
   const BlobDetector detector(*camera, classes, options);
+  std::optional<SiftVerifier> verifier;
+  if (arguments.Has("sift-templates"))
+    verifier.emplace(ReadSiftTemplates(arguments.Get("sift-templates"), classes));
+  size_t rejected = 0;
 
   std::vector<Detection> all;
   size_t skipped = 0;
@@ -92,6 +100,11 @@ int RunDetectCommand(const std::vector<std::string>& args) {
                                               std::to_string(camera->image_width()) + "x" +
                                               std::to_string(camera->image_height()));
     std::vector<Detection> detections = detector.Detect(frame, static_cast<long>(i));
+    if (verifier) {
+      const size_t before = detections.size();
+      detections = verifier->Filter(frame, *camera, detections);
+      rejected += before - detections.size();
+    }
     if (arguments.Has("debug-images")) {
       char name[32];
       std::snprintf(name, sizeof(name), "%06zu.png", i);
@@ -102,6 +115,7 @@ int RunDetectCommand(const std::vector<std::string>& args) {
     progress.Update(i + 1);
   }
   progress.Done(std::to_string(all.size()) + " detections" +
+                (verifier ? ", " + std::to_string(rejected) + " rejected by SIFT" : "") +
                 (skipped ? ", " + std::to_string(skipped) + " frames skipped" : ""));
   WriteDetections(all, output);
   if (!quiet) std::printf("wrote %s\n", output.c_str());

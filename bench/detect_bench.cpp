@@ -8,6 +8,7 @@
 #include "core/run_folder.h"
 #include "detect/blob_detector.h"
 #include "detect/colour_training.h"
+#include "detect/sift_verifier.h"
 #include "samples/scene.h"
 #include "samples/simulator.h"
 
@@ -55,6 +56,42 @@ void BM_ColourBlobDetection640x480(benchmark::State& state) {
   state.counters["detections_per_frame"] = double(detections) / state.iterations();
 }
 BENCHMARK(BM_ColourBlobDetection640x480)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// Colour detection plus SIFT verification of every detection, on the SIFT
+// test scene (a textured box and a same-coloured plain box; four templates).
+// The goal: >= 30 frames/s.
+void BM_ColourDetectionWithSiftVerification(benchmark::State& state) {
+  const std::string run_dir =
+      (std::filesystem::temp_directory_path() / "oslam_detect_bench_sift").string();
+  std::filesystem::remove_all(run_dir);
+  Simulate(LoadScene(std::string(OSLAM_SOURCE_DIR) + "/tests/data/sift_clutter.yaml"), run_dir,
+           SimulationOptions{});
+  const std::unique_ptr<CameraModel> camera = LoadCamera(run_dir + "/camera.yaml");
+  const std::vector<ObjectClass> untrained = ReadClasses(run_dir + "/classes.yaml");
+  const std::vector<ObjectClass> classes =
+      TrainColourModels(untrained, ExamplesFromGroundTruth(run_dir, untrained), 3.0);
+  const GroundTruth truth = *ReadGroundTruth(run_dir);
+  const FrameSource source(run_dir);
+  std::vector<cv::Mat> frames, templates;
+  for (size_t i = 0; i < source.size(); ++i) frames.push_back(source.Read(i));
+  for (const GroundTruthSighting& s : truth.sightings)
+    if (s.object_id == 0 && s.frame % 5 == 0)
+      templates.push_back(ExtractSlicePatch(frames[s.frame], *camera,
+                                            {s.u_r_px, s.u_phi_rad, s.s_r_px, s.s_phi_rad}, -0.2, 96));
+  std::filesystem::remove_all(run_dir);
+  const BlobDetector detector(*camera, classes);
+  const SiftVerifier verifier(std::vector<std::vector<cv::Mat>>{templates});
+  size_t i = 0, checked = 0;
+  for (auto _ : state) {
+    const cv::Mat& frame = frames[i++ % frames.size()];
+    const std::vector<Detection> detections = detector.Detect(frame, 0);
+    checked += detections.size();
+    benchmark::DoNotOptimize(verifier.Filter(frame, *camera, detections));
+  }
+  state.SetItemsProcessed(state.iterations());  // items = frames
+  state.counters["verified_per_frame"] = double(checked) / state.iterations();
+}
+BENCHMARK(BM_ColourDetectionWithSiftVerification)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace oslam
