@@ -12,6 +12,8 @@ const std::vector<Command>& Commands() {
       {"map", "map objects and trajectory (geometric SLAM; --known-association)", RunMapCommand},
       {"export", "write an O-Map as glTF, PLY, figures and reprojection overlays",
        RunExportCommand},
+      {"slam", "O-SLAM: association and classes by MCMC over tracks; O-Map with existence",
+       RunSlamCommand},
       {"simulate", "render a simulated robot run (frames, odometry, ground truth) from a scene",
        RunSimulateCommand},
   };

@@ -23,6 +23,7 @@ int RunDetectCommand(const std::vector<std::string>& args);
 int RunEvalDetectCommand(const std::vector<std::string>& args);
 int RunMapCommand(const std::vector<std::string>& args);
 int RunTrainColorsCommand(const std::vector<std::string>& args);
+int RunSlamCommand(const std::vector<std::string>& args);
 int RunSimulateCommand(const std::vector<std::string>& args);
 int RunExportCommand(const std::vector<std::string>& args);
 
