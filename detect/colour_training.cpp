@@ -55,22 +55,32 @@ std::vector<ColourExample> ReadColourExamples(const std::string& path,
 
 namespace {
 
-// Keeps the mask pixels whose chroma (U, V) is within `max_distance` of the
-// class's display colour: a textured object (stripes, patches of a second
-// colour) is detected by its main colour, as a person picking an ROI would.
-void KeepPixelsNearDisplayColour(const cv::Mat& bgr, const ObjectClass& object_class,
-                                 double max_distance, cv::Mat* mask) {
+// Keeps the mask pixels whose hue (direction of (U, V) around grey) is within
+// `max_hue_difference_rad` of the class's display colour: a textured object
+// (stripes, patches of a second colour) is learnt by its main colour, as a
+// person picking an ROI would. Hue, not chroma distance, because a dimly lit
+// object keeps its hue while its chroma shrinks towards grey.
+void KeepPixelsNearDisplayHue(const cv::Mat& bgr, const ObjectClass& object_class,
+                              double max_hue_difference_rad, cv::Mat* mask) {
   const auto& rgb = object_class.display_rgb;
   cv::Mat reference(1, 1, CV_8UC3, cv::Scalar(rgb[2], rgb[1], rgb[0])), reference_yuv, yuv;
   cv::cvtColor(reference, reference_yuv, cv::COLOR_BGR2YUV);
   cv::cvtColor(bgr, yuv, cv::COLOR_BGR2YUV);
   const cv::Vec3b target = reference_yuv.at<cv::Vec3b>(0, 0);
+  const double target_hue = std::atan2(target[2] - 128.0, target[1] - 128.0);
+  const double target_chroma = std::hypot(target[2] - 128.0, target[1] - 128.0);
   for (int y = 0; y < mask->rows; ++y)
     for (int x = 0; x < mask->cols; ++x) {
       if (!mask->at<uint8_t>(y, x)) continue;
       const cv::Vec3b& p = yuv.at<cv::Vec3b>(y, x);
-      if (std::hypot(double(p[1]) - target[1], double(p[2]) - target[2]) > max_distance)
-        mask->at<uint8_t>(y, x) = 0;
+      const double chroma = std::hypot(p[2] - 128.0, p[1] - 128.0);
+      const double hue = std::atan2(p[2] - 128.0, p[1] - 128.0);
+      // Grey pixels have no hue; a colourless class is matched by chroma alone.
+      const bool keep = target_chroma < 8.0
+                            ? chroma < 8.0
+                            : chroma >= std::max(6.0, 0.4 * target_chroma) &&
+                                  std::abs(WrapAngle(hue - target_hue)) <= max_hue_difference_rad;
+      if (!keep) mask->at<uint8_t>(y, x) = 0;
     }
 }
 
@@ -111,23 +121,32 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
         continue;
       candidates.push_back(&s);
     }
-    std::sort(candidates.begin(), candidates.end(), [](const auto* a, const auto* b) {
-      return a->s_r_px * a->s_phi_rad * a->u_r_px > b->s_r_px * b->s_phi_rad * b->u_r_px;
-    });
-    std::vector<long> used_frames;
-    for (const GroundTruthSighting* s : candidates) {
-      if (static_cast<int>(used_frames.size()) >= per_class) break;
-      if (std::find(used_frames.begin(), used_frames.end(), s->frame) != used_frames.end()) continue;
-      cv::Mat mask = CentralSliceMask(*camera, *s);
-      const cv::Mat frame = frames.Read(static_cast<size_t>(s->frame));
-      KeepPixelsNearDisplayColour(frame, object_class, 40.0, &mask);
-      if (cv::countNonZero(mask) < 8) continue;  // mostly beyond the rim or another colour
-      ColourExample example;
-      example.image_path = frames.Name(static_cast<size_t>(s->frame));
-      example.class_name = object_class.name;
-      example.mask = mask;
-      examples.push_back(example);
-      used_frames.push_back(s->frame);
+    // One example from each of `per_class` stretches of the run, the largest
+    // usable view in each: the lighting along the path (a dark corridor, a
+    // bright window) then shows in the learnt spread, as it would when a person
+    // picks examples across a whole recording.
+    std::sort(candidates.begin(), candidates.end(),
+              [](const auto* a, const auto* b) { return a->frame < b->frame; });
+    const size_t segments = std::min<size_t>(per_class, candidates.size());
+    for (size_t segment = 0; segment < segments; ++segment) {
+      std::vector<const GroundTruthSighting*> stretch(
+          candidates.begin() + segment * candidates.size() / segments,
+          candidates.begin() + (segment + 1) * candidates.size() / segments);
+      std::sort(stretch.begin(), stretch.end(), [](const auto* a, const auto* b) {
+        return a->s_r_px * a->s_phi_rad * a->u_r_px > b->s_r_px * b->s_phi_rad * b->u_r_px;
+      });
+      for (const GroundTruthSighting* s : stretch) {
+        cv::Mat mask = CentralSliceMask(*camera, *s);
+        const cv::Mat frame = frames.Read(static_cast<size_t>(s->frame));
+        KeepPixelsNearDisplayHue(frame, object_class, DegToRad(25.0), &mask);
+        if (cv::countNonZero(mask) < 8) continue;  // mostly beyond the rim or another colour
+        ColourExample example;
+        example.image_path = frames.Name(static_cast<size_t>(s->frame));
+        example.class_name = object_class.name;
+        example.mask = mask;
+        examples.push_back(example);
+        break;
+      }
     }
   }
   return examples;

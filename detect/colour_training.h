@@ -33,10 +33,10 @@ std::vector<ColourExample> ReadColourExamples(const std::string& path,
                                               const std::vector<ObjectClass>& classes);
 
 // Examples for a simulated run: per class, the central part of the largest
-// fully visible ground-truth slices (up to `per_class`, from different frames):
+// fully visible ground-truth slice in each of `per_class` stretches of the run:
 // the middle half of the slice radially and angularly, inside the annulus. For
 // the simulator's convex shapes that region lies on the object. Only pixels
-// whose chroma is near the class's display colour are kept, so a striped
+// whose hue is near the class's display colour's are kept, so a striped
 // object is learnt by its main colour.
 std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
                                                    const std::vector<ObjectClass>& classes,
