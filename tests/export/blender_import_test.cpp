@@ -1,8 +1,8 @@
 // Opens the exported .glb in Blender (headless, Debian's blender 3.4) and
 // checks there what users will see: object count, upright cylinders at their
 // base points, material alpha = pi (tests/export/blender_import_check.py).
-// Labelled "blender" (not in the default run: Blender takes seconds to start);
-// skipped when blender is not installed.
+// Labelled "slow" (not in the default run: it needs Blender, which starts in a
+// second or two); skipped when blender is not installed.
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
