@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <sstream>
 
 #include "apps/arguments.h"
@@ -36,7 +38,8 @@ std::vector<long> ParseFrameList(const std::string& text, long frame_count) {
     } else if (!(n == 3 && dash == '-')) {
       throw UsageError("--frames: '" + item + "' is not a frame number or a range like 10-20");
     }
-    if (first < 0 || last < first || last >= frame_count)
+    if (last < first) throw UsageError("--frames: '" + item + "' is a reversed range");
+    if (first < 0 || last >= frame_count)
       throw UsageError("--frames: '" + item + "' is outside the run's frames 0-" +
                        std::to_string(frame_count - 1));
     for (long f = first; f <= last; ++f) frames.push_back(f);
@@ -88,36 +91,48 @@ void WriteFigures(const ExportScene& scene, const FigureOptions& options, const 
   progress.Done("birdseye.png, perspective.png, trajectories.png" + note);
 }
 
-void WriteOverlays(const ExportScene& scene, const std::string& run_dir,
-                   const std::string& frame_list, double min_existence, const fs::path& out,
-                   bool quiet) {
-  const RunFolderPaths paths = RunFolderPaths::Of(run_dir);
-  const FrameSource frames(run_dir);
-  const std::unique_ptr<CameraModel> camera = LoadCamera(paths.camera);
-  const std::string detections_path = run_dir + "/detections.csv";
-  const std::vector<Detection> detections = fs::exists(detections_path)
-                                                ? ReadDetections(detections_path, scene.classes)
-                                                : std::vector<Detection>{};
-  const long count = static_cast<long>(std::min(frames.size(), scene.map.trajectory.size()));
-  if (count == 0) throw Error::InFile(run_dir, "no frames with an estimated pose to overlay");
+// Everything the overlays need, read and checked before any file is written
+// so a bad --frames is refused up front.
+struct OverlayInput {
+  std::unique_ptr<FrameSource> frames;
+  std::unique_ptr<CameraModel> camera;
+  std::vector<Detection> detections;
   std::vector<long> chosen;
+};
+
+OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_dir,
+                             const std::string& frame_list) {
+  OverlayInput input;
+  input.frames = std::make_unique<FrameSource>(run_dir);
+  input.camera = LoadCamera(RunFolderPaths::Of(run_dir).camera);
+  const std::string detections_path = run_dir + "/detections.csv";
+  if (fs::exists(detections_path))
+    input.detections = ReadDetections(detections_path, scene.classes);
+  const long count = static_cast<long>(std::min(input.frames->size(), scene.map.trajectory.size()));
+  if (count == 0) throw Error::InFile(run_dir, "no frames with an estimated pose to overlay");
   if (frame_list.empty()) {
-    for (long f = 0; f < count; ++f) chosen.push_back(f);
+    for (long f = 0; f < count; ++f) input.chosen.push_back(f);
   } else {
-    chosen = ParseFrameList(frame_list, count);
+    input.chosen = ParseFrameList(frame_list, count);
   }
+  return input;
+}
+
+void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double min_existence,
+                   const fs::path& out, bool quiet) {
   fs::create_directories(out / "overlays");
-  Progress progress("overlays", chosen.size(), "frames", quiet);
-  for (size_t i = 0; i < chosen.size(); ++i) {
+  Progress progress("overlays", input.chosen.size(), "frames", quiet);
+  for (size_t i = 0; i < input.chosen.size(); ++i) {
+    const long frame = input.chosen[i];
     char name[32];
-    std::snprintf(name, sizeof(name), "%06ld.png", chosen[i]);
-    const cv::Mat image =
-        DrawOverlay(frames.Read(chosen[i]), chosen[i], *camera, scene, detections, min_existence);
+    std::snprintf(name, sizeof(name), "%06ld.png", frame);
+    const cv::Mat image = DrawOverlay(input.frames->Read(frame), frame, *input.camera, scene,
+                                      input.detections, min_existence);
     WritePng(image, (out / "overlays" / name).string());
     progress.Update(i + 1);
   }
-  progress.Done(std::to_string(chosen.size()) + " overlays" +
-                (detections.empty() ? " (no detections.csv: map only)" : ""));
+  progress.Done(std::to_string(input.chosen.size()) + " overlays" +
+                (input.detections.empty() ? " (no detections.csv: map only)" : ""));
 }
 
 }  // namespace
@@ -160,6 +175,9 @@ int RunExportCommand(const std::vector<std::string>& args) {
   ExportScene scene;
   scene.map = ReadOMap(arguments.Get("OMAP"));
   if (arguments.Has("run")) ReadRunContext(arguments.Get("run"), &scene);
+  std::optional<OverlayInput> overlays;
+  if (arguments.Flag("overlays"))
+    overlays = PrepareOverlays(scene, arguments.Get("run"), arguments.Get("frames"));
   const fs::path out = arguments.Get("output");
   std::error_code ec;
   fs::create_directories(out, ec);
@@ -167,9 +185,7 @@ int RunExportCommand(const std::vector<std::string>& args) {
 
   WriteModels(scene, options, out, arguments.Flag("ascii-ply"), quiet);
   WriteFigures(scene, figures, out, quiet);
-  if (arguments.Flag("overlays"))
-    WriteOverlays(scene, arguments.Get("run"), arguments.Get("frames"), options.min_existence, out,
-                  quiet);
+  if (overlays) WriteOverlays(scene, *overlays, options.min_existence, out, quiet);
   if (!quiet) std::printf("wrote %s\n", out.string().c_str());
   return 0;
 }
