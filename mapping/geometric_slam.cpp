@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Cholesky>
+
 #include "core/angles.h"
 #include "core/error.h"
 #include "mapping/factors.h"
@@ -82,6 +84,95 @@ bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
   return true;
 }
 
+bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pose2>& poses,
+                                const std::vector<const SliceObservation*>& detections,
+                                const ClassPrior& prior, double pixel_std_px,
+                                CylinderGeometry* object) {
+  using Vector5d = Eigen::Matrix<double, 5, 1>;
+  using Matrix5d = Eigen::Matrix<double, 5, 5>;
+  const Eigen::Vector3d location_weight = prior.location_std_m.cwiseInverse();
+  const Eigen::Vector2d size_weight = prior.size_std_m.cwiseInverse();
+  // Cost, gradient and Gauss-Newton matrix of the object's own factors.
+  auto evaluate = [&](const Vector5d& theta, double* cost, Vector5d* gradient, Matrix5d* hessian) {
+    CylinderGeometry candidate;
+    candidate.base_world = theta.head<3>();
+    candidate.diameter_m = theta[3];
+    candidate.height_m = theta[4];
+    double sum = 0.0;
+    if (gradient) gradient->setZero(), hessian->setZero();
+    SliceJacobians jacobians;
+    for (const SliceObservation* detection : detections) {
+      const BoundingSlice& z = detection->slice;
+      BoundingSlice predicted;
+      if (!PredictSlice(camera, poses[detection->frame], candidate, &predicted,
+                        gradient ? &jacobians : nullptr))
+        return false;
+      const double sqrt2 = std::sqrt(2.0);
+      const Eigen::Vector4d inverse_sigma =
+          Eigen::Vector4d(1.0, z.u_r_px, 1.0 / sqrt2, z.u_r_px / sqrt2) / pixel_std_px;
+      const Eigen::Vector4d error =
+          inverse_sigma.cwiseProduct(Eigen::Vector4d(predicted.u_r_px - z.u_r_px,
+                                                     WrapAngle(predicted.u_phi_rad - z.u_phi_rad),
+                                                     predicted.s_r_px - z.s_r_px,
+                                                     predicted.s_phi_rad - z.s_phi_rad));
+      sum += error.squaredNorm();
+      if (gradient) {
+        Eigen::Matrix<double, 4, 5> j;
+        j << jacobians.wrt_base, jacobians.wrt_size;
+        j = inverse_sigma.asDiagonal() * j;
+        *gradient += j.transpose() * error;
+        *hessian += j.transpose() * j;
+      }
+    }
+    const Eigen::Vector3d location_error =
+        location_weight.cwiseProduct(theta.head<3>() - prior.location_mean_m);
+    const Eigen::Vector2d size_error = size_weight.cwiseProduct(theta.tail<2>() - prior.size_mean_m);
+    sum += location_error.squaredNorm() + size_error.squaredNorm();
+    if (gradient) {
+      gradient->head<3>() += location_weight.cwiseProduct(location_error);
+      gradient->tail<2>() += size_weight.cwiseProduct(size_error);
+      hessian->diagonal().head<3>() += location_weight.cwiseAbs2();
+      hessian->diagonal().tail<2>() += size_weight.cwiseAbs2();
+    }
+    *cost = 0.5 * sum;
+    return std::isfinite(*cost);
+  };
+  Vector5d theta;
+  theta << object->base_world, object->diameter_m, object->height_m;
+  double cost;
+  Vector5d gradient;
+  Matrix5d hessian;
+  if (!evaluate(theta, &cost, &gradient, &hessian)) return false;
+  double lambda = 1e-3;
+  bool improved = false;
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    Matrix5d damped = hessian;
+    damped.diagonal() *= 1.0 + lambda;
+    const Vector5d step = damped.ldlt().solve(-gradient);
+    if (!step.allFinite()) break;
+    const Vector5d candidate = theta + step;
+    double new_cost;
+    if (candidate[3] > 0 && candidate[4] > 0 && evaluate(candidate, &new_cost, nullptr, nullptr) &&
+        new_cost < cost) {
+      const bool small = step.lpNorm<Eigen::Infinity>() < 1e-3 || cost - new_cost < 1e-6 * cost;
+      theta = candidate;
+      cost = new_cost;
+      improved = true;
+      lambda = std::max(lambda / 10.0, 1e-9);
+      if (small || !evaluate(theta, &cost, &gradient, &hessian)) break;
+    } else {
+      lambda *= 10.0;
+      if (lambda > 1e8) break;
+    }
+  }
+  if (improved) {
+    object->base_world = theta.head<3>();
+    object->diameter_m = theta[3];
+    object->height_m = theta[4];
+  }
+  return improved;
+}
+
 GeometricSlam::GeometricSlam(const CameraModel& camera, const GeometricSlamOptions& options)
     : camera_(camera), options_(options), solver_(options.solver) {}
 
@@ -144,6 +235,18 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
         initial.base_world = prior.location_mean_m;
         initial.diameter_m = prior.size_mean_m.x();
         initial.height_m = prior.size_mean_m.y();
+      }
+      // Refine with the object's first detections, the poses held at their
+      // initial values (spec §5.4 leaves the initialisation open): a single
+      // detection fixes the range only through s_phi and u_r, both noisy at
+      // E = 30 px, and a far-off start costs the joint solve many steps.
+      if (options_.initial_refinement_detections > 0) {
+        const size_t count = std::min(list.size(),
+                                      static_cast<size_t>(options_.initial_refinement_detections));
+        const std::vector<const SliceObservation*> first_detections(list.begin(),
+                                                                    list.begin() + count);
+        RefineObjectFromDetections(camera_, initial_poses, first_detections, prior,
+                                   options_.pixel_std_px, &initial);
       }
     }
     const int base = graph.AddVariable(initial.base_world);

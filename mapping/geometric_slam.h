@@ -56,6 +56,10 @@ struct GeometricSlamOptions {
   MotionNoiseOptions motion;
   double pixel_std_px = 30.0;  // E of spec §4.2 (thesis: 30 px)
   SolverOptions solver;
+  // A new object (not in the warm start) starts from its first detection
+  // and is then refined, alone and with the poses held, on up to this many
+  // of its first detections (0: no refinement).
+  int initial_refinement_detections = 20;
   bool compute_object_covariances = true;
   bool compute_pose_covariances = false;
 
@@ -86,6 +90,15 @@ struct GeometricSlamResult {
 // on the ray of u_r, size = prior mean. False when the slice has no ray.
 bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
                                 const BoundingSlice& slice, const ClassPrior& prior,
+                                CylinderGeometry* object);
+
+// Least-squares refinement of one object's geometry from its detections
+// (each with its pose in `poses`, indexed by frame) and its class priors,
+// the poses held fixed; `object` holds the start and receives the result.
+// False (object unchanged) when no step lowered the cost.
+bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pose2>& poses,
+                                const std::vector<const SliceObservation*>& detections,
+                                const ClassPrior& prior, double pixel_std_px,
                                 CylinderGeometry* object);
 
 class GeometricSlam {

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <numeric>
 
+#include <cstdio>
+#include <cstdlib>
+
 #include <cholmod.h>
 #include <SuiteSparseQR.hpp>
 
@@ -13,6 +16,9 @@ namespace oslam {
 namespace {
 
 constexpr double kLog2Pi = 1.8378770664093454836;
+// METIS is tried as an ordering from this many variables on (below it, its
+// cost exceeds what it can save).
+constexpr int kMetisMinBlocks = 2000;
 
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
@@ -93,17 +99,38 @@ struct SparseSolver::Impl {
   std::vector<std::vector<int>> pattern_prefix;  // scalar row prefix per block row
   std::vector<int> offsets;                      // scalar offset per free variable
   int n = 0;
-  cholmod_sparse* hessian = nullptr;
+  cholmod_sparse* hessian = nullptr;  // upper triangle, variables' order
+  // The same matrix with the chosen fill-reducing permutation applied,
+  // lower triangle: CHOLMOD factors it with its natural ordering, which
+  // spares the transpose-and-permute copy that every cholmod_factorize of
+  // an unpermuted matrix makes.
+  cholmod_sparse* permuted = nullptr;
+  std::vector<int> permuted_entry;  // hessian entry -> permuted entry
+  std::vector<int> inverse_permutation;  // scalar column -> permuted position
   cholmod_factor* factor = nullptr;
-  std::vector<int> diagonal_position;
+  std::vector<int> diagonal_position;  // in hessian
   bool factor_is_final = false;  // holds the undamped factor at the final point
 
   // ---- per solve ----
   std::vector<int> free_index;  // per key: free variable index or -1
   std::vector<int> pair_begin;  // per factor, range into pairs
   std::vector<BlockPair> pairs;
-  std::vector<Eigen::VectorXd> errors;
-  std::vector<Eigen::MatrixXd> jacobians;
+  // Errors and Jacobians of every factor at the current point, and at the
+  // trial point of a step (swapped in when the step is accepted, so an
+  // accepted step costs one evaluation, not two).
+  struct Evaluation {
+    std::vector<Eigen::VectorXd> errors;
+    std::vector<Eigen::MatrixXd> jacobians;
+    void Resize(size_t size) {
+      errors.resize(size);
+      jacobians.resize(size);
+    }
+  };
+  Evaluation current, trial;
+  Eigen::MatrixXd local_hessian;  // scratch: J_f^T J_f
+  Eigen::VectorXd local_gradient;  // scratch: J_f^T e_f
+  std::vector<int> factor_columns;  // per factor: its Jacobian's column count
+  int ordering_used = 0;  // 0 none, 1 AMD, 2 high-degree last, 3 METIS
   std::vector<int> factor_row;  // first row of each factor in J
   int m = 0;
   Eigen::VectorXd gradient, diagonal;
@@ -136,6 +163,7 @@ struct SparseSolver::Impl {
   }
   void FreeStructure() {
     if (hessian) cholmod_free_sparse(&hessian, &cc);
+    if (permuted) cholmod_free_sparse(&permuted, &cc);
     if (factor) cholmod_free_factor(&factor, &cc);
     pattern_dims.clear();
     pattern_rows.clear();
@@ -199,7 +227,7 @@ struct SparseSolver::Impl {
       pattern_rows = std::move(rows);
       BuildHessianStructure();
       const auto start = Clock::now();
-      factor = cholmod_analyze(hessian, &cc);
+      factor = Analyze();
       *analyze_s = Seconds(start);
       if (!factor) {
         *why = "CHOLMOD analysis failed (out of memory?)";
@@ -212,8 +240,10 @@ struct SparseSolver::Impl {
     // Where every factor's blocks go.
     pairs.clear();
     pair_begin.assign(factors.size() + 1, 0);
-    errors.resize(factors.size());
-    jacobians.resize(factors.size());
+    current.Resize(factors.size());
+    trial.Resize(factors.size());
+    factor_columns.resize(factors.size());
+    int max_columns = 0;
     for (size_t f = 0; f < factors.size(); ++f) {
       pair_begin[f] = static_cast<int>(pairs.size());
       const auto& keys = factors[f]->keys();
@@ -223,8 +253,12 @@ struct SparseSolver::Impl {
         columns.push_back(total);
         total += graph.values().Dim(key);
       }
-      errors[f].resize(factors[f]->Dimension());
-      jacobians[f].resize(factors[f]->Dimension(), total);
+      for (Evaluation* evaluation : {&current, &trial}) {
+        evaluation->errors[f].resize(factors[f]->Dimension());
+        evaluation->jacobians[f].resize(factors[f]->Dimension(), total);
+      }
+      factor_columns[f] = total;
+      max_columns = std::max(max_columns, total);
       for (size_t i = 0; i < keys.size(); ++i) {
         for (size_t j = 0; j < keys.size(); ++j) {
           int a = free_index[keys[i]], b = free_index[keys[j]];
@@ -238,6 +272,8 @@ struct SparseSolver::Impl {
       }
     }
     pair_begin[factors.size()] = static_cast<int>(pairs.size());
+    local_hessian.resize(max_columns, max_columns);
+    local_gradient.resize(max_columns);
     gradient.resize(n);
     diagonal.resize(n);
     return true;
@@ -282,48 +318,182 @@ struct SparseSolver::Impl {
     rhs = cholmod_zeros(n, 1, CHOLMOD_REAL, &cc);
   }
 
-  // 1/2 sum ||e||^2 at `values`; false when a factor cannot be evaluated.
-  bool Cost(const FactorGraph& graph, const Values& values, double* cost) {
+  // Fill-reducing ordering and symbolic analysis of `hessian`. Orderings are
+  // computed on the block graph (one node per variable, so a variable's
+  // components stay together) and expanded to scalars; candidates are AMD,
+  // CAMD with the variables of high block degree last (objects seen from
+  // most poses: the pose chain is eliminated first, as a band, and the
+  // objects end up in one dense trailing block) and, on big problems,
+  // METIS nested dissection (objects seen on many laps of a long run). The
+  // one with the fewest factorisation flops is kept.
+  cholmod_factor* Analyze() {
+    const int num_free = static_cast<int>(pattern_dims.size());
+    size_t nnz = 0;
+    for (const auto& rows : pattern_rows) nnz += rows.size();
+    cholmod_sparse* blocks =
+        cholmod_allocate_sparse(num_free, num_free, nnz, 1, 1, 1, CHOLMOD_PATTERN, &cc);
+    if (!blocks) return nullptr;
+    auto* bp = static_cast<int*>(blocks->p);
+    auto* bi = static_cast<int*>(blocks->i);
+    std::vector<int> degree(num_free, 0);
+    int next = 0;
+    for (int b = 0; b < num_free; ++b) {
+      bp[b] = next;
+      for (int a : pattern_rows[b]) {
+        bi[next++] = a;
+        if (a != b) {
+          ++degree[a];
+          ++degree[b];
+        }
+      }
+    }
+    bp[num_free] = next;
+
+    std::vector<std::pair<int, std::vector<int>>> candidates;  // (kind, block permutation)
+    std::vector<int> permutation(num_free);
+    if (cholmod_amd(blocks, nullptr, 0, permutation.data(), &cc))
+      candidates.emplace_back(1, permutation);
+    std::vector<int> sorted = degree;
+    std::nth_element(sorted.begin(), sorted.begin() + num_free / 2, sorted.end());
+    const int threshold = std::max(16, 4 * sorted[num_free / 2]);
+    std::vector<int> constraint(num_free, 0);
+    bool any_high = false;
+    for (int v = 0; v < num_free; ++v)
+      if (degree[v] > threshold) constraint[v] = 1, any_high = true;
+    if (any_high &&
+        cholmod_camd(blocks, nullptr, 0, constraint.data(), permutation.data(), &cc))
+      candidates.emplace_back(2, permutation);
+    if (num_free >= kMetisMinBlocks &&
+        cholmod_metis(blocks, nullptr, 0, /*postorder=*/0, permutation.data(), &cc))
+      candidates.emplace_back(3, permutation);
+    cholmod_free_sparse(&blocks, &cc);
+
+    cc.nmethods = 1;
+    cc.method[0].ordering = CHOLMOD_GIVEN;
+    cholmod_factor* best = nullptr;
+    double best_flops = 0.0;
+    std::vector<int> scalar;
+    scalar.reserve(n);
+    for (const auto& [kind, block_permutation] : candidates) {
+      scalar.clear();
+      for (int v : block_permutation)
+        for (int q = 0; q < pattern_dims[v]; ++q) scalar.push_back(offsets[v] + q);
+      cholmod_factor* analysed = cholmod_analyze_p(hessian, scalar.data(), nullptr, 0, &cc);
+      if (!analysed) continue;
+      if (std::getenv("OSLAM_SOLVER_TRACE"))
+        std::fprintf(stderr, "ordering %d: lnz %.0f flops %.3g\n", kind, cc.lnz, cc.fl);
+      if (!best || cc.fl < best_flops) {
+        if (best) cholmod_free_factor(&best, &cc);
+        best = analysed;
+        best_flops = cc.fl;
+        ordering_used = kind;
+      } else {
+        cholmod_free_factor(&analysed, &cc);
+      }
+    }
+    if (!best) {  // plain AMD on the scalar matrix as the fallback
+      cc.method[0].ordering = CHOLMOD_AMD;
+      best = cholmod_analyze(hessian, &cc);
+      ordering_used = 1;
+    }
+    if (!best) return nullptr;
+    // The chosen permutation (with CHOLMOD's postordering) applied once.
+    const auto* perm = static_cast<const int*>(best->Perm);
+    inverse_permutation.resize(n);
+    for (int k = 0; k < n; ++k) inverse_permutation[perm[k]] = k;
+    cholmod_free_factor(&best, &cc);
+    const auto* hp = static_cast<const int*>(hessian->p);
+    const auto* hi = static_cast<const int*>(hessian->i);
+    const int hnz = hp[n];
+    std::vector<int> count(n + 1, 0);
+    for (int j = 0; j < n; ++j)
+      for (int k = hp[j]; k < hp[j + 1]; ++k)
+        ++count[std::min(inverse_permutation[hi[k]], inverse_permutation[j])];
+    permuted = cholmod_allocate_sparse(n, n, hnz, 1, 1, -1, CHOLMOD_REAL, &cc);
+    if (!permuted) return nullptr;
+    auto* pp = static_cast<int*>(permuted->p);
+    auto* pi = static_cast<int*>(permuted->i);
+    pp[0] = 0;
+    for (int j = 0; j < n; ++j) pp[j + 1] = pp[j] + count[j];
+    std::vector<int> fill(pp, pp + n);
+    permuted_entry.resize(hnz);
+    for (int j = 0; j < n; ++j)
+      for (int k = hp[j]; k < hp[j + 1]; ++k) {
+        const int a = inverse_permutation[hi[k]], b = inverse_permutation[j];
+        const int column = std::min(a, b);
+        permuted_entry[k] = fill[column];
+        pi[fill[column]++] = std::max(a, b);
+      }
+    // Rows sorted within each column (CHOLMOD's sorted flag), carrying the map.
+    std::vector<int> order, rows, where(hnz);
+    for (int k = 0; k < hnz; ++k) where[permuted_entry[k]] = k;
+    for (int j = 0; j < n; ++j) {
+      const int begin = pp[j], end = pp[j + 1];
+      order.resize(end - begin);
+      std::iota(order.begin(), order.end(), begin);
+      std::sort(order.begin(), order.end(), [&](int x, int y) { return pi[x] < pi[y]; });
+      rows.resize(order.size());
+      for (size_t q = 0; q < order.size(); ++q) rows[q] = pi[order[q]];
+      for (size_t q = 0; q < order.size(); ++q) {
+        pi[begin + q] = rows[q];
+        permuted_entry[where[order[q]]] = begin + static_cast<int>(q);
+      }
+    }
+    cc.method[0].ordering = CHOLMOD_NATURAL;
+    cc.postorder = 0;
+    cholmod_factor* natural = cholmod_analyze(permuted, &cc);
+    cc.postorder = 1;
+    if (natural && std::getenv("OSLAM_SOLVER_TRACE"))
+      std::fprintf(stderr, "chosen ordering %d, factor ordering %d super %d lnz %.0f\n",
+                   ordering_used, natural->ordering, natural->is_super, cc.lnz);
+    return natural;
+  }
+
+  // Errors (and Jacobians) of every factor at `values` into `out`;
+  // 1/2 sum ||e||^2 in `cost`. False when a factor cannot be evaluated.
+  bool Evaluate(const FactorGraph& graph, const Values& values, bool with_jacobians,
+                Evaluation* out, double* cost) {
     double sum = 0.0;
     const auto& factors = graph.factors();
     for (size_t f = 0; f < factors.size(); ++f) {
-      if (!factors[f]->Linearize(values, errors[f], nullptr)) return false;
-      sum += errors[f].squaredNorm();
+      if (!factors[f]->Linearize(values, out->errors[f],
+                                 with_jacobians ? &out->jacobians[f] : nullptr))
+        return false;
+      sum += out->errors[f].squaredNorm();
     }
     *cost = 0.5 * sum;
     return std::isfinite(*cost);
   }
 
-  // Fills errors, jacobians, J^T J (into hessian), gradient J^T e and the
-  // undamped diagonal; returns false when a factor cannot be evaluated.
-  bool Linearize(const FactorGraph& graph, const Values& values, double* cost) {
+  // J^T J (into hessian), the gradient J^T e and the undamped diagonal from
+  // an evaluation with Jacobians; false when they are not finite.
+  bool Assemble(const Evaluation& evaluation) {
     auto* x = static_cast<double*>(hessian->x);
     const auto* p = static_cast<const int*>(hessian->p);
     std::fill(x, x + p[n], 0.0);
     gradient.setZero();
-    double sum = 0.0;
-    const auto& factors = graph.factors();
-    for (size_t f = 0; f < factors.size(); ++f) {
-      Eigen::MatrixXd& jacobian = jacobians[f];
-      const Eigen::VectorXd& error = errors[f];
-      if (!factors[f]->Linearize(values, errors[f], &jacobian)) return false;
-      sum += error.squaredNorm();
+    const size_t num_factors = evaluation.jacobians.size();
+    for (size_t f = 0; f < num_factors; ++f) {
+      const Eigen::MatrixXd& jacobian = evaluation.jacobians[f];
+      const int columns = factor_columns[f];
+      auto local = local_hessian.topLeftCorner(columns, columns);
+      local.noalias() = jacobian.transpose() * jacobian;
+      auto local_g = local_gradient.head(columns);
+      local_g.noalias() = jacobian.transpose() * evaluation.errors[f];
       for (int k = pair_begin[f]; k < pair_begin[f + 1]; ++k) {
         const BlockPair& pair = pairs[k];
         for (int q = 0; q < pair.b_dim; ++q) {
-          const auto column_b = jacobian.col(pair.b_column + q);
           double* out = x + p[pair.b_offset + q] + pair.row_prefix;
           const int last = pair.diagonal ? q : pair.a_dim - 1;
-          for (int r = 0; r <= last; ++r) out[r] += jacobian.col(pair.a_column + r).dot(column_b);
+          for (int r = 0; r <= last; ++r) out[r] += local(pair.a_column + r, pair.b_column + q);
         }
         if (pair.diagonal)
           for (int r = 0; r < pair.a_dim; ++r)
-            gradient[pair.a_offset + r] += jacobian.col(pair.a_column + r).dot(error);
+            gradient[pair.a_offset + r] += local_g[pair.a_column + r];
       }
     }
-    *cost = 0.5 * sum;
     for (int c = 0; c < n; ++c) diagonal[c] = x[diagonal_position[c]];
-    return std::isfinite(*cost) && gradient.allFinite();
+    return gradient.allFinite() && diagonal.allFinite();
   }
 
   // Factors J^T J + lambda D (lambda = 0: undamped); false if not positive definite.
@@ -332,17 +502,23 @@ struct SparseSolver::Impl {
     for (int c = 0; c < n; ++c)
       x[diagonal_position[c]] = diagonal[c] + lambda * std::clamp(diagonal[c], options.min_diagonal,
                                                                   options.max_diagonal);
-    const int ok = cholmod_factorize(hessian, factor, &cc);
+    auto* px = static_cast<double*>(permuted->x);
+    const int hnz = static_cast<const int*>(hessian->p)[n];
+    for (int k = 0; k < hnz; ++k) px[permuted_entry[k]] = x[k];
     for (int c = 0; c < n; ++c) x[diagonal_position[c]] = diagonal[c];
+    const int ok = cholmod_factorize(permuted, factor, &cc);
     return ok && cc.status == CHOLMOD_OK && factor->minor == factor->n;
   }
 
   // Solves (factored matrix) out = in.
   bool SolveFactored(const Eigen::VectorXd& in, Eigen::VectorXd* out) {
-    Eigen::Map<Eigen::VectorXd>(static_cast<double*>(rhs->x), n) = in;
+    auto* bx = static_cast<double*>(rhs->x);
+    for (int c = 0; c < n; ++c) bx[inverse_permutation[c]] = in[c];
     if (!cholmod_solve2(CHOLMOD_A, factor, rhs, nullptr, &solution, nullptr, &work_y, &work_e, &cc))
       return false;
-    *out = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(solution->x), n);
+    const auto* sx = static_cast<const double*>(solution->x);
+    out->resize(n);
+    for (int c = 0; c < n; ++c) (*out)[c] = sx[inverse_permutation[c]];
     return out->allFinite();
   }
 
@@ -352,6 +528,8 @@ struct SparseSolver::Impl {
                  double* squared_residual, double* log_abs_det_r) {
     const int rows = m + (lambda > 0 ? n : 0);
     size_t nnz = 0;
+    const auto& jacobians = current.jacobians;
+    const auto& errors = current.errors;
     for (const auto& jacobian : jacobians) nnz += jacobian.size();
     cholmod_triplet* triplet =
         cholmod_l_allocate_triplet(rows, n, nnz + n, 0, CHOLMOD_REAL, &cc_long);
@@ -477,13 +655,12 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   Values& values = graph->mutable_values();
   Values trial;
   double cost = 0.0;
-  auto linearize = [&]() {
-    const auto t = Clock::now();
-    const bool ok = impl.Linearize(*graph, values, &cost);
-    summary.linearize_time_s += Seconds(t);
-    return ok;
-  };
-  if (!linearize())
+  const bool trace = std::getenv("OSLAM_SOLVER_TRACE") != nullptr;
+  const auto t_first = Clock::now();
+  const bool first_ok = impl.Evaluate(*graph, values, true, &impl.current, &cost) &&
+                        impl.Assemble(impl.current);
+  summary.linearize_time_s += Seconds(t_first);
+  if (!first_ok)
     return finish(TerminationType::kFailure,
                   "a factor cannot be evaluated at the initial values (e.g. an object has no "
                   "image from a pose that saw it)");
@@ -524,12 +701,20 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
         if (v >= 0) trial.Retract(key, delta.data() + impl.offsets[v]);
       }
       const auto t_cost = Clock::now();
-      const bool evaluated = impl.Cost(*graph, trial, &new_cost);
+      const bool evaluated = impl.Evaluate(*graph, trial, true, &impl.trial, &new_cost);
       summary.linearize_time_s += Seconds(t_cost);
       if (evaluated && predicted > 0.0) {
         rho = (cost - new_cost) / predicted;
         accepted = rho > options_.min_relative_decrease;
       }
+    }
+    if (trace) {
+      Eigen::Index where = 0;
+      if (solved) delta.cwiseAbs().maxCoeff(&where);
+      std::fprintf(stderr, "it %d lambda %.3g cost %.6g -> %.6g rho %.3f |d| %.3g at %ld/%d %s\n",
+                   summary.iterations, lambda, cost, new_cost, rho,
+                   solved ? delta.lpNorm<Eigen::Infinity>() : -1.0, long(where), impl.n,
+                   accepted ? "ok" : "REJ");
     }
     if (!accepted) {
       lambda *= nu;
@@ -541,17 +726,26 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
       }
       continue;
     }
+    const auto t_assemble = Clock::now();
+    if (!impl.Assemble(impl.trial)) {
+      // Non-finite Jacobians at a point with a finite cost: treat as a failed step.
+      impl.Assemble(impl.current);
+      summary.linearize_time_s += Seconds(t_assemble);
+      lambda *= nu;
+      nu *= 2.0;
+      if (lambda > options_.max_damping) {
+        message = "no further decrease possible (damping limit)";
+        termination = TerminationType::kConverged;
+        break;
+      }
+      continue;
+    }
+    summary.linearize_time_s += Seconds(t_assemble);
     std::swap(values, trial);
+    std::swap(impl.current, impl.trial);
     ++summary.successful_steps;
     const double old_cost = cost;
-    if (!linearize()) {
-      // The cost evaluated fine a moment ago, so this is not expected.
-      std::swap(values, trial);
-      linearize();
-      termination = TerminationType::kFailure;
-      message = "linearisation failed at an accepted point";
-      break;
-    }
+    cost = new_cost;
     lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
     lambda = std::max(lambda, 1e-15);
     nu = 2.0;
@@ -606,7 +800,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
       if (v >= 0) trial.Retract(key, delta.data() + impl.offsets[v]);
     }
     double new_cost = 0.0;
-    if (impl.Cost(*graph, trial, &new_cost) && new_cost <= cost) {
+    if (impl.Evaluate(*graph, trial, false, &impl.trial, &new_cost) && new_cost <= cost) {
       std::swap(values, trial);
       summary.final_cost = new_cost;
     }
@@ -660,7 +854,8 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
     auto* ux = static_cast<double*>(unit->x);
     int c = 0;
     for (size_t h = g; h < end; ++h)
-      for (int column : columns[h]) ux[static_cast<size_t>(c++) * impl.n + column] = 1.0;
+      for (int column : columns[h])
+        ux[static_cast<size_t>(c++) * impl.n + impl.inverse_permutation[column]] = 1.0;
     cholmod_dense* x = cholmod_solve(CHOLMOD_A, impl.factor, unit, &impl.cc);
     cholmod_free_dense(&unit, &impl.cc);
     if (!x) {
@@ -675,7 +870,8 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
       block.resize(size, size);
       for (int q = 0; q < size; ++q)
         for (int r = 0; r < size; ++r)
-          block(r, q) = xx[static_cast<size_t>(c + q) * impl.n + columns[h][r]];
+          block(r, q) =
+              xx[static_cast<size_t>(c + q) * impl.n + impl.inverse_permutation[columns[h][r]]];
       block = 0.5 * (block + block.transpose()).eval();
       c += size;
     }

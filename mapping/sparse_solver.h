@@ -32,7 +32,7 @@ struct SolverOptions {
   // spec §5.4), or lowers the cost by less than function_tolerance
   // relatively, or when max |J^T e| falls below gradient_tolerance.
   double step_tolerance = 1e-4;
-  double function_tolerance = 1e-6;
+  double function_tolerance = 1e-8;
   double gradient_tolerance = 1e-10;
   // LM damping lambda multiplies diag(J^T J) (clamped to
   // [min_diagonal, max_diagonal]) - Marquardt's scaling, so metres and

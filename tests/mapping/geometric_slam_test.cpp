@@ -55,6 +55,7 @@ TEST(GeometricSlamTest, NoiseFreeDataRecoversTheTruthFromFirstDetectionInitialis
   options.pixel_std_px = 0.01;  // exact detections: the priors must not pull
   options.solver.step_tolerance = 1e-9;
   options.solver.function_tolerance = 1e-14;
+  options.initial_refinement_detections = 0;  // objects from their first detection only
   GeometricSlam slam(camera, options);
   const GeometricSlamResult result = slam.Solve(scene.problem);
   ASSERT_EQ(result.summary.termination, TerminationType::kConverged) << result.summary.message;
