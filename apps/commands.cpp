@@ -9,6 +9,7 @@ const std::vector<Command>& Commands() {
       {"train-colors", "learn class colour models from example regions", RunTrainColorsCommand},
       {"detect", "detect objects by colour in every frame of a run", RunDetectCommand},
       {"eval-detect", "score a run's detections against its ground truth", RunEvalDetectCommand},
+      {"eval", "score an O-Map against a run's ground truth", RunEvalCommand},
       {"map", "map objects and trajectory (geometric SLAM; --known-association)", RunMapCommand},
       {"export", "write an O-Map as glTF, PLY, figures and reprojection overlays",
        RunExportCommand},

@@ -21,6 +21,7 @@ int RunCameraCommand(const std::vector<std::string>& args);
 int RunCalibrateCommand(const std::vector<std::string>& args);
 int RunDetectCommand(const std::vector<std::string>& args);
 int RunEvalDetectCommand(const std::vector<std::string>& args);
+int RunEvalCommand(const std::vector<std::string>& args);
 int RunMapCommand(const std::vector<std::string>& args);
 int RunTrainColorsCommand(const std::vector<std::string>& args);
 int RunSlamCommand(const std::vector<std::string>& args);
