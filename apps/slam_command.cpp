@@ -41,6 +41,12 @@ void AddOptions(Arguments* a) {
   a->AddOption("delta-t", "", "DT", "temperature step between chains", "3.33");
   a->AddOption("baseline", "", "nn", "instead of O-SLAM: gated nearest-neighbour association");
   a->AddOption("min-track-length", "", "N", "drop shorter tracks (Sec. 6.3: 3)", "3");
+  a->AddOption("max-gap", "", "N",
+               "join tracks across up to N missed frames (occlusions; 0 = thesis)", "2");
+  a->AddFlag("no-identity-merge",
+             "keep one map object per sample identity (thesis Algorithm 3 as printed)");
+  a->AddOption("identity-distance", "", "M",
+               "identities closer than this that rarely co-occur become one object", "0.5");
   a->AddOption("proposal-iterations", "", "N", "solver iterations per proposed state", "1");
   a->AddOption("mismatch-penalty", "", "X", "class-mismatch factor on e_j (inf = never)", "3");
   a->AddOption("location-std-xy", "", "M", "class location prior std, x and y", "10");
@@ -143,6 +149,10 @@ int RunSlamCommand(const std::vector<std::string>& args) {
 
   TrackOptions track_options;
   track_options.min_length = static_cast<int>(arguments.GetInt("min-track-length"));
+  track_options.max_gap_frames = static_cast<int>(arguments.GetInt("max-gap"));
+  FusionOptions fusion_options;
+  fusion_options.merge_identities = !arguments.Flag("no-identity-merge");
+  fusion_options.identity_merge_distance_m = arguments.GetDouble("identity-distance");
   SlamTargetOptions target_options;
   target_options.proposal_iterations = static_cast<int>(arguments.GetInt("proposal-iterations"));
   SamplerOptions sampler_options;
@@ -160,6 +170,7 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   }
   std::string why;
   if (!track_options.Validate(&why) || !target_options.Validate(&why) ||
+      !fusion_options.Validate(&why) ||
       !sampler_options.Validate(&why))
     throw UsageError(why);
 
@@ -177,9 +188,11 @@ int RunSlamCommand(const std::vector<std::string>& args) {
           : ClassConfusionModel::Identity(num_classes, 1e-3, track_class, track_size);
   const TrackSummary& ts = input.tracks.summary;
   if (!quiet)
-    std::printf("%d detections -> %zu tracks (%d links, %d dropped in tracks shorter than %d)\n",
-                ts.num_detections, input.tracks.tracks.size(), ts.num_links,
-                ts.num_dropped_detections, track_options.min_length);
+    std::printf(
+        "%d detections -> %zu tracks (%d links, %d across gaps; %d dropped in tracks shorter "
+        "than %d)\n",
+        ts.num_detections, input.tracks.tracks.size(), ts.num_links, ts.num_gap_links,
+        ts.num_dropped_detections, track_options.min_length);
 
   auto factory = [&] { return std::make_unique<SlamEvaluator>(input.data, model, target_options); };
   SamplerResult result;
@@ -206,7 +219,7 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
-  const FusionResult fused = FuseSamples(result.samples, input.data.classes, track_size, {});
+  const FusionResult fused = FuseSamples(result.samples, input.data.classes, track_size, fusion_options);
   WriteSampledOMap(arguments.Get("output"), fused, source,
                    arguments.Has("baseline") ? nullptr : &result.summary);
   if (quiet) return 0;

@@ -29,6 +29,17 @@ Json MoveJson(const std::array<MoveStatistics, 3>& stats) {
   return moves;
 }
 
+// The sample identities combined into the object (item 6a).
+Json MembersJson(const FusedIdentity& identity) {
+  Json members = Json::array();
+  for (size_t m = 0; m < identity.members.size(); ++m)
+    members.push_back({{"tracks", identity.members[m]},
+                       {"num_samples", m < identity.member_samples.size()
+                                           ? identity.member_samples[m]
+                                           : identity.num_samples}});
+  return members;
+}
+
 Json SummaryJson(const SamplerSummary& s) {
   Json trace = Json::array();
   for (double v : s.cold_trace) trace.push_back(Number(v));
@@ -78,7 +89,8 @@ std::string SampledOMapToJson(const FusionResult& fused, const SampledOMapSource
          {"covariance", covariance},
          {"class_histogram", histogram},
          {"tracks", fused.identities[i].tracks},
-         {"num_samples", fused.identities[i].num_samples}});
+         {"num_samples", fused.identities[i].num_samples},
+         {"identities", MembersJson(fused.identities[i])}});
   }
   root["objects"] = objects;
   Json trajectory = Json::array();

@@ -19,6 +19,7 @@ bool TrackOptions::Validate(std::string* why) const {
   if (!(max_angle_change_rad > 0)) return fail("the track angle gate must be > 0 rad");
   if (!(max_relative_size_change > 0)) return fail("the track size gate must be > 0");
   if (min_length < 1) return fail("the minimum track length must be >= 1");
+  if (max_gap_frames < 0) return fail("the track gap must be >= 0 frames");
   return true;
 }
 
@@ -101,6 +102,33 @@ TrackSet BuildTracks(const std::vector<ClassedSlice>& detections, const TrackOpt
       next[a] = b;
       previous[b] = a;
       ++result.summary.num_links;
+    }
+  }
+  // Joins across 1..max_gap_frames missed frames (item 6b), shortest gap
+  // first: track ends at frame f and track starts at f + 1 + gap, with the
+  // gate widths multiplied by the frame difference.
+  for (int gap = 1; gap <= options.max_gap_frames; ++gap) {
+    TrackOptions widened = options;
+    const double scale = gap + 1.0;
+    widened.max_radius_change_px *= scale;
+    widened.max_angle_change_rad *= scale;
+    widened.max_relative_size_change *= scale;
+    TrackSummary ignored;
+    for (const auto& [frame, members] : by_frame) {
+      const auto later = by_frame.find(frame + 1 + gap);
+      if (later == by_frame.end()) continue;
+      std::vector<int> ends, starts;
+      for (int a : members)
+        if (next[a] < 0) ends.push_back(a);
+      for (int b : later->second)
+        if (previous[b] < 0) starts.push_back(b);
+      if (ends.empty() || starts.empty()) continue;
+      for (const auto& [a, b] : LinkFrames(detections, ends, starts, widened, &ignored)) {
+        next[a] = b;
+        previous[b] = a;
+        ++result.summary.num_links;
+        ++result.summary.num_gap_links;
+      }
     }
   }
   // Walk the chains from their heads, in frame order (map) then index order.

@@ -31,6 +31,13 @@ struct TrackOptions {
   double max_relative_size_change = 0.2;   // |ds| < 0.2 min(s, s') for s_r and s_phi
   int min_length = 3;                      // N_min (3 in the class-confusion runs, 2 in §6.2)
   TrackLinkRule link_rule = TrackLinkRule::kNearest;
+  // Beyond the thesis (issue 7 item 6b): a track that ends and one that
+  // starts up to this many missed frames later (an occlusion, a missed
+  // detection) are joined when they have the same detected class and pass
+  // the eq. 6.1 gate widened by the frame difference; shortest gaps first,
+  // one-to-one, before the short-track filter. 0 = the thesis (consecutive
+  // frames only).
+  int max_gap_frames = 0;
 
   bool Validate(std::string* why) const;
 };
@@ -44,6 +51,7 @@ struct Track {
 struct TrackSummary {
   int num_detections = 0;
   int num_links = 0;
+  int num_gap_links = 0;  // of num_links: joins across missed frames (max_gap_frames)
   int num_ambiguous = 0;  // detections with more than one gated candidate
   int num_tracks_before_filter = 0;
   int num_dropped_detections = 0;  // in tracks shorter than min_length

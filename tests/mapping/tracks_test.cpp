@@ -51,9 +51,48 @@ TEST(TracksTest, LinksSameClassNearestOneToOneAndDropsShortTracks) {
   EXPECT_GT(BuildTracks(d, options).tracks.size(), 4u);
 }
 
+TEST(TracksTest, TracksSplitByAnOcclusionAreRejoinedAcrossTheGap) {
+  // Object A (class 0) seen in frames 0-3, hidden in 4-5, seen again 6-9;
+  // object B (class 1) at the same place, seen in frames 6-9 only; a class-0
+  // object far away (C) appears in frame 6.
+  std::vector<ClassedSlice> d;
+  for (long f : {0, 1, 2, 3, 6, 7, 8, 9}) d.push_back(At(f, 0, 200 + 3 * f, 10 + 2 * f));
+  for (long f : {6, 7, 8, 9}) d.push_back(At(f, 1, 200 + 3 * f, 10 + 2 * f));
+  for (long f : {6, 7, 8}) d.push_back(At(f, 0, 150, -120));
+  TrackOptions options;
+  const TrackSet thesis = BuildTracks(d, options);
+  EXPECT_EQ(thesis.tracks.size(), 4u);  // A in two pieces, B, C
+  EXPECT_EQ(thesis.summary.num_gap_links, 0);
+  options.max_gap_frames = 2;
+  const TrackSet joined = BuildTracks(d, options);
+  ASSERT_EQ(joined.tracks.size(), 3u);
+  EXPECT_EQ(joined.tracks[0].detections.size(), 8u);  // A whole; never B (class) nor C (gate)
+  for (int i : joined.tracks[0].detections) EXPECT_EQ(d[i].class_index, 0);
+  EXPECT_EQ(d[joined.tracks[0].detections.back()].frame, 9);
+  EXPECT_EQ(joined.summary.num_gap_links, 1);
+  // A gap longer than the limit is not bridged.
+  options.max_gap_frames = 1;
+  EXPECT_EQ(BuildTracks(d, options).tracks.size(), 4u);
+}
+
+TEST(TracksTest, GapJoiningRescuesFragmentsShorterThanTheMinimum) {
+  // 2 + 2 detections with one missed frame: dropped by N_min = 3 unless joined.
+  const std::vector<ClassedSlice> d = {At(0, 0, 200, 10), At(1, 0, 202, 11), At(3, 0, 206, 13),
+                                       At(4, 0, 208, 14)};
+  TrackOptions options;
+  EXPECT_TRUE(BuildTracks(d, options).tracks.empty());
+  options.max_gap_frames = 1;
+  const TrackSet set = BuildTracks(d, options);
+  ASSERT_EQ(set.tracks.size(), 1u);
+  EXPECT_EQ(set.tracks[0].detections, (std::vector<int>{0, 1, 2, 3}));
+}
+
 TEST(TracksTest, InvalidOptionsThrow) {
   TrackOptions options;
   options.min_length = 0;
+  EXPECT_THROW(BuildTracks({}, options), Error);
+  options.min_length = 1;
+  options.max_gap_frames = -1;
   EXPECT_THROW(BuildTracks({}, options), Error);
 }
 
