@@ -3,6 +3,7 @@
 // with existence probabilities and class histograms; or the nearest-neighbour
 // baseline. Prints a convergence report and, when the run has ground truth,
 // its scores.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -107,12 +108,12 @@ Input Load(const Arguments& arguments, TrackOptions track_options) {
 void PrintMoves(const char* phase, const std::array<MoveStatistics, 3>& stats) {
   for (int m = 0; m < 3; ++m) {
     const MoveStatistics& s = stats[m];
-    const long solved = s.proposed - s.self_transitions;
     std::printf(
-        "  %s %-6s proposed %5ld  self %5ld  accepted %5ld (%.1f%% of proposed)  %.2f ms/solve\n",
-        phase, MoveName(static_cast<MoveType>(m)), s.proposed, s.self_transitions, s.accepted,
-        s.proposed ? 100.0 * s.accepted / s.proposed : 0.0,
-        solved > 0 ? 1e3 * s.time_s / solved : 0.0);
+        "  %s %-6s proposed %5ld  self %5ld  cached %5ld  accepted %5ld (%.1f%% of proposed)  "
+        "%.2f ms/solve\n",
+        phase, MoveName(static_cast<MoveType>(m)), s.proposed, s.self_transitions, s.cache_hits,
+        s.accepted, s.proposed ? 100.0 * s.accepted / s.proposed : 0.0,
+        s.solves() > 0 ? 1e3 * s.time_s / s.solves() : 0.0);
   }
 }
 
@@ -125,8 +126,13 @@ void PrintReport(const SamplerResult& result) {
               result.samples.size(), s.sampling_time_s, s.swaps_accepted, s.swaps_proposed,
               s.effective_sample_size);
   PrintMoves("mc3 ", s.sampling);
-  std::printf("solves %zu, cache hits %zu; best log target %.2f\n", s.num_solves, s.num_cache_hits,
-              result.best->log_target);
+  long proposals = 0;
+  for (const auto* phase : {&s.hill_climb, &s.sampling})
+    for (const MoveStatistics& m : *phase) proposals += m.proposed;
+  std::printf(
+      "solves %zu, cache hits %zu; best log target %.2f; %.0f cold-chain proposals/s\n",
+      s.num_solves, s.num_cache_hits, result.best->log_target,
+      proposals / std::max(1e-9, s.hill_climb_time_s + s.sampling_time_s));
   const size_t n = s.cold_trace.size();
   std::printf("cold-chain log target trace:");
   for (size_t i = 0; i < n; i += std::max<size_t>(1, n / 10)) std::printf(" %.1f", s.cold_trace[i]);
@@ -226,8 +232,10 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   if (!arguments.Has("baseline")) PrintReport(result);
   int above = 0;
   for (const OMapObject& o : fused.map.objects) above += o.existence_probability > 0.5;
-  std::printf("%zu identities, %d with pi > 0.5; %.2f s\n", fused.map.objects.size(), above,
-              seconds);
+  size_t members = 0;
+  for (const FusedIdentity& f : fused.identities) members += f.members.size();
+  std::printf("%zu map objects (from %zu sample identities), %d with pi > 0.5; %.2f s\n",
+              fused.map.objects.size(), members, above, seconds);
   if (const auto truth = ReadGroundTruth(arguments.Get("RUN_DIR"))) {
     const OMapScore s = ScoreOMap(fused.map, input.odometry, *truth);
     std::printf(

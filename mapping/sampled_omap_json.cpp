@@ -23,8 +23,11 @@ Json MoveJson(const std::array<MoveStatistics, 3>& stats) {
         {"proposed", s.proposed},
         {"accepted", s.accepted},
         {"self_transitions", s.self_transitions},
+        {"cache_hits", s.cache_hits},
         {"acceptance_rate", Number(s.proposed ? double(s.accepted) / s.proposed : NAN)},
-        {"evaluation_time_s", s.time_s}};
+        {"evaluation_time_s", s.time_s},
+        // per proposal that needed a solve (self-transitions and cache hits cost ~nothing)
+        {"time_per_proposal_s", Number(s.solves() > 0 ? s.time_s / s.solves() : NAN)}};
   }
   return moves;
 }
@@ -41,8 +44,13 @@ Json MembersJson(const FusedIdentity& identity) {
 }
 
 Json SummaryJson(const SamplerSummary& s) {
-  Json trace = Json::array();
+  Json trace = Json::array(), hill_trace = Json::array();
   for (double v : s.cold_trace) trace.push_back(Number(v));
+  for (double v : s.hill_climb_trace) hill_trace.push_back(Number(v));
+  long proposals = 0;
+  for (const auto* phase : {&s.hill_climb, &s.sampling})
+    for (const MoveStatistics& m : *phase) proposals += m.proposed;
+  const double seconds = s.hill_climb_time_s + s.sampling_time_s;
   return {{"hill_climb_moves", MoveJson(s.hill_climb)},
           {"sampling_moves", MoveJson(s.sampling)},
           {"swaps_proposed", s.swaps_proposed},
@@ -54,6 +62,8 @@ Json SummaryJson(const SamplerSummary& s) {
           {"num_cache_hits", s.num_cache_hits},
           {"hill_climb_time_s", s.hill_climb_time_s},
           {"sampling_time_s", s.sampling_time_s},
+          {"cold_chain_proposals_per_second", Number(seconds > 0 ? proposals / seconds : NAN)},
+          {"hill_climb_log_target", hill_trace},
           {"cold_chain_log_target", trace}};
 }
 

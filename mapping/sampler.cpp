@@ -59,8 +59,10 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool gre
     return current;
   }
   const auto start = std::chrono::steady_clock::now();
+  const size_t hits_before = evaluator.num_cache_hits();
   EvaluationPtr proposed = evaluator.Evaluate(proposal.state, current.get());
   stat.time_s += Seconds(start);
+  stat.cache_hits += static_cast<long>(evaluator.num_cache_hits() - hits_before);
   if (!proposed || !proposed->valid) return current;
   const double delta = proposed->log_target - current->log_target;
   bool accept;

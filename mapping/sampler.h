@@ -36,7 +36,10 @@ struct SamplerOptions {
 
 struct MoveStatistics {
   long proposed = 0, accepted = 0, self_transitions = 0;
-  double time_s = 0;  // spent evaluating proposals of this type
+  long cache_hits = 0;  // proposed states found in the evaluator's cache (no solve)
+  double time_s = 0;    // spent evaluating proposals of this type
+  // Proposals that needed a solve.
+  long solves() const { return proposed - self_transitions - cache_hits; }
 };
 
 struct SamplerSummary {

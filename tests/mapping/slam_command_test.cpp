@@ -136,8 +136,12 @@ TEST(SlamCommand, OSlamMapReadsBackWithObjectsAndTrajectory) {
   const auto& sampler = json.at("sampler");
   EXPECT_EQ(sampler["cold_chain_log_target"].size(), 120u);
   EXPECT_TRUE(sampler["effective_sample_size"].is_number());
-  for (const char* move : {"merge", "split", "switch"})
+  EXPECT_EQ(sampler["hill_climb_log_target"].size(), 30u);
+  EXPECT_GT(sampler["cold_chain_proposals_per_second"].get<double>(), 0.0);
+  for (const char* move : {"merge", "split", "switch"}) {
     EXPECT_TRUE(sampler["sampling_moves"][move].contains("acceptance_rate")) << move;
+    EXPECT_TRUE(sampler["sampling_moves"][move].contains("time_per_proposal_s")) << move;
+  }
   for (const auto& o : json["objects"]) EXPECT_FALSE(o["identities"].empty());
 }
 
