@@ -130,7 +130,9 @@ struct SparseSolver::Impl {
   Eigen::MatrixXd local_hessian;  // scratch: J_f^T J_f
   Eigen::VectorXd local_gradient;  // scratch: J_f^T e_f
   std::vector<int> factor_columns;  // per factor: its Jacobian's column count
-  int ordering_used = 0;  // 0 none, 1 AMD, 2 high-degree last, 3 METIS
+  OrderingType requested_ordering = OrderingType::kAutomatic;
+  OrderingType ordering_used = OrderingType::kAmd;
+  OrderingType analysed_ordering = OrderingType::kAutomatic;  // the request the cache was made for
   std::vector<int> factor_row;  // first row of each factor in J
   int m = 0;
   Eigen::VectorXd gradient, diagonal;
@@ -216,7 +218,8 @@ struct SparseSolver::Impl {
       rows[v].erase(std::unique(rows[v].begin(), rows[v].end()), rows[v].end());
     }
 
-    bool fits = allow_reuse && hessian && factor && dims == pattern_dims;
+    bool fits = allow_reuse && hessian && factor && dims == pattern_dims &&
+                analysed_ordering == requested_ordering;
     for (int v = 0; fits && v < num_free; ++v)
       fits = std::includes(pattern_rows[v].begin(), pattern_rows[v].end(), rows[v].begin(),
                            rows[v].end());
@@ -228,6 +231,7 @@ struct SparseSolver::Impl {
       BuildHessianStructure();
       const auto start = Clock::now();
       factor = Analyze();
+      analysed_ordering = requested_ordering;
       *analyze_s = Seconds(start);
       if (!factor) {
         *why = "CHOLMOD analysis failed (out of memory?)";
@@ -349,10 +353,14 @@ struct SparseSolver::Impl {
     }
     bp[num_free] = next;
 
-    std::vector<std::pair<int, std::vector<int>>> candidates;  // (kind, block permutation)
+    std::vector<std::pair<OrderingType, std::vector<int>>> candidates;
     std::vector<int> permutation(num_free);
-    if (cholmod_amd(blocks, nullptr, 0, permutation.data(), &cc))
-      candidates.emplace_back(1, permutation);
+    const OrderingType wanted = requested_ordering;
+    auto want = [wanted](OrderingType type) {
+      return wanted == OrderingType::kAutomatic || wanted == type;
+    };
+    if (want(OrderingType::kAmd) && cholmod_amd(blocks, nullptr, 0, permutation.data(), &cc))
+      candidates.emplace_back(OrderingType::kAmd, permutation);
     std::vector<int> sorted = degree;
     std::nth_element(sorted.begin(), sorted.begin() + num_free / 2, sorted.end());
     const int threshold = std::max(16, 4 * sorted[num_free / 2]);
@@ -360,12 +368,14 @@ struct SparseSolver::Impl {
     bool any_high = false;
     for (int v = 0; v < num_free; ++v)
       if (degree[v] > threshold) constraint[v] = 1, any_high = true;
-    if (any_high &&
+    if (((any_high && wanted == OrderingType::kAutomatic) ||
+         wanted == OrderingType::kHighDegreeLast) &&
         cholmod_camd(blocks, nullptr, 0, constraint.data(), permutation.data(), &cc))
-      candidates.emplace_back(2, permutation);
-    if (num_free >= kMetisMinBlocks &&
+      candidates.emplace_back(OrderingType::kHighDegreeLast, permutation);
+    if (((num_free >= kMetisMinBlocks && wanted == OrderingType::kAutomatic) ||
+         wanted == OrderingType::kMetis) &&
         cholmod_metis(blocks, nullptr, 0, /*postorder=*/0, permutation.data(), &cc))
-      candidates.emplace_back(3, permutation);
+      candidates.emplace_back(OrderingType::kMetis, permutation);
     cholmod_free_sparse(&blocks, &cc);
 
     cc.nmethods = 1;
@@ -381,7 +391,8 @@ struct SparseSolver::Impl {
       cholmod_factor* analysed = cholmod_analyze_p(hessian, scalar.data(), nullptr, 0, &cc);
       if (!analysed) continue;
       if (std::getenv("OSLAM_SOLVER_TRACE"))
-        std::fprintf(stderr, "ordering %d: lnz %.0f flops %.3g\n", kind, cc.lnz, cc.fl);
+        std::fprintf(stderr, "ordering %d: lnz %.0f flops %.3g\n", static_cast<int>(kind), cc.lnz,
+                     cc.fl);
       if (!best || cc.fl < best_flops) {
         if (best) cholmod_free_factor(&best, &cc);
         best = analysed;
@@ -394,7 +405,7 @@ struct SparseSolver::Impl {
     if (!best) {  // plain AMD on the scalar matrix as the fallback
       cc.method[0].ordering = CHOLMOD_AMD;
       best = cholmod_analyze(hessian, &cc);
-      ordering_used = 1;
+      ordering_used = OrderingType::kAmd;
     }
     if (!best) return nullptr;
     // The chosen permutation (with CHOLMOD's postordering) applied once.
@@ -445,7 +456,7 @@ struct SparseSolver::Impl {
     cc.postorder = 1;
     if (natural && std::getenv("OSLAM_SOLVER_TRACE"))
       std::fprintf(stderr, "chosen ordering %d, factor ordering %d super %d lnz %.0f\n",
-                   ordering_used, natural->ordering, natural->is_super, cc.lnz);
+                   static_cast<int>(ordering_used), natural->ordering, natural->is_super, cc.lnz);
     return natural;
   }
 
@@ -643,10 +654,12 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   summary.num_factors = static_cast<int>(graph->factors().size());
 
   double analyze_s = 0.0;
+  impl.requested_ordering = options_.ordering;
   if (!impl.SetUp(*graph, options_.reuse_symbolic_analysis, &summary.reused_symbolic_analysis,
                   &analyze_s, &why))
     return finish(TerminationType::kFailure, why);
   summary.analyze_time_s = analyze_s;
+  summary.ordering = impl.ordering_used;
   summary.num_residuals = impl.m;
   summary.num_parameters = impl.n;
   const int num_keys = graph->num_variables();

@@ -25,6 +25,12 @@ namespace oslam {
 
 enum class LinearSolverType { kSparseCholesky, kSparseQR };
 
+// Fill-reducing ordering of the Cholesky path, computed per variable (block).
+// kAutomatic tries AMD, CAMD with the variables of high block degree (objects
+// seen from many poses) last, and METIS from 2,000 variables on, and keeps
+// the one with the fewest factorisation flops; the others force one method.
+enum class OrderingType { kAutomatic, kAmd, kHighDegreeLast, kMetis };
+
 struct SolverOptions {
   LinearSolverType linear_solver = LinearSolverType::kSparseCholesky;
   int max_iterations = 50;
@@ -43,6 +49,7 @@ struct SolverOptions {
   double max_diagonal = 1e32;
   // A step is accepted when actual / predicted cost reduction exceeds this.
   double min_relative_decrease = 1e-3;
+  OrderingType ordering = OrderingType::kAutomatic;
   // Reuse the cached symbolic analysis when the new block pattern fits in it.
   bool reuse_symbolic_analysis = true;
   bool compute_evidence = true;
@@ -72,6 +79,7 @@ struct SolverSummary {
   int num_residuals = 0;   // m
   int num_parameters = 0;  // n (free variables only)
   bool reused_symbolic_analysis = false;
+  OrderingType ordering = OrderingType::kAutomatic;  // the one used (never kAutomatic after a solve)
   double total_time_s = 0, linearize_time_s = 0, analyze_time_s = 0, factorize_time_s = 0,
          evidence_time_s = 0;
 

@@ -161,6 +161,42 @@ TEST(GeometricSlamTest, AnObjectSeenOnceIsSolvedWithItsPriors) {
   EXPECT_GT(position_covariance.trace(), 1e-3);
 }
 
+// The initial refinement (poses held at odometry) moves objects from their
+// single-detection start towards the truth, and the cold solve then needs
+// few iterations.
+TEST(GeometricSlamTest, RefinementFromFirstDetectionsImprovesTheObjectStart) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  testing::SyntheticSceneOptions scene_options;
+  scene_options.pixel_std_px = 30.0;
+  scene_options.odometry_noise = true;
+  const testing::SyntheticScene scene = testing::MakeSyntheticScene(camera, scene_options);
+  const std::vector<Pose2> poses =
+      ComposeOdometry(scene.problem.first_pose, scene.problem.increments);
+  std::map<int, std::vector<const SliceObservation*>> by_object;
+  for (const auto& observation : scene.problem.observations)
+    by_object[observation.object_id].push_back(&observation);
+  double before = 0.0, after = 0.0;
+  for (const auto& [id, list] : by_object) {
+    const ClassPrior& prior = scene.problem.classes[scene.problem.object_class.at(id)];
+    CylinderGeometry object;
+    ASSERT_TRUE(InitialObjectFromDetection(camera, poses[list.front()->frame],
+                                           list.front()->slice, prior, &object));
+    const Eigen::Vector3d truth = scene.true_objects[id].base_world;
+    before += (object.base_world - truth).head<2>().norm();
+    const std::vector<const SliceObservation*> first(
+        list.begin(), list.begin() + std::min<size_t>(20, list.size()));
+    RefineObjectFromDetections(camera, poses, first, prior, 30.0, &object);
+    after += (object.base_world - truth).head<2>().norm();
+  }
+  EXPECT_LT(after, 0.5 * before);
+  GeometricSlamOptions options;
+  options.compute_object_covariances = false;
+  GeometricSlam slam(camera, options);
+  const GeometricSlamResult result = slam.Solve(scene.problem);
+  EXPECT_EQ(result.summary.termination, TerminationType::kConverged);
+  EXPECT_LE(result.summary.iterations, 10);
+}
+
 TEST(GeometricSlamTest, WarmStartAfterAnAssociationChangeConvergesFasterToTheSameAnswer) {
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
   testing::SyntheticSceneOptions scene_options;

@@ -234,6 +234,65 @@ TEST(EvidenceTest, EqualsDenseBruteForceOnSmallSlamProblems) {
   }
 }
 
+// Every fill-reducing ordering (and the QR path) must give the same
+// iterates, evidence and covariances: the permutation is bookkeeping only.
+TEST(SolverTest, EveryOrderingGivesTheSameSolutionEvidenceAndCovariance) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  for (unsigned seed : {1u, 4u}) {
+    SolveResult reference;
+    std::vector<Eigen::MatrixXd> reference_blocks;
+    Eigen::VectorXd reference_values;
+    bool have_reference = false;
+    for (const OrderingType ordering : {OrderingType::kAutomatic, OrderingType::kAmd,
+                                        OrderingType::kHighDegreeLast, OrderingType::kMetis}) {
+      FactorGraph graph = SmallSlamGraph(camera, seed, 40);
+      SolverOptions options;
+      options.ordering = ordering;
+      SparseSolver solver(options);
+      const SolveResult result = solver.Solve(&graph);
+      ASSERT_EQ(result.summary.termination, TerminationType::kConverged) << result.summary.message;
+      ASSERT_TRUE(result.evidence.valid);
+      if (ordering != OrderingType::kAutomatic) EXPECT_EQ(result.summary.ordering, ordering);
+      std::vector<std::vector<int>> groups;
+      for (int key = 0; key < graph.num_variables(); ++key)
+        if (!graph.IsFixed(key)) groups.push_back({key});
+      std::vector<Eigen::MatrixXd> blocks;
+      ASSERT_TRUE(solver.MarginalCovariances(groups, &blocks));
+      Eigen::VectorXd values(3 * graph.num_variables());
+      values.setZero();
+      for (int key = 0; key < graph.num_variables(); ++key)
+        values.segment(3 * key, graph.values().Dim(key)) = graph.values().Get(key);
+      if (!have_reference) {
+        reference = result;
+        reference_blocks = blocks;
+        reference_values = values;
+        have_reference = true;
+        continue;
+      }
+      EXPECT_EQ(result.summary.iterations, reference.summary.iterations);
+      EXPECT_NEAR(result.summary.final_cost, reference.summary.final_cost,
+                  1e-9 * reference.summary.final_cost);
+      EXPECT_NEAR(result.evidence.log_evidence, reference.evidence.log_evidence, 1e-7);
+      EXPECT_NEAR(result.evidence.log_det_information, reference.evidence.log_det_information,
+                  1e-7);
+      EXPECT_LT((values - reference_values).cwiseAbs().maxCoeff(), 1e-8);
+      for (size_t g = 0; g < blocks.size(); ++g)
+        EXPECT_LT((blocks[g] - reference_blocks[g]).cwiseAbs().maxCoeff(),
+                  1e-9 * (1 + reference_blocks[g].norm()));
+    }
+    // And the dense brute force at the final linearisation point.
+    FactorGraph graph = SmallSlamGraph(camera, seed, 40);
+    SolverOptions options;
+    options.ordering = OrderingType::kHighDegreeLast;
+    options.apply_final_step = false;
+    SparseSolver solver(options);
+    const SolveResult result = solver.Solve(&graph);
+    ASSERT_TRUE(result.evidence.valid);
+    const DenseReference dense = DenseEvidence(graph);
+    EXPECT_NEAR(result.evidence.log_evidence, dense.log_evidence, 1e-7);
+  }
+}
+
 TEST(SolverTest, ReportsProblemsInTheSummaryInsteadOfThrowing) {
   SparseSolver solver;
   FactorGraph empty;
