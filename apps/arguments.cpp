@@ -15,11 +15,16 @@ Arguments::Arguments(std::string usage, std::string description)
 void Arguments::AddOption(const std::string& name, const std::string& short_name,
                           const std::string& value_name, const std::string& help,
                           const std::string& default_value) {
-  options_.push_back({name, short_name, value_name, help, default_value, false});
+  options_.push_back({name, short_name, value_name, help, default_value, false, false});
 }
 
 void Arguments::AddFlag(const std::string& name, const std::string& help) {
-  options_.push_back({name, "", "", help, "", true});
+  options_.push_back({name, "", "", help, "", true, false});
+}
+
+void Arguments::AddRepeatedOption(const std::string& name, const std::string& value_name,
+                                  const std::string& help) {
+  options_.push_back({name, "", value_name, help + " (may be repeated)", "", false, true});
 }
 
 void Arguments::AddPositional(const std::string& name, const std::string& help, bool required) {
@@ -55,11 +60,12 @@ bool Arguments::Parse(const std::vector<std::string>& args) {
       if (spec->is_flag) {
         if (has_inline_value) throw UsageError("option '" + token + "' takes no value");
         values_[spec->name] = "1";
-      } else if (has_inline_value) {
-        values_[spec->name] = inline_value;
       } else {
-        if (i + 1 >= args.size()) throw UsageError("option '" + token + "' needs a value");
-        values_[spec->name] = args[++i];
+        if (!has_inline_value && i + 1 >= args.size())
+          throw UsageError("option '" + token + "' needs a value");
+        const std::string value = has_inline_value ? inline_value : args[++i];
+        values_[spec->name] = value;
+        if (spec->repeated) repeated_values_[spec->name].push_back(value);
       }
       continue;
     }
@@ -101,6 +107,11 @@ std::string Arguments::Get(const std::string& name) const {
   for (const Spec& spec : options_)
     if (spec.name == name) return spec.default_value;
   return "";
+}
+
+std::vector<std::string> Arguments::GetAll(const std::string& name) const {
+  const auto it = repeated_values_.find(name);
+  return it == repeated_values_.end() ? std::vector<std::string>() : it->second;
 }
 
 bool Arguments::Flag(const std::string& name) const { return Has(name); }

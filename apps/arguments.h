@@ -18,6 +18,9 @@ class Arguments {
                  const std::string& value_name, const std::string& help,
                  const std::string& default_value = "");
   void AddFlag(const std::string& name, const std::string& help);
+  // An option that may be given several times; GetAll returns every value.
+  void AddRepeatedOption(const std::string& name, const std::string& value_name,
+                         const std::string& help);
   void AddPositional(const std::string& name, const std::string& help, bool required = true);
 
   // Returns false when --help was given (help already printed to stdout).
@@ -30,11 +33,13 @@ class Arguments {
   bool Flag(const std::string& name) const;
   double GetDouble(const std::string& name) const;  // UsageError when not a number
   long GetInt(const std::string& name) const;
+  std::vector<std::string> GetAll(const std::string& name) const;
 
  private:
   struct Spec {
     std::string name, short_name, value_name, help, default_value;
     bool is_flag = false;
+    bool repeated = false;
   };
   struct PositionalSpec {
     std::string name, help;
@@ -46,6 +51,7 @@ class Arguments {
   std::vector<Spec> options_;
   std::vector<PositionalSpec> positionals_;
   std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> repeated_values_;
 };
 
 }  // namespace oslam

@@ -4,6 +4,8 @@ namespace oslam {
 
 const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
+      {"run", "video folder -> O-Map: detect, O-SLAM, export, evaluate, report", RunRunCommand},
+      {"config", "print or check the configuration of 'oslam run'", RunConfigCommand},
       {"camera", "show a camera model, or write a preset as camera.yaml", RunCameraCommand},
       {"calibrate", "calibrate a catadioptric camera from checkerboard images", RunCalibrateCommand},
       {"train-colors", "learn class colour models from example regions", RunTrainColorsCommand},

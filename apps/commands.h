@@ -18,6 +18,8 @@ const std::vector<Command>& Commands();
 
 // One function per subcommand, each in its own file.
 int RunCameraCommand(const std::vector<std::string>& args);
+int RunConfigCommand(const std::vector<std::string>& args);
+int RunRunCommand(const std::vector<std::string>& args);
 int RunCalibrateCommand(const std::vector<std::string>& args);
 int RunDetectCommand(const std::vector<std::string>& args);
 int RunEvalDetectCommand(const std::vector<std::string>& args);

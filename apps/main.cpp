@@ -7,6 +7,7 @@
 #include <opencv2/core/utils/logger.hpp>
 
 #include "apps/commands.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 namespace {
@@ -33,6 +34,7 @@ std::string OneLine(std::string text) {
 
 int main(int argc, char** argv) {
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
+  oslam::InstallInterruptCleanup();
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty()) {
     PrintHelp();

@@ -14,6 +14,11 @@ namespace oslam {
 void WriteAtomically(const std::string& path,
                      const std::function<void(const std::string& temp_path)>& write);
 
+// Makes SIGINT and SIGTERM remove the temp files of writes still under way
+// before the process ends, so an interrupted run leaves neither half-written
+// files nor stray temp files. Call once, from main().
+void InstallInterruptCleanup();
+
 // Writes `contents` to `path` atomically.
 void WriteTextFileAtomically(const std::string& path, const std::string& contents);
 

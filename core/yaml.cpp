@@ -39,6 +39,10 @@ YamlFile::YamlFile(const std::string& path) : path_(path) {
     storage_.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     throw Error::InFile(path, DescribeSyntaxError(e, lines_added));
+  } catch (const std::exception& e) {
+    // OpenCV's parser fails on some malformed input (e.g. an empty key) with a
+    // standard exception instead of a parse error (found by corruption_test).
+    throw Error::InFile(path, std::string("not valid YAML (") + e.what() + ")");
   }
   if (!storage_.isOpened()) throw Error::InFile(path, "cannot be read as YAML");
   if (!storage_.root().isMap()) throw Error::InFile(path, "expected a YAML mapping at top level");

@@ -6,6 +6,7 @@ set -euo pipefail
 
 OSLAM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 OSLAM_BUILD_DIR="${OSLAM_BUILD_DIR:-$OSLAM_ROOT/build}"
+OSLAM_CMAKE_EXTRA=()  # extra cmake arguments for the first configure
 
 # Everything oslam builds against (Debian 12 names).
 OSLAM_PACKAGES=(
@@ -39,7 +40,8 @@ oslam_install_missing() {
 oslam_build() {
   if [[ ! -f "$OSLAM_BUILD_DIR/CMakeCache.txt" ]]; then
     oslam_log "configuring in $OSLAM_BUILD_DIR"
-    cmake -S "$OSLAM_ROOT" -B "$OSLAM_BUILD_DIR" -DCMAKE_BUILD_TYPE=Release >/dev/null
+    cmake -S "$OSLAM_ROOT" -B "$OSLAM_BUILD_DIR" -DCMAKE_BUILD_TYPE=Release \
+      "${OSLAM_CMAKE_EXTRA[@]}" >/dev/null
   fi
   oslam_log "building (this takes a few minutes the first time)"
   cmake --build "$OSLAM_BUILD_DIR" -j "$(nproc)" -- --no-print-directory >"$OSLAM_BUILD_DIR/build.log" 2>&1 || {

@@ -1,12 +1,21 @@
 #!/usr/bin/env bash
-# Install what is missing, build, and run oslam on the shipped `lab` sample.
-# Output goes to runs/lab (override with OSLAM_RUN_DIR).
+# Install what is missing, build, and run oslam on the shipped `lab` sample:
+# simulate the omnidirectional video (once), learn the class colours from the
+# simulated ground truth, then `oslam run` (detect, O-SLAM, export, evaluate).
+# The O-Map is written to runs/lab_out/map.glb (override the folders with
+# OSLAM_RUN_DIR and OSLAM_OUT_DIR).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 oslam_install_missing
 oslam_build
 
 run_dir="${OSLAM_RUN_DIR:-$OSLAM_ROOT/runs/lab}"
+out_dir="${OSLAM_OUT_DIR:-$OSLAM_ROOT/runs/lab_out}"
 oslam="$OSLAM_BUILD_DIR/apps/oslam"
-"$oslam" simulate "$OSLAM_ROOT/samples/scenes/lab.yaml" -o "$run_dir" --seed 1
-oslam_log "sample run folder: $run_dir (frames/, odometry.csv, camera.yaml, classes.yaml, ground_truth/)"
+if [[ ! -f "$run_dir/odometry.csv" ]]; then
+  rm -rf "$run_dir"  # an interrupted simulation: start again
+  "$oslam" simulate "$OSLAM_ROOT/samples/scenes/lab.yaml" -o "$run_dir" --seed 1
+fi
+"$oslam" train-colors "$run_dir/classes.yaml" --from-ground-truth "$run_dir" --quiet
+"$oslam" run "$run_dir" -o "$out_dir" --seed 1
+oslam_log "O-Map: $out_dir/map.glb (Blender: File > Import > glTF 2.0); report: $out_dir/report.md"

@@ -1,0 +1,212 @@
+// `oslam run` end to end on a small simulated run: outputs, determinism, and
+// bad input (each a one-line error naming the file, exit code 1 or 2, and no
+// output written before the inputs are checked).
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "mapping/omap.h"
+#include "test_util.h"
+
+namespace oslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+Result Oslam(const std::string& arguments) {
+  testing::TempDir dir;
+  const std::string command = std::string(OSLAM_BINARY) + " " + arguments + " >" +
+                              dir.Path("out") + " 2>" + dir.Path("err");
+  const int status = std::system(command.c_str());
+  Result result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::stringstream out, err;
+  out << std::ifstream(dir.Path("out")).rdbuf();
+  err << std::ifstream(dir.Path("err")).rdbuf();
+  result.out = out.str();
+  result.err = err.str();
+  return result;
+}
+
+std::string ReadFile(const std::string& path) {
+  std::stringstream text;
+  text << std::ifstream(path, std::ios::binary).rdbuf();
+  return text.str();
+}
+
+// One simulated run with trained colours, shared by every test (made once).
+class RunCommand : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir;
+    const std::string run = dir_->Path("run");
+    const Result simulate = Oslam("simulate " + std::string(OSLAM_SOURCE_DIR) +
+                                  "/tests/data/sift_clutter.yaml -o " + run + " --quiet");
+    ASSERT_EQ(simulate.exit_code, 0) << simulate.err;
+    const Result train =
+        Oslam("train-colors " + run + "/classes.yaml --from-ground-truth " + run + " --quiet");
+    ASSERT_EQ(train.exit_code, 0) << train.err;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+
+  // A copy of the run to break.
+  std::string CopyOfRun(const std::string& name) {
+    const std::string copy = dir_->Path(name);
+    fs::remove_all(copy);
+    fs::copy(dir_->Path("run"), copy, fs::copy_options::recursive);
+    return copy;
+  }
+  static std::string Run() { return dir_->Path("run"); }
+  static std::string Fast() { return " --set slam.samples=60 --set slam.burn_in=10 --set slam.hill_climb=20 --set export.overlays=0 "; }
+
+  static testing::TempDir* dir_;
+};
+testing::TempDir* RunCommand::dir_ = nullptr;
+
+TEST_F(RunCommand, WritesTheMapFiguresReportAndEvaluationAndIsDeterministic) {
+  const std::string out = dir_->Path("out1");
+  const Result run = Oslam("run " + Run() + " -o " + out + Fast() + "--seed 3 --quiet");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.out, "");
+  for (const char* file : {"detections.csv", "omap.json", "map.glb", "map.ply", "birdseye.png",
+                           "report.md", "eval.json", "config.yaml"})
+    EXPECT_TRUE(fs::is_regular_file(fs::path(out) / file)) << file;
+  const OMap map = ReadOMap(out + "/omap.json");
+  EXPECT_EQ(map.trajectory.size(), 16u);
+  const std::string eval = ReadFile(out + "/eval.json");
+  EXPECT_NE(eval.find("\"true_objects_total\": 1"), std::string::npos) << eval;
+  EXPECT_NE(ReadFile(out + "/report.md").find("## Timings"), std::string::npos);
+  // No temporary files left behind.
+  for (const auto& entry : fs::directory_iterator(out))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+
+  // Same seed, same map: objects, trajectory and the sampler's path are
+  // identical (the file also records timings and its input paths, which differ).
+  const std::string again = dir_->Path("out2");
+  ASSERT_EQ(Oslam("run " + Run() + " -o " + again + Fast() + "--seed 3 --quiet").exit_code, 0);
+  const auto first = nlohmann::json::parse(ReadFile(out + "/omap.json"));
+  const auto second = nlohmann::json::parse(ReadFile(again + "/omap.json"));
+  EXPECT_EQ(first["objects"].dump(), second["objects"].dump());
+  EXPECT_EQ(first["trajectory"].dump(), second["trajectory"].dump());
+  EXPECT_EQ(first["sampler"]["cold_chain_log_target"].dump(),
+            second["sampler"]["cold_chain_log_target"].dump());
+  EXPECT_EQ(ReadFile(out + "/detections.csv"), ReadFile(again + "/detections.csv"));
+}
+
+// Exit code 1, one line on stderr naming `file_part` and `problem`, and no
+// output folder.
+void ExpectInputError(const Result& result, const std::string& file_part, const std::string& problem,
+                      const std::string& out) {
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_NE(result.err.find(file_part), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find(problem), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(out)) << "output written despite bad input";
+}
+
+TEST_F(RunCommand, BadInputIsReportedBeforeAnythingIsWritten) {
+  const std::string out = dir_->Path("never");
+  {
+    const std::string run = CopyOfRun("short_odometry");
+    std::string text = ReadFile(run + "/odometry.csv");
+    text.erase(text.rfind('\n', text.size() - 2) + 1);  // drop the last row
+    std::ofstream(run + "/odometry.csv") << text;
+    ExpectInputError(Oslam("run " + run + " -o " + out), "odometry.csv",
+                     "has 15 rows but the run has 16 frames", out);
+  }
+  {
+    const std::string run = CopyOfRun("nan_odometry");
+    std::string text = ReadFile(run + "/odometry.csv");
+    const size_t x = text.find("\n3,") + 3;
+    text.replace(x, text.find(',', x) - x, "nan");
+    std::ofstream(run + "/odometry.csv") << text;
+    ExpectInputError(Oslam("run " + run + " -o " + out), "odometry.csv:5", "NaN", out);
+  }
+  {
+    const std::string run = dir_->Path("empty");
+    fs::create_directories(run);
+    ExpectInputError(Oslam("run " + run + " -o " + out), run, "no frames/ folder", out);
+  }
+  {
+    const std::string run = CopyOfRun("bad_camera");
+    std::ofstream(run + "/camera.yaml") << "model: [broken\n";
+    ExpectInputError(Oslam("run " + run + " -o " + out), "camera.yaml", "YAML syntax error", out);
+  }
+  {
+    const std::string run = CopyOfRun("untrained");
+    std::string text = ReadFile(run + "/classes.yaml");
+    text.erase(text.find("      colour:"), text.find("confusion:") - text.find("      colour:"));
+    text.erase(text.find("confusion:"));
+    std::ofstream(run + "/classes.yaml") << text;
+    ExpectInputError(Oslam("run " + run + " -o " + out), "classes.yaml",
+                     "no class has a colour model", out);
+  }
+  {
+    testing::TempDir config_dir;
+    std::ofstream(config_dir.Path("oslam.yaml")) << "slam:\n  sampels: 10\n";
+    ExpectInputError(Oslam("run " + Run() + " -o " + out + " --config " + config_dir.Path("oslam.yaml")),
+                     "oslam.yaml", "slam.sampels: unknown key", out);
+  }
+}
+
+TEST_F(RunCommand, CorruptFrameIsNamedUnlessSkipped) {
+  const std::string run = CopyOfRun("corrupt_frame");
+  std::ofstream(run + "/frames/000004.png") << "not a png";
+  const Result result = Oslam("run " + run + " -o " + dir_->Path("corrupt_out") + Fast());
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("000004.png: cannot read image"), std::string::npos) << result.err;
+  const Result skipped = Oslam("run " + run + " -o " + dir_->Path("skipped_out") + Fast() +
+                               "--set detect.skip_bad_frames=1 --quiet");
+  EXPECT_EQ(skipped.exit_code, 0) << skipped.err;
+  EXPECT_NE(skipped.err.find("skipping frame 4"), std::string::npos) << skipped.err;
+}
+
+TEST_F(RunCommand, UsageErrorsExitWithTwo) {
+  for (const std::string& arguments : std::vector<std::string>{"run " + Run(), "run " + Run() + " -o x --set nosuch.key=1", "run " + Run() + " -o x --set slam.samples",
+        "run " + Run() + " -o x --set slam.method=magic", std::string("config")}) {
+    const Result result = Oslam(arguments);
+    EXPECT_EQ(result.exit_code, 2) << arguments << ": " << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  }
+  const Result defaults = Oslam("config --print-defaults");
+  EXPECT_EQ(defaults.exit_code, 0);
+  EXPECT_NE(defaults.out.find("samples: 667"), std::string::npos) << defaults.out;
+}
+
+// Ctrl-C in the middle of writing frames leaves complete files only: no temp
+// files, every frame written so far decodes.
+TEST(Interrupt, SigintLeavesNoHalfWrittenFiles) {
+  testing::TempDir dir;
+  const std::string run = dir.Path("run");
+  const std::string command = "timeout -s INT 2 " + std::string(OSLAM_BINARY) + " simulate " +
+                              std::string(OSLAM_SOURCE_DIR) + "/samples/scenes/lab.yaml -o " + run +
+                              " --quiet 2>/dev/null";
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  ASSERT_NE(WEXITSTATUS(status), 0) << "the simulation finished before the interrupt";
+  int frames = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(run)) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+    if (entry.path().extension() == ".png") {
+      EXPECT_FALSE(cv::imread(entry.path().string()).empty()) << entry.path();
+      ++frames;
+    }
+  }
+  EXPECT_GT(frames, 0);
+  EXPECT_FALSE(fs::exists(run + "/odometry.csv"));  // written last: the run is visibly unfinished
+}
+
+}  // namespace
+}  // namespace oslam
