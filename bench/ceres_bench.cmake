@@ -1,0 +1,8 @@
+# Ceres comparison of the geometric solver (issue 6). Benchmark-only and
+# optional: built when Debian's libceres-dev is installed, skipped otherwise.
+find_package(Ceres QUIET)
+if(Ceres_FOUND)
+  oslam_add_bench(ceres_bench SOURCES ceres_bench.cpp LIBS oslam_mapping Ceres::ceres)
+else()
+  message(STATUS "Ceres not found (apt-get install libceres-dev): ceres_bench is skipped")
+endif()
