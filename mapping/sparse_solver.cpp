@@ -668,6 +668,8 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   Values& values = graph->mutable_values();
   Values trial;
   double cost = 0.0;
+  // OSLAM_SOLVER_TRACE=1 prints the orderings tried and every LM step to stderr
+  // (a diagnostic for convergence work; off by default).
   const bool trace = std::getenv("OSLAM_SOLVER_TRACE") != nullptr;
   const auto t_first = Clock::now();
   const bool first_ok = impl.Evaluate(*graph, values, true, &impl.current, &cost) &&
