@@ -40,8 +40,14 @@ oslam_install_missing() {
 oslam_build() {
   if [[ ! -f "$OSLAM_BUILD_DIR/CMakeCache.txt" ]]; then
     oslam_log "configuring in $OSLAM_BUILD_DIR"
+    mkdir -p "$OSLAM_BUILD_DIR"
+    # PCL's config prints warnings about optional I/O features; keep them in the log.
     cmake -S "$OSLAM_ROOT" -B "$OSLAM_BUILD_DIR" -DCMAKE_BUILD_TYPE=Release \
-      "${OSLAM_CMAKE_EXTRA[@]}" >/dev/null
+      "${OSLAM_CMAKE_EXTRA[@]}" >"$OSLAM_BUILD_DIR/configure.log" 2>&1 || {
+      tail -n 40 "$OSLAM_BUILD_DIR/configure.log" >&2
+      oslam_log "configure failed; full log in $OSLAM_BUILD_DIR/configure.log"
+      return 1
+    }
   fi
   oslam_log "building (this takes a few minutes the first time)"
   cmake --build "$OSLAM_BUILD_DIR" -j "$(nproc)" -- --no-print-directory >"$OSLAM_BUILD_DIR/build.log" 2>&1 || {
