@@ -1,7 +1,12 @@
 // Helpers shared by the test programs.
 #pragma once
 
+#include <sys/wait.h>
+
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <functional>
 #include <random>
 #include <string>
@@ -42,6 +47,26 @@ inline Eigen::MatrixXd NumericJacobian(
     jacobian.col(i) = (f(plus) - f(minus)) / (2.0 * step);
   }
   return jacobian;
+}
+
+// A shell command's exit code and output, for tests of the oslam program.
+struct CommandResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+inline CommandResult RunShellCommand(const std::string& command) {
+  TempDir dir;
+  const int status =
+      std::system((command + " >" + dir.Path("out") + " 2>" + dir.Path("err")).c_str());
+  CommandResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::stringstream out, err;
+  out << std::ifstream(dir.Path("out")).rdbuf();
+  err << std::ifstream(dir.Path("err")).rdbuf();
+  result.out = out.str();
+  result.err = err.str();
+  return result;
 }
 
 // Path of shared test data (../shared/data beside the repo), or "" when absent.

@@ -15,24 +15,10 @@
 namespace oslam {
 namespace {
 
-struct Result {
-  int exit_code = -1;
-  std::string out, err;
-};
+using Result = testing::CommandResult;
 
 Result RunOslam(const std::string& arguments) {
-  testing::TempDir dir;
-  const std::string command = std::string(OSLAM_BINARY) + " " + arguments + " >" +
-                              dir.Path("out") + " 2>" + dir.Path("err");
-  const int status = std::system(command.c_str());
-  Result result;
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::stringstream out, err;
-  out << std::ifstream(dir.Path("out")).rdbuf();
-  err << std::ifstream(dir.Path("err")).rdbuf();
-  result.out = out.str();
-  result.err = err.str();
-  return result;
+  return testing::RunShellCommand(std::string(OSLAM_BINARY) + " " + arguments);
 }
 
 int Lines(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
