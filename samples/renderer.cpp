@@ -70,8 +70,28 @@ Primitive MakeObject(const SceneObject& object, int index) {
       p.edge = object.length_m * axis;
       break;
     }
+    case ShapeKind::kCheckerboard:
+      p.kind = Renderer::Kind::kBoard;
+      p.center = {object.position.x(), object.position.y(), object.center_z_m};
+      p.axes = CheckerboardRotation(object);
+      p.half = {0.5 * object.length_m, 0.5 * object.height_m, 0.0};
+      p.bound_radius = std::hypot(p.half.x(), p.half.y());  // covers any tilt
+      p.z0 = object.base_z_m;
+      p.z1 = 2.0 * object.center_z_m - object.base_z_m;
+      break;
   }
   return p;
+}
+
+// Checkerboard albedo at board-plane coordinates (u, v) from the board centre:
+// light margin around cols x rows squares, the square at the (-u, -v) corner dark.
+Eigen::Vector3f CheckerAlbedo(const SceneObject& board, double u, double v) {
+  const double x = u / board.square_m + 0.5 * board.board_cols;
+  const double y = v / board.square_m + 0.5 * board.board_rows;
+  if (x < 0 || y < 0 || x >= board.board_cols || y >= board.board_rows)
+    return board.material.albedo_rgb;
+  const long i = static_cast<long>(x), j = static_cast<long>(y);
+  return (i + j) % 2 == 0 ? board.material.albedo2_rgb : board.material.albedo_rgb;
 }
 
 // ---- analytic intersections; each returns the nearest t in (kMinT, best) ----
@@ -160,6 +180,20 @@ bool HitBox(const Primitive& p, const Eigen::Vector3d& o, const Eigen::Vector3d&
   return true;
 }
 
+bool HitBoard(const Primitive& p, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double best,
+              double* t) {
+  const Eigen::Vector3d normal = p.axes.col(2);
+  const double denominator = normal.dot(d);
+  if (std::abs(denominator) < 1e-15) return false;  // ray in the board plane
+  const double tt = normal.dot(p.center - o) / denominator;
+  if (!(tt > kMinT && tt < best)) return false;
+  const Eigen::Vector3d q = o + tt * d - p.center;
+  if (std::abs(q.dot(p.axes.col(0))) > p.half.x() || std::abs(q.dot(p.axes.col(1))) > p.half.y())
+    return false;
+  *t = tt;
+  return true;
+}
+
 bool HitPrimitive(const Primitive& p, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                   double best, double* t, int* part) {
   switch (p.kind) {
@@ -171,6 +205,8 @@ bool HitPrimitive(const Primitive& p, const Eigen::Vector3d& o, const Eigen::Vec
       return HitSphere(p, o, d, best, t);
     case Renderer::Kind::kBox:
       return HitBox(p, o, d, best, t, part);
+    case Renderer::Kind::kBoard:
+      return HitBoard(p, o, d, best, t);
   }
   return false;
 }
@@ -223,6 +259,13 @@ SurfacePoint SurfaceOf(const Primitive& p, int part, const Eigen::Vector3d& x) {
       const int a = part == 0 ? 1 : 0, b = part == 2 ? 1 : 2;
       s.u = local[a] + p.half[a];
       s.v = local[b] + p.half[b];
+      break;
+    }
+    case Renderer::Kind::kBoard: {
+      const Eigen::Vector3d q = x - p.center;
+      s.normal = p.axes.col(2);
+      s.u = q.dot(p.axes.col(0));  // from the board centre (CheckerAlbedo)
+      s.v = q.dot(p.axes.col(1));
       break;
     }
   }
@@ -346,8 +389,48 @@ Hit Renderer::Trace(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const in
   return hit;
 }
 
-Eigen::Vector3f Renderer::Shade(const Hit& hit, const Eigen::Vector3d& o,
-                                const Eigen::Vector3d& d) const {
+Eigen::Vector3f Renderer::BoardAlbedo(const Primitive& board, const Eigen::Vector3d& o,
+                                      const Eigen::Vector3d& d, long k, double c, double s) const {
+  const SceneObject& object = scene_.objects[board.object];
+  const Eigen::Vector3d normal = board.axes.col(2);
+  auto albedo_along = [&](const Eigen::Vector3d& direction, Eigen::Vector3f* albedo) {
+    const double denominator = normal.dot(direction);
+    if (std::abs(denominator) < 1e-15) return false;
+    const double t = normal.dot(board.center - o) / denominator;
+    if (!(t > kMinT)) return false;
+    const Eigen::Vector3d q = o + t * direction - board.center;
+    *albedo = CheckerAlbedo(object, q.dot(board.axes.col(0)), q.dot(board.axes.col(1)));
+    return true;
+  };
+  Eigen::Vector3f centre_albedo = object.material.albedo_rgb;
+  albedo_along(d, &centre_albedo);
+  if (k < 0) return centre_albedo;
+  // Box filter over the pixel: kBoardSamples^2 rays through sub-pixel
+  // positions, each intersected with the board's plane (edges and corners land
+  // at sub-pixel accuracy, like a real sensor integrating over the pixel).
+  constexpr int kBoardSamples = 4;
+  const CameraModel& camera = *scene_.camera;
+  const int index = pixel_index_[k];
+  const double px = index % camera.image_width(), py = index / camera.image_width();
+  Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+  for (int sy = 0; sy < kBoardSamples; ++sy) {
+    for (int sx = 0; sx < kBoardSamples; ++sx) {
+      const Eigen::Vector2d sub(px + (sx + 0.5) / kBoardSamples - 0.5,
+                                py + (sy + 0.5) / kBoardSamples - 0.5);
+      Ray ray;
+      Eigen::Vector3f albedo = centre_albedo;
+      if (camera.BackProjectPixel(sub, &ray)) {
+        const Eigen::Vector3d r = ray.direction_robot.normalized();
+        albedo_along(Eigen::Vector3d(c * r.x() - s * r.y(), s * r.x() + c * r.y(), r.z()), &albedo);
+      }
+      sum += albedo;
+    }
+  }
+  return sum / static_cast<float>(kBoardSamples * kBoardSamples);
+}
+
+Eigen::Vector3f Renderer::Shade(const Hit& hit, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                long k, double c, double s) const {
   if (hit.primitive == kNothing) return scene_.background_rgb;
   const Eigen::Vector3d x = o + hit.t * d;
   const Material* material = nullptr;
@@ -375,7 +458,11 @@ Eigen::Vector3f Renderer::Shade(const Hit& hit, const Eigen::Vector3d& o,
                                : 1.0;
     light += lamp.intensity * cosine * falloff;
   }
-  return AlbedoAt(*material, surface.u, surface.v) * static_cast<float>(light);
+  const Eigen::Vector3f albedo =
+      hit.primitive >= 0 && primitives_[hit.primitive].kind == Kind::kBoard
+          ? BoardAlbedo(primitives_[hit.primitive], o, d, k, c, s)
+          : AlbedoAt(*material, surface.u, surface.v);
+  return albedo * static_cast<float>(light);
 }
 
 void Renderer::Render(const Pose2& pose, const FrameConditions& conditions,
@@ -398,7 +485,7 @@ void Renderer::Render(const Pose2& pose, const FrameConditions& conditions,
     const int bin = WrapBin(static_cast<long>(bin_position_[k] + shift));
     const int first = bins.start[bin];
     const Hit hit = Trace(origin, d, bins.items.data() + first, bins.start[bin + 1] - first);
-    const Eigen::Vector3f rgb = Shade(hit, origin, d);
+    const Eigen::Vector3f rgb = Shade(hit, origin, d, static_cast<long>(k), c, s);
     const int index = pixel_index_[k];
     radiance_data[index] = cv::Vec3f(rgb.x(), rgb.y(), rgb.z());
     if (hit.primitive >= 0 && primitives_[hit.primitive].object >= 0) {

@@ -58,19 +58,20 @@ class Renderer {
   size_t num_annulus_pixels() const { return pixel_index_.size(); }
 
   // Rendering internals, public for the implementation's helpers.
-  enum class Kind { kVertical, kCylinder, kBox, kSphere };
+  enum class Kind { kVertical, kCylinder, kBox, kSphere, kBoard };
   struct Primitive {
     Kind kind = Kind::kVertical;
     int object = -1;  // scene object, -1 for walls
     const Material* material = nullptr;
-    Eigen::Vector2d from = Eigen::Vector2d::Zero();    // vertical rectangle start
-    Eigen::Vector2d edge = Eigen::Vector2d::Zero();    // vertical rectangle direction * length
-    Eigen::Vector3d center = Eigen::Vector3d::Zero();  // cylinder axis foot, sphere/box centre
-    Eigen::Vector3d half = Eigen::Vector3d::Zero();    // box half extents
-    double radius = 0.0;                               // cylinder, sphere
-    double z0 = 0.0, z1 = 0.0;                         // vertical extent
-    double cos_yaw = 1.0, sin_yaw = 0.0;               // box
-    double bound_radius = 0.0;                         // footprint bounding circle
+    Eigen::Vector2d from = Eigen::Vector2d::Zero();      // vertical rectangle start
+    Eigen::Vector2d edge = Eigen::Vector2d::Zero();      // vertical rectangle direction * length
+    Eigen::Vector3d center = Eigen::Vector3d::Zero();    // cylinder axis foot, sphere/box centre
+    Eigen::Vector3d half = Eigen::Vector3d::Zero();      // box half extents
+    double radius = 0.0;                                 // cylinder, sphere
+    double z0 = 0.0, z1 = 0.0;                           // vertical extent
+    double cos_yaw = 1.0, sin_yaw = 0.0;                 // box
+    double bound_radius = 0.0;                           // footprint bounding circle
+    Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // board: world from (u, v, normal)
   };
   struct Hit {
     double t = 0.0;
@@ -90,8 +91,14 @@ class Renderer {
                 long* last) const;
   Hit Trace(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, const int* candidates,
             int count) const;
+  // `k` (annulus pixel) and the pose's (c, s) = (cos, sin) of theta are used to
+  // anti-alias checkerboards; k < 0 samples the albedo at the hit only.
   Eigen::Vector3f Shade(const Hit& hit, const Eigen::Vector3d& origin,
-                        const Eigen::Vector3d& direction) const;
+                        const Eigen::Vector3d& direction, long k = -1, double c = 1.0,
+                        double s = 0.0) const;
+  Eigen::Vector3f BoardAlbedo(const Primitive& board, const Eigen::Vector3d& origin,
+                              const Eigen::Vector3d& hit_direction, long k, double c,
+                              double s) const;
   Eigen::Vector3d WorldDirection(size_t k, double c, double s) const;
 
   const Scene& scene_;

@@ -24,8 +24,33 @@ const char* ShapeName(ShapeKind kind) {
       return "sphere";
     case ShapeKind::kPanel:
       return "panel";
+    case ShapeKind::kCheckerboard:
+      return "checkerboard";
   }
   return "?";
+}
+
+Eigen::Matrix3d CheckerboardRotation(const SceneObject& board) {
+  const double cy = std::cos(board.yaw_rad), sy = std::sin(board.yaw_rad);
+  const double cp = std::cos(board.pitch_rad), sp = std::sin(board.pitch_rad);
+  const double cr = std::cos(board.roll_rad), sr = std::sin(board.roll_rad);
+  Eigen::Matrix3d yaw, pitch, upright, roll;
+  yaw << cy, -sy, 0, sy, cy, 0, 0, 0, 1;
+  pitch << 1, 0, 0, 0, cp, -sp, 0, sp, cp;
+  upright << 1, 0, 0, 0, 0, -1, 0, 1, 0;  // board (u, v, n) -> world (x, z, -y)
+  roll << cr, -sr, 0, sr, cr, 0, 0, 0, 1;
+  return yaw * pitch * upright * roll;
+}
+
+std::vector<Eigen::Vector3d> CheckerboardInnerCorners(const SceneObject& board) {
+  const Eigen::Matrix3d rotation = CheckerboardRotation(board);
+  const Eigen::Vector3d centre(board.position.x(), board.position.y(), board.center_z_m);
+  std::vector<Eigen::Vector3d> corners;
+  for (int j = 1; j < board.board_rows; ++j)
+    for (int i = 1; i < board.board_cols; ++i)
+      corners.push_back(centre + rotation.col(0) * ((i - 0.5 * board.board_cols) * board.square_m) +
+                        rotation.col(1) * ((j - 0.5 * board.board_rows) * board.square_m));
+  return corners;
 }
 
 GroundTruthObject GroundTruthOf(const SceneObject& object, int id) {
@@ -50,6 +75,7 @@ GroundTruthObject GroundTruthOf(const SceneObject& object, int id) {
       truth.width_m = object.width_m;
       break;
     case ShapeKind::kPanel:
+    case ShapeKind::kCheckerboard:
       truth.diameter_m = object.length_m;
       truth.height_m = object.height_m;
       truth.length_m = object.length_m;
@@ -233,7 +259,9 @@ ShapeKind ParseShape(const Reader& r, const std::string& text, const std::string
   if (text == "box") return ShapeKind::kBox;
   if (text == "sphere") return ShapeKind::kSphere;
   if (text == "panel") return ShapeKind::kPanel;
-  r.file.Fail(key, "unknown shape '" + text + "' (known: cylinder, box, sphere, panel)");
+  if (text == "checkerboard") return ShapeKind::kCheckerboard;
+  r.file.Fail(key,
+              "unknown shape '" + text + "' (known: cylinder, box, sphere, panel, checkerboard)");
 }
 
 // Which size keys each shape needs; any other size key is an error, so a
@@ -248,24 +276,73 @@ std::vector<std::string> SizeKeysOf(ShapeKind shape) {
       return {"length_m", "width_m", "height_m"};
     case ShapeKind::kPanel:
       return {"length_m", "height_m"};
+    case ShapeKind::kCheckerboard:
+      return {};
   }
   return {};
+}
+
+// The checkerboard's own keys (position_m is then [x, y, z] of its centre).
+// Its extent in its plane goes to length_m x height_m, and base_z_m / height_m
+// are replaced by its lowest point / vertical extent for the ground truth.
+void ParseCheckerboard(const Reader& r, const cv::FileNode& node, const std::string& prefix,
+                       SceneObject* board) {
+  for (const char* key : {"base_z_m", "texture"})
+    if (r.Has(node, key)) r.file.Fail(prefix + key, "not used by shape checkerboard");
+  const std::vector<double> centre = r.file.Doubles(node, "position_m", 3, prefix);
+  board->position = {centre[0], centre[1]};
+  board->center_z_m = centre[2];
+  board->board_cols = r.file.Int(node, "cols", prefix);
+  board->board_rows = r.file.Int(node, "rows", prefix);
+  if (board->board_cols < 3) r.file.Fail(prefix + "cols", "must be at least 3 squares");
+  if (board->board_rows < 3) r.file.Fail(prefix + "rows", "must be at least 3 squares");
+  board->square_m = r.Positive(node, "square_m", prefix);
+  board->margin_m = r.NonNegative(node, "margin_m", board->square_m, prefix);
+  board->pitch_rad = r.file.OptionalDouble(node, "pitch_rad", 0.0, prefix);
+  board->roll_rad = r.file.OptionalDouble(node, "roll_rad", 0.0, prefix);
+  board->material.albedo_rgb =
+      r.Has(node, "colour") ? r.Colour(node, "colour", prefix) : Eigen::Vector3f(1.f, 1.f, 1.f);
+  board->material.albedo2_rgb =
+      r.Has(node, "colour2") ? r.Colour(node, "colour2", prefix) : Eigen::Vector3f(0.f, 0.f, 0.f);
+  board->length_m = board->board_cols * board->square_m + 2.0 * board->margin_m;
+  const double plane_height = board->board_rows * board->square_m + 2.0 * board->margin_m;
+  // Vertical extent of the rectangle (for the ground truth's base and height).
+  const Eigen::Matrix3d rotation = CheckerboardRotation(*board);
+  const double half_z =
+      0.5 * (board->length_m * std::abs(rotation(2, 0)) + plane_height * std::abs(rotation(2, 1)));
+  board->base_z_m = board->center_z_m - half_z;
+  board->height_m = plane_height;
 }
 
 SceneObject ParseObject(const Reader& r, const cv::FileNode& node, const std::string& prefix,
                         const std::vector<ObjectClass>& classes) {
   const std::vector<std::string> size_keys = {"diameter_m", "length_m", "width_m", "height_m"};
-  r.file.RequireOnlyKeys(node, prefix,
-                         {"class", "shape", "position_m", "base_z_m", "diameter_m", "length_m",
-                          "width_m", "height_m", "yaw_rad", "colour", "texture"});
+  const std::vector<std::string> board_keys = {"cols",      "rows",     "square_m", "margin_m",
+                                               "pitch_rad", "roll_rad", "colour2"};
+  std::vector<std::string> allowed = {"class",      "shape",    "position_m", "base_z_m",
+                                      "diameter_m", "length_m", "width_m",    "height_m",
+                                      "yaw_rad",    "colour",   "texture"};
+  allowed.insert(allowed.end(), board_keys.begin(), board_keys.end());
+  r.file.RequireOnlyKeys(node, prefix, allowed);
   SceneObject object;
   object.class_name = r.file.OptionalString(node, "class", "", prefix);
   if (!object.class_name.empty() && FindClass(classes, object.class_name) < 0)
     r.file.Fail(prefix + "class", "'" + object.class_name + "' is not listed under classes");
   object.shape = ParseShape(r, r.file.String(node, "shape", prefix), prefix + "shape");
+  if (object.shape != ShapeKind::kCheckerboard) {
+    for (const std::string& key : board_keys)
+      if (r.Has(node, key))
+        r.file.Fail(prefix + key, std::string("not used by shape ") + ShapeName(object.shape));
+  }
+  object.yaw_rad = r.file.OptionalDouble(node, "yaw_rad", 0.0, prefix);
+  if (object.shape == ShapeKind::kCheckerboard) {
+    for (const std::string& key : size_keys)
+      if (r.Has(node, key)) r.file.Fail(prefix + key, "not used by shape checkerboard");
+    ParseCheckerboard(r, node, prefix, &object);
+    return object;
+  }
   object.position = r.Point2(node, "position_m", prefix);
   object.base_z_m = r.NonNegative(node, "base_z_m", 0.0, prefix);
-  object.yaw_rad = r.file.OptionalDouble(node, "yaw_rad", 0.0, prefix);
   const std::vector<std::string> needed = SizeKeysOf(object.shape);
   for (const std::string& key : size_keys) {
     const bool wanted = std::find(needed.begin(), needed.end(), key) != needed.end();

@@ -40,14 +40,18 @@ struct WallSegment {
   Material material;
 };
 
-enum class ShapeKind { kCylinder, kBox, kSphere, kPanel };
+enum class ShapeKind { kCylinder, kBox, kSphere, kPanel, kCheckerboard };
 const char* ShapeName(ShapeKind kind);
 
 // One object. position is the centre of its footprint on the floor plan,
 // base_z_m the height of its lowest point (the O-Map base point is
 // (position, base_z_m)). Boxes: length along the object's own x (yaw_rad from
 // the world x axis), width along its y. Panels: a flat vertical rectangle of
-// length_m x height_m (a door), seen from both sides.
+// length_m x height_m (a door), seen from both sides. Checkerboards: a flat
+// calibration board of board_cols x board_rows squares of square_m with a
+// margin_m light border, centred at (position, center_z_m), oriented by
+// yaw_rad, pitch_rad, roll_rad (CheckerboardRotation); material.albedo_rgb is
+// the light colour (squares and margin), material.albedo2_rgb the dark one.
 struct SceneObject {
   std::string class_name;  // empty: a distractor of no class
   ShapeKind shape = ShapeKind::kCylinder;
@@ -57,9 +61,28 @@ struct SceneObject {
   double length_m = 0.0;    // box, panel
   double width_m = 0.0;     // box
   double height_m = 0.0;    // cylinder, box, panel (sphere: = diameter)
-  double yaw_rad = 0.0;     // box, panel
+  double yaw_rad = 0.0;     // box, panel, checkerboard
   Material material;
+  // Checkerboard only (the board's extent is also in length_m x height_m of
+  // its plane; base_z_m is its lowest point, for the ground truth).
+  int board_cols = 0, board_rows = 0;  // squares
+  double square_m = 0.0;
+  double margin_m = 0.0;
+  double center_z_m = 0.0;
+  double pitch_rad = 0.0;  // tilt about the board's own horizontal axis
+  double roll_rad = 0.0;   // rotation of the pattern in the board plane
 };
+
+// World-from-board rotation of a checkerboard: column 0 is the board's u axis
+// (along a row of squares), column 1 its v axis (along a column), column 2 the
+// normal u x v. R = Rz(yaw) Rx(pitch) B Rz(roll), with B mapping the board's
+// (u, v, n) to world (x, z, -y): at zero angles the board stands upright in
+// the x-z plane, rows horizontal.
+Eigen::Matrix3d CheckerboardRotation(const SceneObject& board);
+
+// World positions of a checkerboard's (board_cols - 1) x (board_rows - 1)
+// inner corners, row-major (u fastest), the points `oslam calibrate` detects.
+std::vector<Eigen::Vector3d> CheckerboardInnerCorners(const SceneObject& board);
 
 struct PointLight {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();

@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "calib/calibration.h"
 #include "core/bounding_slice.h"
 #include "mapping/observation_model.h"
 #include "samples/simulator.h"
@@ -274,6 +275,70 @@ TEST(Renderer, SiftFindsFeaturesOnNoiseTexturedObjects) {
   for (const cv::KeyPoint& k : keypoints)
     if (render.object_ids.at<int>(cvRound(k.pt.y), cvRound(k.pt.x)) == 0) ++on_green_box;
   EXPECT_GE(on_green_box, 5) << keypoints.size() << " keypoints in the frame";
+}
+
+}  // namespace
+}  // namespace oslam
+
+namespace oslam {
+namespace {
+
+TEST(Renderer, CheckerboardCornersLandWhereTheCameraModelProjectsThem) {
+  // A tilted, rolled 8 x 7 board seen by the LPA camera from a robot away
+  // from the origin: the corners cv::findChessboardCornersSB finds in the
+  // rendered image must be the camera model's projections of the board's
+  // inner corners, to sub-pixel accuracy (the board is box-filtered over each
+  // pixel, so edges are not quantised to whole pixels).
+  testing::TempDir dir;
+  const Pose2 pose{0.3, -0.2, 0.7};
+  // Board centre 0.38 m from the robot's axis, bearing 0.5 rad in the robot
+  // frame, 0.17 m below the mirror focus (z_m = 0.76 m).
+  const double bearing = 0.5, distance = 0.38;
+  const Eigen::Vector3d centre = pose.RobotToWorld(
+      Eigen::Vector3d(distance * std::cos(bearing), distance * std::sin(bearing), 0.59));
+  std::ofstream(dir.Path("scene.yaml"))
+      << "camera: {preset: lpa}\n"
+         "classes:\n"
+         "  - {name: can, display_rgb: [200, 30, 30], diameter_mean_m: 0.3, "
+         "diameter_std_m: 0.1, height_mean_m: 0.5, height_std_m: 0.1}\n"
+         "floor: {colour: [100, 100, 100]}\n"
+         "lighting: {ambient: 1.0}\n"
+         "sensor: {noise_std: 0}\n"
+         "objects:\n"
+         "  - {shape: checkerboard, position_m: ["
+      << centre.x() << ", " << centre.y() << ", " << centre.z()
+      << "], cols: 8, rows: 7, square_m: 0.03, yaw_rad: " << pose.theta + bearing + M_PI / 2
+      << ", pitch_rad: 0.55, roll_rad: 0.3, colour: [230, 230, 230], colour2: [20, 20, 20]}\n"
+         "path: {start_pose: [0, 0, 0], commands: F1}\n";
+  const Scene scene = LoadScene(dir.Path("scene.yaml"));
+  FrameRender render;
+  Renderer(scene).Render(pose, {}, &render);
+  // Bearing bins never drop the board.
+  FrameRender brute;
+  Renderer(scene, {true}).Render(pose, {}, &brute);
+  EXPECT_EQ(cv::norm(render.image, brute.image, cv::NORM_INF), 0.0);
+
+  std::vector<Eigen::Vector2d> projected;
+  for (const Eigen::Vector3d& corner : CheckerboardInnerCorners(scene.objects[0])) {
+    Eigen::Vector2d pixel;
+    ASSERT_TRUE(scene.camera->ProjectToPixel(pose.WorldToRobot(corner), &pixel));
+    ASSERT_TRUE(scene.camera->IsInAnnulus(pixel));
+    projected.push_back(pixel);
+  }
+  Corners detected;
+  ASSERT_TRUE(DetectBoardCorners(render.image, {7, 6, 0.03}, {}, &detected));
+  ASSERT_EQ(detected.size(), projected.size());
+  double max_error = 0.0, sum_squares = 0.0;
+  for (const Eigen::Vector2d& d : detected) {
+    double nearest = 1e9;
+    for (const Eigen::Vector2d& p : projected) nearest = std::min(nearest, (d - p).norm());
+    max_error = std::max(max_error, nearest);
+    sum_squares += nearest * nearest;
+  }
+  const double rms = std::sqrt(sum_squares / detected.size());
+  std::printf("rendered board corners vs camera model: RMS %.3f px, max %.3f px\n", rms, max_error);
+  EXPECT_LT(rms, 0.2);
+  EXPECT_LT(max_error, 0.5);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <functional>
 
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "core/error.h"
 #include "test_util.h"
@@ -61,7 +62,9 @@ TEST(Scene, BadInputGivesOneLineErrorsNamingFileAndKey) {
   testing::TempDir dir;
   const std::string file = dir.Path("scene.yaml") + ": ";
   EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "shape: cylinder", "shape: cone")),
-            file + "objects[0].shape: unknown shape 'cone' (known: cylinder, box, sphere, panel)");
+            file +
+                "objects[0].shape: unknown shape 'cone' (known: cylinder, box, sphere, panel, "
+                "checkerboard)");
   EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "class: red can,", "class: blue can,")),
             file + "objects[0].class: 'blue can' is not listed under classes");
   EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "height_m: 0.5, colour", "width_m: 0.5, colour")),
@@ -98,6 +101,63 @@ TEST(Scene, BadInputGivesOneLineErrorsNamingFileAndKey) {
                              "colour: [200, 30, 30], texture: {pattern: image, file: nothere.png, "
                              "size_m: [1, 1]}}")),
       file + "objects[0].texture.file: cannot read image '" + dir.Path("nothere.png") + "'");
+}
+
+TEST(Scene, ParsesACheckerboard) {
+  testing::TempDir dir;
+  const std::string board =
+      "{shape: checkerboard, position_m: [1, 0.5, 0.8], cols: 8, rows: 7, square_m: 0.03}";
+  std::ofstream(dir.Path("scene.yaml"))
+      << Replace(kGoodScene, "objects:\n", "objects:\n  - " + board + "\n");
+  const Scene scene = LoadScene(dir.Path("scene.yaml"));
+  ASSERT_EQ(scene.objects.size(), 2u);
+  const SceneObject& b = scene.objects[0];
+  EXPECT_EQ(b.shape, ShapeKind::kCheckerboard);
+  EXPECT_EQ(b.board_cols, 8);
+  EXPECT_EQ(b.board_rows, 7);
+  EXPECT_DOUBLE_EQ(b.margin_m, 0.03);  // default: one square
+  EXPECT_DOUBLE_EQ(b.center_z_m, 0.8);
+  EXPECT_NEAR(b.length_m, 0.30, 1e-12);
+  EXPECT_NEAR(b.height_m, 0.27, 1e-12);
+  EXPECT_NEAR(b.base_z_m, 0.8 - 0.135, 1e-12);  // upright: lowest point of the margin
+  EXPECT_EQ(b.material.albedo_rgb, Eigen::Vector3f(1, 1, 1));
+  EXPECT_EQ(b.material.albedo2_rgb, Eigen::Vector3f(0, 0, 0));
+  // Upright, facing -y, rows horizontal: the first inner corner is one square
+  // in from the pattern's lower-left corner.
+  const std::vector<Eigen::Vector3d> corners = CheckerboardInnerCorners(b);
+  ASSERT_EQ(corners.size(), 42u);
+  EXPECT_LT((corners[0] - Eigen::Vector3d(1 - 0.09, 0.5, 0.8 - 0.075)).norm(), 1e-12);
+  EXPECT_LT((corners[6] - Eigen::Vector3d(1 + 0.09, 0.5, 0.8 - 0.075)).norm(), 1e-12);
+  EXPECT_EQ(GroundTruthOf(b, 0).shape, "checkerboard");
+  // Tilt and roll keep the board's axes orthonormal and right-handed.
+  SceneObject tilted = b;
+  tilted.yaw_rad = 0.4, tilted.pitch_rad = -0.3, tilted.roll_rad = 1.1;
+  const Eigen::Matrix3d r = CheckerboardRotation(tilted);
+  EXPECT_LT((r.transpose() * r - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+  EXPECT_LT((r.col(0).cross(r.col(1)) - r.col(2)).norm(), 1e-12);
+
+  const std::string file = dir.Path("scene.yaml") + ": ";
+  auto with_board = [&](const std::string& from, const std::string& to) {
+    return LoadError(
+        dir, Replace(kGoodScene, "objects:\n", "objects:\n  - " + Replace(board, from, to) + "\n"));
+  };
+  EXPECT_EQ(with_board("[1, 0.5, 0.8]", "[1, 0.5]"),
+            file + "objects[0].position_m: expected 3 numbers, found 2");
+  EXPECT_EQ(with_board("cols: 8", "cols: 2"), file + "objects[0].cols: must be at least 3 squares");
+  EXPECT_EQ(with_board("square_m: 0.03", "square_m: 0"),
+            file + "objects[0].square_m: must be positive");
+  EXPECT_EQ(with_board("square_m: 0.03", "square_m: 0.03, height_m: 1"),
+            file + "objects[0].height_m: not used by shape checkerboard");
+  EXPECT_EQ(with_board("square_m: 0.03", "square_m: 0.03, base_z_m: 1"),
+            file + "objects[0].base_z_m: not used by shape checkerboard");
+  EXPECT_EQ(with_board("square_m: 0.03", "square_m: 0.03, margin_m: -1"),
+            file + "objects[0].margin_m: must not be negative");
+  EXPECT_EQ(with_board("square_m: 0.03", "square_m: 0.03, tilt_rad: 1")
+                .rfind(file + "objects[0].tilt_rad: unknown key (allowed: class, shape,", 0),
+            0u);
+  EXPECT_EQ(LoadError(dir, Replace(kGoodScene, "height_m: 0.5, colour",
+                                   "height_m: 0.5, rows: 3, colour")),
+            file + "objects[0].rows: not used by shape cylinder");
 }
 
 TEST(Scene, BoxGroundTruthDiameterIsTheFootprintDiagonal) {
