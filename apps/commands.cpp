@@ -16,6 +16,8 @@ const std::vector<Command>& Commands() {
        RunMapDispatchCommand},
       {"export", "write an O-Map as glTF, PLY, figures and reprojection overlays",
        RunExportCommand},
+      {"overlay", "draw an O-Map on a run's frames (reprojection overlays)", RunOverlayCommand},
+      {"render", "figures of an O-Map: bird's-eye, perspective, trajectories", RunRenderCommand},
       {"slam", "O-SLAM: association and classes by MCMC over tracks; O-Map with existence",
        RunSlamCommand},
       {"simulate", "render a simulated robot run (frames, odometry, ground truth) from a scene",

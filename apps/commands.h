@@ -30,5 +30,7 @@ int RunTrainColorsCommand(const std::vector<std::string>& args);
 int RunSlamCommand(const std::vector<std::string>& args);
 int RunSimulateCommand(const std::vector<std::string>& args);
 int RunExportCommand(const std::vector<std::string>& args);
+int RunOverlayCommand(const std::vector<std::string>& args);
+int RunRenderCommand(const std::vector<std::string>& args);
 
 }  // namespace oslam

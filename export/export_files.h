@@ -1,0 +1,58 @@
+// The file-writing steps shared by `oslam export`, `oslam overlay` and
+// `oslam render`: read a run folder's context, write the models, the figures
+// and the reprojection overlays into an output folder, with progress lines.
+// Every file is written atomically; errors name the file.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "calib/camera_model.h"
+#include "core/run_folder.h"
+#include "detect/blob_detector.h"
+#include "export/export_scene.h"
+#include "export/figures.h"
+
+namespace oslam {
+
+// Classes, odometry and ground truth of the run, those that exist. Throws
+// oslam::Error naming `run_dir` when it is not a folder.
+void ReadRunContext(const std::string& run_dir, ExportScene* scene);
+
+// "0,5,10-20" -> {0, 5, 10, ..., 20}; every frame must be < frame_count.
+// Throws UsageError (a --frames problem) otherwise.
+std::vector<long> ParseFrameList(const std::string& text, long frame_count);
+
+// Creates `out` (and parents); throws oslam::Error naming it when it cannot.
+void CreateOutputFolder(const std::filesystem::path& out);
+
+// map.glb, map.gltf, map.ply and (when there are trajectories) trajectory.ply.
+void WriteModels(const ExportScene& scene, const ExportOptions& options,
+                 const std::filesystem::path& out, bool ascii_ply, bool quiet);
+
+// birdseye.png, perspective.png and, when the scene has ground truth,
+// trajectories.png. Returns the names of the files written.
+std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOptions& options,
+                                      const std::filesystem::path& out, bool quiet);
+
+// Everything the overlays need, read and checked before any file is written
+// so a bad frame list is refused up front.
+struct OverlayInput {
+  std::unique_ptr<FrameSource> frames;
+  std::unique_ptr<CameraModel> camera;
+  std::vector<Detection> detections;  // empty when the run has no detections.csv
+  std::vector<long> chosen;           // frames to draw, in order
+};
+
+// Frames and camera of `run_dir`, its detections if any, and the frames of
+// `frame_list` ("" = every frame with an estimated pose).
+OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_dir,
+                             const std::string& frame_list);
+
+// One PNG per chosen frame: `overlays_dir`/NNNNNN.png (folder created).
+void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double min_existence,
+                   const std::filesystem::path& overlays_dir, bool quiet);
+
+}  // namespace oslam
