@@ -1,0 +1,190 @@
+// oslam overlay and oslam render end to end, run as the user runs them (the
+// oslam binary): the files promised are written and read back, usage errors
+// exit 2, unreadable input exits 1 with a one-line error naming the file.
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "calib/camera_io.h"
+#include "calib/hyperbolic_camera.h"
+#include "core/run_folder.h"
+#include "test_util.h"
+
+namespace oslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kOMap = OSLAM_SOURCE_DIR "/tests/data/export_omap.json";
+
+struct CliResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+CliResult Oslam(const std::string& arguments) {
+  testing::TempDir dir;
+  const int status = std::system((std::string(OSLAM_BINARY) + " " + arguments + " >" +
+                                  dir.Path("out") + " 2>" + dir.Path("err"))
+                                     .c_str());
+  CliResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::stringstream out, err;
+  out << std::ifstream(dir.Path("out")).rdbuf();
+  err << std::ifstream(dir.Path("err")).rdbuf();
+  result.out = out.str();
+  result.err = err.str();
+  return result;
+}
+
+std::vector<std::string> FilesIn(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// A run folder for the fixture map's 4 estimated poses: uniform grey LPA
+// frames, the camera, class colours and a ground-truth trajectory.
+void WriteRun(const std::string& run) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  fs::create_directories(run + "/frames");
+  for (int i = 0; i < 4; ++i) {
+    const cv::Mat frame(camera.image_height(), camera.image_width(), CV_8UC3, cv::Scalar::all(90));
+    ASSERT_TRUE(cv::imwrite(run + "/frames/00000" + std::to_string(i) + ".png", frame));
+  }
+  SaveCamera(camera, run + "/camera.yaml");
+  ObjectClass box;
+  box.name = "green box";
+  box.display_rgb = {40, 150, 60};
+  box.diameter_mean_m = 0.65;
+  box.diameter_std_m = 0.05;
+  box.height_mean_m = 0.57;
+  box.height_std_m = 0.05;
+  WriteClasses({box}, run + "/classes.yaml");
+  GroundTruth truth;
+  truth.trajectory = {{-1.0, -1.0, 0.0}, {-0.5, -1.0, 0.0}, {0.0, -1.0, 0.3}, {0.4, -0.8, 0.8}};
+  WriteGroundTruth(truth, run);
+}
+
+TEST(OverlayCommand, DrawsTheChosenFramesWithTheMapOnThem) {
+  testing::TempDir dir;
+  WriteRun(dir.Path("run"));
+  const std::string out = dir.Path("overlays");
+  const CliResult result =
+      Oslam("overlay " + dir.Path("run") + " " + kOMap + " -o " + out + " --frames 1,3 --quiet");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(result.out, "");
+  ASSERT_EQ(FilesIn(out), (std::vector<std::string>{"000001.png", "000003.png"}));
+  const cv::Mat frame = cv::imread(dir.Path("run/frames/000001.png"));
+  for (const std::string name : {"000001.png", "000003.png"}) {
+    const cv::Mat overlay = cv::imread(out + "/" + name);
+    ASSERT_EQ(overlay.size(), frame.size()) << name;
+    // The green box (pi 0.95) is in view: many pixels differ from the grey
+    // frame and some are green-dominant.
+    cv::Mat changed;
+    cv::compare(overlay, frame, changed, cv::CMP_NE);
+    EXPECT_GT(cv::countNonZero(changed.reshape(1)), 500) << name;
+    std::vector<cv::Mat> bgr;
+    cv::split(overlay, bgr);
+    const cv::Mat greenish = (bgr[1] > bgr[0] + 20) & (bgr[1] > bgr[2] + 20);
+    EXPECT_GT(cv::countNonZero(greenish), 20) << name;
+  }
+}
+
+TEST(OverlayCommand, AllFramesByDefaultAndAProgressLine) {
+  testing::TempDir dir;
+  WriteRun(dir.Path("run"));
+  const CliResult result =
+      Oslam("overlay " + dir.Path("run") + " " + kOMap + " -o " + dir.Path("out"));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(FilesIn(dir.Path("out")),
+            (std::vector<std::string>{"000000.png", "000001.png", "000002.png", "000003.png"}));
+  EXPECT_NE(result.out.find("wrote 4 overlays"), std::string::npos) << result.out;
+}
+
+TEST(RenderCommand, WritesTheFiguresThatReadBack) {
+  testing::TempDir dir;
+  const CliResult result =
+      Oslam("render " + kOMap + " -o " + dir.Path("out") + " --figure-size 160 --quiet");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(result.out, "");
+  // No run folder, so no ground truth and no comparison plot.
+  ASSERT_EQ(FilesIn(dir.Path("out")),
+            (std::vector<std::string>{"birdseye.png", "perspective.png"}));
+  for (const char* name : {"birdseye.png", "perspective.png"}) {
+    const cv::Mat image = cv::imread(dir.Path("out/") + name);
+    EXPECT_EQ(image.size(), cv::Size(160, 160)) << name;
+  }
+}
+
+TEST(RenderCommand, RunWithGroundTruthAddsTheTrajectoryPlot) {
+  testing::TempDir dir;
+  WriteRun(dir.Path("run"));
+  const CliResult result = Oslam("render " + kOMap + " -o " + dir.Path("out") + " --run " +
+                                 dir.Path("run") + " --figure-size 300 --quiet");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  ASSERT_EQ(FilesIn(dir.Path("out")),
+            (std::vector<std::string>{"birdseye.png", "perspective.png", "trajectories.png"}));
+  const cv::Mat plot = cv::imread(dir.Path("out/trajectories.png"));
+  EXPECT_EQ(plot.cols, 300);
+  EXPECT_GT(plot.rows, 0);
+}
+
+// Exit 2 with one line on stderr naming the command.
+void ExpectUsageError(const std::string& arguments, const std::string& mentions) {
+  const CliResult result = Oslam(arguments);
+  EXPECT_EQ(result.exit_code, 2) << arguments << "\n" << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_NE(result.err.find("usage error"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find(mentions), std::string::npos) << arguments << "\n" << result.err;
+}
+
+TEST(OverlayRenderCommands, UsageErrorsExit2AndWriteNothing) {
+  testing::TempDir dir;
+  WriteRun(dir.Path("run"));
+  const std::string run = dir.Path("run"), out = dir.Path("out");
+  ExpectUsageError("overlay " + run + " " + kOMap, "-o");
+  ExpectUsageError("overlay " + kOMap + " -o " + out, "OMAP");  // RUN_DIR missing
+  ExpectUsageError("overlay " + run + " " + kOMap + " -o " + out + " --frames 2-9", "--frames");
+  ExpectUsageError("overlay " + run + " " + kOMap + " -o " + out + " --frames x", "--frames");
+  ExpectUsageError("overlay " + run + " " + kOMap + " -o " + out + " --min-existence 2",
+                   "min-existence");
+  ExpectUsageError("render " + kOMap, "-o");
+  ExpectUsageError("render " + kOMap + " -o " + out + " --figure-size 10", "64x64");
+  ExpectUsageError("render " + kOMap + " -o " + out + " --overlays", "--overlays");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// Exit 1 with one line naming the file that is missing.
+void ExpectMissingInput(const std::string& arguments, const std::string& path) {
+  const CliResult result = Oslam(arguments);
+  EXPECT_EQ(result.exit_code, 1) << arguments << "\n" << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_NE(result.err.find(path), std::string::npos) << arguments << "\n" << result.err;
+}
+
+TEST(OverlayRenderCommands, MissingInputExits1NamingTheFile) {
+  testing::TempDir dir;
+  WriteRun(dir.Path("run"));
+  const std::string run = dir.Path("run"), out = dir.Path("out");
+  const std::string no_map = dir.Path("no_map.json"), no_run = dir.Path("no_run");
+  ExpectMissingInput("overlay " + run + " " + no_map + " -o " + out, no_map);
+  ExpectMissingInput("overlay " + no_run + " " + kOMap + " -o " + out, no_run);
+  fs::remove(run + "/camera.yaml");
+  ExpectMissingInput("overlay " + run + " " + kOMap + " -o " + out, run + "/camera.yaml");
+  ExpectMissingInput("render " + no_map + " -o " + out, no_map);
+  ExpectMissingInput("render " + kOMap + " -o " + out + " --run " + no_run, no_run);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace oslam
