@@ -53,6 +53,14 @@ int RunDetectCommand(const std::vector<std::string>& args) {
   arguments.AddOption("debug-images", "", "DIR", "also write each frame with its slices drawn");
   arguments.AddOption("min-area", "", "PX", "smallest blob kept, in pixels", "40");
   arguments.AddOption("opening", "", "PX", "radius of the morphological opening, 0 = off", "1");
+  arguments.AddOption("colour-box", "", "yuv|scaled",
+                      "class colour region: 'yuv' = the thesis' mean ± k·σ box; 'scaled' = its "
+                      "chroma scaled with brightness (robust to dim light)",
+                      "scaled");
+  arguments.AddOption("brightness-range", "", "R",
+                      "with --colour-box scaled: accept brightness from 1/R to R times the "
+                      "examples' range",
+                      "2.5");
   arguments.AddOption("sift-templates", "", "FILE.yaml",
                       "keep a detection of a class with templates only if SIFT verifies it");
   arguments.AddFlag("skip-bad-frames", "warn about unreadable frames and go on");
@@ -66,6 +74,9 @@ int RunDetectCommand(const std::vector<std::string>& args) {
   BlobDetectorOptions options;
   options.min_area_px = static_cast<int>(arguments.GetInt("min-area"));
   options.opening_radius_px = static_cast<int>(arguments.GetInt("opening"));
+  if (!ParseColourBoxShape(arguments.Get("colour-box"), &options.colour.shape))
+    throw UsageError("--colour-box must be 'yuv' or 'scaled'");
+  options.colour.brightness_range = arguments.GetDouble("brightness-range");
   std::string why;
   if (!options.Validate(&why)) throw UsageError(why);
   const bool quiet = arguments.Flag("quiet");
@@ -73,8 +84,10 @@ int RunDetectCommand(const std::vector<std::string>& args) {
   const FrameSource frames(run_dir);
   const std::unique_ptr<CameraModel> camera = LoadCamera(paths.camera);
   const std::vector<ObjectClass> classes = ReadClasses(paths.classes);
-  if (std::none_of(classes.begin(), classes.end(), [](const auto& c) { return c.colour.has_value(); }))
-    throw Error::InFile(paths.classes, "no class has a colour model (run 'oslam train-colors' first)");
+  if (std::none_of(classes.begin(), classes.end(),
+                   [](const auto& c) { return c.colour.has_value(); }))
+    throw Error::InFile(paths.classes,
+                        "no class has a colour model (run 'oslam train-colors' first)");
   const BlobDetector detector(*camera, classes, options);
   std::optional<SiftVerifier> verifier;
   if (arguments.Has("sift-templates"))
@@ -96,7 +109,8 @@ int RunDetectCommand(const std::vector<std::string>& args) {
     }
     if (frame.cols != camera->image_width() || frame.rows != camera->image_height())
       throw Error::InFile(frames.Name(i), "image is " + std::to_string(frame.cols) + "x" +
-                                              std::to_string(frame.rows) + " but camera.yaml says " +
+                                              std::to_string(frame.rows) +
+                                              " but camera.yaml says " +
                                               std::to_string(camera->image_width()) + "x" +
                                               std::to_string(camera->image_height()));
     std::vector<Detection> detections = detector.Detect(frame, static_cast<long>(i));

@@ -21,12 +21,12 @@ bool BlobDetectorOptions::Validate(std::string* why) const {
     if (why) *why = "opening_radius_px must be in 0..10";
     return false;
   }
-  return true;
+  return colour.Validate(why);
 }
 
 BlobDetector::BlobDetector(const CameraModel& camera, const std::vector<ObjectClass>& classes,
                            const BlobDetectorOptions& options)
-    : classes_(classes), options_(options), classifier_(classes) {
+    : classes_(classes), options_(options), classifier_(classes, options.colour) {
   std::string why;
   if (!options.Validate(&why)) throw Error("blob detector: " + why);
   const int width = camera.image_width(), height = camera.image_height();
@@ -62,8 +62,9 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
   for (int c = 0; c < classifier_.num_classes(); ++c) {
     if (extents[c].count < options_.min_area_px) continue;
     // Work on the class's bounding box only (plus a margin for the opening).
-    const cv::Rect roi = (extents[c].box + cv::Size(2 * radius, 2 * radius) - cv::Point(radius, radius)) &
-                         cv::Rect(0, 0, bgr.cols, bgr.rows);
+    const cv::Rect roi =
+        (extents[c].box + cv::Size(2 * radius, 2 * radius) - cv::Point(radius, radius)) &
+        cv::Rect(0, 0, bgr.cols, bgr.rows);
     cv::Mat class_mask = (class_bits(roi) & cv::Scalar(static_cast<int>(1u << c))) != 0;
     if (radius > 0) cv::morphologyEx(class_mask, class_mask, cv::MORPH_OPEN, kernel);
     cv::Mat labels, stats, centroids;
@@ -71,9 +72,9 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
         cv::connectedComponentsWithStats(class_mask, labels, stats, centroids, 8, CV_32S);
     for (int label = 1; label < num_labels; ++label) {
       if (stats.at<int>(label, cv::CC_STAT_AREA) < options_.min_area_px) continue;
-      const cv::Rect box(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
-                         stats.at<int>(label, cv::CC_STAT_WIDTH),
-                         stats.at<int>(label, cv::CC_STAT_HEIGHT));
+      const cv::Rect box(
+          stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
+          stats.at<int>(label, cv::CC_STAT_WIDTH), stats.at<int>(label, cv::CC_STAT_HEIGHT));
       detections.push_back(DescribeBlob(labels, label, box, roi.tl(), yuv, c, frame));
     }
   }
@@ -110,14 +111,9 @@ Detection BlobDetector::DescribeBlob(const cv::Mat& labels, int label, const cv:
   detection.slice.u_r_px -= 0.5;
   detection.slice.s_r_px += 1.0;
   detection.slice.s_phi_rad += 2.0 * pad_angle;
-  const ColourBox& model = *classes_[class_index].colour;
-  double d2 = 0;
-  for (int ch = 0; ch < 3; ++ch) {
-    detection.mean_yuv[ch] = sum[ch] / detection.area_px;
-    const double sigma = std::max(1.0, model.yuv_std[ch]);
-    d2 += std::pow((detection.mean_yuv[ch] - model.yuv_mean[ch]) / sigma, 2);
-  }
-  detection.score = std::exp(-0.5 * d2);
+  for (int ch = 0; ch < 3; ++ch) detection.mean_yuv[ch] = sum[ch] / detection.area_px;
+  detection.score = std::exp(
+      -0.5 * classifier_.SquaredDistance(*classes_[class_index].colour, detection.mean_yuv));
   return detection;
 }
 
@@ -150,7 +146,8 @@ std::vector<Detection> ReadDetections(const std::string& path,
       throw Error::AtLine(path, table.line_of_row(row), "unknown class '" + d.class_name + "'");
     d.slice = {table.Double(row, ur), table.Double(row, uphi), table.Double(row, sr),
                table.Double(row, sphi)};
-    if (table.HasColumn("area_px")) d.area_px = static_cast<int>(table.Integer(row, table.ColumnIndex("area_px")));
+    if (table.HasColumn("area_px"))
+      d.area_px = static_cast<int>(table.Integer(row, table.ColumnIndex("area_px")));
     if (table.HasColumn("score")) d.score = table.Double(row, table.ColumnIndex("score"));
     detections.push_back(d);
   }
@@ -167,7 +164,8 @@ void DrawSlice(cv::Mat* image, const CameraModel& camera, const BoundingSlice& s
     outline.emplace_back(cvRound(p.x()), cvRound(p.y()));
   };
   for (int i = 0; i <= steps; ++i) add(slice.u_r_px, begin + slice.s_phi_rad * i / steps);
-  for (int i = steps; i >= 0; --i) add(slice.u_r_px + slice.s_r_px, begin + slice.s_phi_rad * i / steps);
+  for (int i = steps; i >= 0; --i)
+    add(slice.u_r_px + slice.s_r_px, begin + slice.s_phi_rad * i / steps);
   cv::polylines(*image, outline, true, colour, thickness, cv::LINE_AA);
 }
 

@@ -25,14 +25,16 @@ struct Detection {
   int area_px = 0;
   std::array<double, 3> mean_yuv{};
   // exp(-D²/2) of the blob's mean colour to the class box centre, with D the
-  // per-channel distance in standard deviations: 1 = the class's typical colour.
+  // distance in standard deviations under the detector's box shape
+  // (ColourClassifier::SquaredDistance): 1 = the class's typical colour.
   double score = 0.0;
 };
 
 struct BlobDetectorOptions {
-  int min_area_px = 40;       // smaller blobs are noise
-  int opening_radius_px = 1;  // morphological opening per class mask; 0 = off
-  bool annulus_only = true;   // ignore the blind disc and everything beyond the mirror rim
+  int min_area_px = 40;            // smaller blobs are noise
+  int opening_radius_px = 1;       // morphological opening per class mask; 0 = off
+  bool annulus_only = true;        // ignore the blind disc and everything beyond the mirror rim
+  ColourClassifierOptions colour;  // box shape (thesis YUV box or brightness-scaled)
   bool Validate(std::string* why) const;
 };
 
@@ -57,9 +59,9 @@ class BlobDetector {
   std::vector<ObjectClass> classes_;
   BlobDetectorOptions options_;
   ColourClassifier classifier_;
-  cv::Mat mask_;        // CV_8U, 255 inside the annulus
-  cv::Mat radius_px_;   // CV_32F polar radius of each pixel centre
-  cv::Mat angle_rad_;   // CV_32F polar angle of each pixel centre
+  cv::Mat mask_;       // CV_8U, 255 inside the annulus
+  cv::Mat radius_px_;  // CV_32F polar radius of each pixel centre
+  cv::Mat angle_rad_;  // CV_32F polar angle of each pixel centre
 };
 
 // Writes detections as CSV (docs/formats.md), atomically.

@@ -1,5 +1,6 @@
 #include "detect/colour_classifier.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <opencv2/imgproc.hpp>
@@ -8,20 +9,73 @@
 
 namespace oslam {
 
-ColourClassifier::ColourClassifier(const std::vector<ObjectClass>& classes)
-    : num_classes_(static_cast<int>(classes.size())) {
+bool ColourClassifierOptions::Validate(std::string* why) const {
+  if (!(brightness_range >= 1.0 && brightness_range <= 16.0)) {
+    if (why) *why = "brightness_range must be in 1..16";
+    return false;
+  }
+  if (min_y < 0 || min_y > 255) {
+    if (why) *why = "min_y must be in 0..255";
+    return false;
+  }
+  return true;
+}
+
+bool ParseColourBoxShape(const std::string& text, ColourBoxShape* shape) {
+  if (text == "yuv") {
+    *shape = ColourBoxShape::kYuv;
+  } else if (text == "scaled") {
+    *shape = ColourBoxShape::kBrightnessScaled;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+// Sets `bit` in table[y * 256 + v] for every integer v in [low, high].
+void SetRange(std::vector<uint32_t>* table, int y, double low, double high, uint32_t bit) {
+  const int first = std::max(0, static_cast<int>(std::ceil(low)));
+  const int last = std::min(255, static_cast<int>(std::floor(high)));
+  for (int v = first; v <= last; ++v) (*table)[y * 256 + v] |= bit;
+}
+
+}  // namespace
+
+ColourClassifier::ColourClassifier(const std::vector<ObjectClass>& classes,
+                                   const ColourClassifierOptions& options)
+    : num_classes_(static_cast<int>(classes.size())),
+      options_(options),
+      y_u_(256 * 256, 0u),
+      y_v_(256 * 256, 0u) {
   if (num_classes_ > kMaxClasses)
     throw Error("the colour detector handles at most 32 classes, got " +
                 std::to_string(num_classes_));
+  std::string why;
+  if (!options.Validate(&why)) throw Error("colour classifier: " + why);
   for (int c = 0; c < num_classes_; ++c) {
     if (!classes[c].colour) continue;
     const ColourBox& box = *classes[c].colour;
-    for (int channel = 0; channel < 3; ++channel) {
-      const double half_width = box.k_sigma * box.yuv_std[channel];
-      const int low = static_cast<int>(std::ceil(box.yuv_mean[channel] - half_width));
-      const int high = static_cast<int>(std::floor(box.yuv_mean[channel] + half_width));
-      for (int value = std::max(0, low); value <= std::min(255, high); ++value)
-        tables_[channel][value] |= (1u << c);
+    const uint32_t bit = 1u << c;
+    const double k = box.k_sigma;
+    const double y_low = box.yuv_mean[0] - k * box.yuv_std[0];
+    const double y_high = box.yuv_mean[0] + k * box.yuv_std[0];
+    for (int y = 0; y < 256; ++y) {
+      if (options.shape == ColourBoxShape::kYuv) {
+        if (y < y_low || y > y_high) continue;
+        for (int ch = 1; ch < 3; ++ch)
+          SetRange(ch == 1 ? &y_u_ : &y_v_, y, box.yuv_mean[ch] - k * box.yuv_std[ch],
+                   box.yuv_mean[ch] + k * box.yuv_std[ch], bit);
+      } else {
+        if (y < options.min_y || y < y_low / options.brightness_range || y > y_high) continue;
+        const double scale = y / std::max(1.0, box.yuv_mean[0]);
+        for (int ch = 1; ch < 3; ++ch) {
+          const double centre = 128.0 + scale * (box.yuv_mean[ch] - 128.0);
+          const double half_width = k * box.yuv_std[ch] * scale;
+          SetRange(ch == 1 ? &y_u_ : &y_v_, y, centre - half_width, centre + half_width, bit);
+        }
+      }
     }
   }
 }
@@ -34,12 +88,15 @@ void ColourClassifier::Classify(const cv::Mat& yuv, const cv::Mat& mask, cv::Mat
   std::vector<int> count(num_classes_, 0);
   std::vector<int> min_x(num_classes_, yuv.cols), min_y(num_classes_, yuv.rows);
   std::vector<int> max_x(num_classes_, -1), max_y(num_classes_, -1);
+  const uint32_t* y_u = y_u_.data();
+  const uint32_t* y_v = y_v_.data();
   for (int y = 0; y < yuv.rows; ++y) {
     const cv::Vec3b* in = yuv.ptr<cv::Vec3b>(y);
     const uint8_t* use = mask.empty() ? nullptr : mask.ptr<uint8_t>(y);
     uint32_t* out = reinterpret_cast<uint32_t*>(class_bits->ptr<int32_t>(y));
     for (int x = 0; x < yuv.cols; ++x) {
-      uint32_t bits = tables_[0][in[x][0]] & tables_[1][in[x][1]] & tables_[2][in[x][2]];
+      const int row = in[x][0] << 8;
+      uint32_t bits = y_u[row | in[x][1]] & y_v[row | in[x][2]];
       if (use && !use[x]) bits = 0;
       out[x] = bits;
       // Most pixels belong to no class, so this loop rarely runs.
@@ -56,14 +113,32 @@ void ColourClassifier::Classify(const cv::Mat& yuv, const cv::Mat& mask, cv::Mat
   extents->assign(num_classes_, ClassExtent{});
   for (int c = 0; c < num_classes_; ++c) {
     if (count[c] == 0) continue;
-    (*extents)[c] = {count[c], cv::Rect(min_x[c], min_y[c], max_x[c] - min_x[c] + 1,
-                                        max_y[c] - min_y[c] + 1)};
+    (*extents)[c] = {
+        count[c], cv::Rect(min_x[c], min_y[c], max_x[c] - min_x[c] + 1, max_y[c] - min_y[c] + 1)};
   }
 }
 
 bool ColourClassifier::InBox(int class_index, const cv::Vec3b& yuv) const {
   const uint32_t bit = 1u << class_index;
-  return (tables_[0][yuv[0]] & tables_[1][yuv[1]] & tables_[2][yuv[2]] & bit) != 0;
+  const int row = yuv[0] << 8;
+  return (y_u_[row | yuv[1]] & y_v_[row | yuv[2]] & bit) != 0;
+}
+
+double ColourClassifier::SquaredDistance(const ColourBox& box,
+                                         const std::array<double, 3>& yuv) const {
+  double d2 = 0;
+  if (options_.shape == ColourBoxShape::kYuv) {
+    for (int ch = 0; ch < 3; ++ch)
+      d2 += std::pow((yuv[ch] - box.yuv_mean[ch]) / std::max(1.0, box.yuv_std[ch]), 2);
+    return d2;
+  }
+  const double scale = yuv[0] / std::max(1.0, box.yuv_mean[0]);
+  for (int ch = 1; ch < 3; ++ch) {
+    const double expected = scale * (box.yuv_mean[ch] - 128.0);
+    const double sigma = std::max(1.0, box.yuv_std[ch]) * std::max(0.1, scale);
+    d2 += std::pow((yuv[ch] - 128.0 - expected) / sigma, 2);
+  }
+  return d2;
 }
 
 ColourBox LearnColourBox(const std::vector<cv::Mat>& bgr_images, const std::vector<cv::Mat>& masks,
@@ -86,7 +161,8 @@ ColourBox LearnColourBox(const std::vector<cv::Mat>& bgr_images, const std::vect
       }
     }
   }
-  if (n < 2) throw Error("colour model needs at least 2 example pixels, got " + std::to_string(int(n)));
+  if (n < 2)
+    throw Error("colour model needs at least 2 example pixels, got " + std::to_string(int(n)));
   ColourBox box;
   box.k_sigma = k_sigma;
   for (int ch = 0; ch < 3; ++ch) {

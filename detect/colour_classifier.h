@@ -1,6 +1,8 @@
 // CMVision-style colour classification (spec §10.2): each class is a box in
-// YUV space, mean ± k·σ per channel. Three 256-entry lookup tables hold one
-// bit per class, so a pixel's classes are the AND of three table reads.
+// YUV space, mean ± k·σ per channel (the thesis), or that box with its chroma
+// scaled by the pixel's brightness (illumination-robust). Two 256 × 256
+// lookup tables, indexed by (Y, U) and (Y, V), hold one bit per class, so a
+// pixel's classes are the AND of two table reads.
 #pragma once
 
 #include <array>
@@ -14,13 +16,40 @@
 
 namespace oslam {
 
+// How a class's colour model (YUV mean μ and spread σ, k) becomes a region of
+// YUV space.
+enum class ColourBoxShape {
+  // The thesis' box: |Y − μ_Y|, |U − μ_U|, |V − μ_V| each ≤ k·σ.
+  kYuv,
+  // Chroma scaled by brightness: under a dimmer or brighter light an object's
+  // R, G, B scale together, so its chroma (U − 128, V − 128) scales with Y.
+  // With s = Y / μ_Y: Y within [(μ_Y − kσ_Y) / r, (μ_Y + kσ_Y)·r] (r =
+  // brightness_range) and at least min_y, and
+  // |(U − 128) − s·(μ_U − 128)| ≤ k·σ_U·max(1, s), the same for V: the thesis
+  // box at the class's mean brightness, slid along the line of constant
+  // brightness-normalised chroma; its half-width never shrinks below k·σ, as
+  // pixel noise does not shrink in the dark.
+  kBrightnessScaled,
+};
+
+struct ColourClassifierOptions {
+  ColourBoxShape shape = ColourBoxShape::kBrightnessScaled;
+  double brightness_range = 2.5;  // r above: how much darker or brighter than its examples
+  int min_y = 12;                 // darker pixels carry no usable chroma
+  bool Validate(std::string* why) const;
+};
+
+// Parses "yuv" / "scaled"; returns false for anything else.
+bool ParseColourBoxShape(const std::string& text, ColourBoxShape* shape);
+
 class ColourClassifier {
  public:
   static constexpr int kMaxClasses = 32;
 
   // Classes without a colour box are never detected. Throws oslam::Error when
-  // there are more than kMaxClasses classes.
-  explicit ColourClassifier(const std::vector<ObjectClass>& classes);
+  // there are more than kMaxClasses classes or the options are invalid.
+  explicit ColourClassifier(const std::vector<ObjectClass>& classes,
+                            const ColourClassifierOptions& options = {});
 
   // Where each class occurs in an image: pixel count and bounding box.
   struct ClassExtent {
@@ -38,10 +67,19 @@ class ColourClassifier {
 
   bool InBox(int class_index, const cv::Vec3b& yuv) const;
   int num_classes() const { return num_classes_; }
+  const ColourClassifierOptions& options() const { return options_; }
+
+  // Distance (in standard deviations) of a YUV colour from class c's model
+  // under the box shape: D² summed over the channels the shape constrains
+  // (kBrightnessScaled compares the chroma rescaled to the class's brightness
+  // and leaves Y out).
+  double SquaredDistance(const ColourBox& box, const std::array<double, 3>& yuv) const;
 
  private:
   int num_classes_ = 0;
-  std::array<std::array<uint32_t, 256>, 3> tables_{};
+  ColourClassifierOptions options_;
+  // y_u_[Y * 256 + U], y_v_[Y * 256 + V]: class bits.
+  std::vector<uint32_t> y_u_, y_v_;
 };
 
 // Mean and standard deviation per YUV channel of the pixels of `bgr` where

@@ -84,10 +84,18 @@ void KeepPixelsNearDisplayHue(const cv::Mat& bgr, const ObjectClass& object_clas
     }
 }
 
+// Thinner true slices give too few example pixels, or none off the edges.
+constexpr double kMinSliceWidthPx = 4.0;
+
 cv::Mat CentralSliceMask(const CameraModel& camera, const GroundTruthSighting& s) {
   cv::Mat mask = cv::Mat::zeros(camera.image_height(), camera.image_width(), CV_8UC1);
   const double r_low = s.u_r_px + 0.25 * s.s_r_px, r_high = s.u_r_px + 0.75 * s.s_r_px;
-  const double half_angle = 0.25 * s.s_phi_rad;
+  // The middle half angularly, but for thin objects (an 8 cm bottle is ~5 px
+  // wide at 2 m) at least 3 px of arc, keeping 1 px off each true edge, so
+  // they still get example pixels.
+  const double radius = std::max(1.0, s.u_r_px);
+  const double half_angle =
+      std::max(0.25 * s.s_phi_rad, std::min(0.5 * s.s_phi_rad - 1.0 / radius, 1.5 / radius));
   for (int y = 0; y < mask.rows; ++y)
     for (int x = 0; x < mask.cols; ++x) {
       const Eigen::Vector2d pixel(x, y);
@@ -109,7 +117,8 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
   if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder to learn colours from");
   const std::unique_ptr<CameraModel> camera = LoadCamera(paths.camera);
   const FrameSource frames(run_dir);
-  if (frames.is_video()) throw Error::InFile(run_dir, "learning from ground truth needs frames/, not a video");
+  if (frames.is_video())
+    throw Error::InFile(run_dir, "learning from ground truth needs frames/, not a video");
   std::vector<ColourExample> examples;
   for (const ObjectClass& object_class : classes) {
     std::vector<const GroundTruthSighting*> candidates;
@@ -117,7 +126,8 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
       const auto object = std::find_if(truth->objects.begin(), truth->objects.end(),
                                        [&](const auto& o) { return o.id == s.object_id; });
       if (object->class_name != object_class.name || s.visible_fraction < 0.95) continue;
-      if (s.s_r_px < 8 || s.s_phi_rad * s.u_r_px < 6 || s.frame >= static_cast<long>(frames.size()))
+      if (s.s_r_px < 8 || s.s_phi_rad * s.u_r_px < kMinSliceWidthPx ||
+          s.frame >= static_cast<long>(frames.size()))
         continue;
       candidates.push_back(&s);
     }

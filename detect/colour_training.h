@@ -22,7 +22,7 @@ namespace oslam {
 struct ColourExample {
   std::string image_path;
   std::string class_name;
-  cv::Rect roi;            // used when mask_path is empty
+  cv::Rect roi;  // used when mask_path is empty
   std::string mask_path;
   cv::Mat mask;  // in-memory mask (8-bit, non-zero = example); overrides roi and mask_path
 };
@@ -34,7 +34,9 @@ std::vector<ColourExample> ReadColourExamples(const std::string& path,
 
 // Examples for a simulated run: per class, the central part of the largest
 // fully visible ground-truth slice in each of `per_class` stretches of the run:
-// the middle half of the slice radially and angularly, inside the annulus. For
+// the middle half of the slice radially and angularly (angularly at least 3 px
+// of arc, 1 px inside the true edges, so a thin object still gets pixels;
+// slices under 4 px wide are skipped), inside the annulus. For
 // the simulator's convex shapes that region lies on the object. Only pixels
 // whose hue is near the class's display colour's are kept, so a striped
 // object is learnt by its main colour.

@@ -98,10 +98,11 @@ TEST(BlobDetector, FindsEachPaintedSliceWithItsClassAndExtent) {
 
 TEST(BlobDetector, IgnoresColourOutsideTheMirrorAnnulusAndTinyBlobs) {
   const Scene scene;
-  cv::Mat image(scene.camera.image_height(), scene.camera.image_width(), CV_8UC3, cv::Scalar(128, 128, 128));
-  cv::rectangle(image, cv::Rect(0, 0, 40, 40), cv::Scalar(kGreen), cv::FILLED);       // beyond the rim
-  cv::circle(image, cv::Point(320, 240), 20, cv::Scalar(kPink), cv::FILLED);          // blind disc
-  cv::rectangle(image, cv::Rect(400, 240, 3, 3), cv::Scalar(kBlue), cv::FILLED);      // 9 px
+  cv::Mat image(scene.camera.image_height(), scene.camera.image_width(), CV_8UC3,
+                cv::Scalar(128, 128, 128));
+  cv::rectangle(image, cv::Rect(0, 0, 40, 40), cv::Scalar(kGreen), cv::FILLED);   // beyond the rim
+  cv::circle(image, cv::Point(320, 240), 20, cv::Scalar(kPink), cv::FILLED);      // blind disc
+  cv::rectangle(image, cv::Rect(400, 240, 3, 3), cv::Scalar(kBlue), cv::FILLED);  // 9 px
   const BlobDetector detector(scene.camera, scene.classes);
   EXPECT_TRUE(detector.Detect(image, 0).empty());
 }
@@ -113,6 +114,81 @@ TEST(BlobDetector, WrongFrameSizeIsAnError) {
   BlobDetectorOptions bad;
   bad.min_area_px = 0;
   EXPECT_THROW(BlobDetector(scene.camera, scene.classes, bad), Error);
+}
+
+cv::Vec3b ToYuv(const cv::Vec3b& bgr) {
+  cv::Mat yuv;
+  cv::cvtColor(cv::Mat(1, 1, CV_8UC3, cv::Scalar(bgr[0], bgr[1], bgr[2])), yuv, cv::COLOR_BGR2YUV);
+  return yuv.at<cv::Vec3b>(0, 0);
+}
+
+cv::Vec3b Scaled(const cv::Vec3b& bgr, double factor) {
+  return cv::Vec3b(cv::saturate_cast<uint8_t>(bgr[0] * factor),
+                   cv::saturate_cast<uint8_t>(bgr[1] * factor),
+                   cv::saturate_cast<uint8_t>(bgr[2] * factor));
+}
+
+TEST(ColourClassifier, BrightnessScaledBoxKeepsAnObjectUnderDimLightThatTheThesisBoxLoses) {
+  const std::vector<ObjectClass> classes = {ClassWithColour("green box", kGreen, 3),
+                                            ClassWithColour("pink ball", kPink, 3)};
+  ColourClassifierOptions thesis;
+  thesis.shape = ColourBoxShape::kYuv;
+  ColourClassifierOptions scaled;
+  scaled.shape = ColourBoxShape::kBrightnessScaled;
+  scaled.brightness_range = 2.5;
+  const ColourClassifier yuv_box(classes, thesis), scaled_box(classes, scaled);
+  for (int c = 0; c < 2; ++c) {
+    const cv::Vec3b bgr = c == 0 ? kGreen : kPink;
+    // Both accept the class's own colour.
+    EXPECT_TRUE(yuv_box.InBox(c, ToYuv(bgr)));
+    EXPECT_TRUE(scaled_box.InBox(c, ToYuv(bgr)));
+    // Half the light: R, G, B halve. Only the scaled box still accepts it.
+    EXPECT_FALSE(yuv_box.InBox(c, ToYuv(Scaled(bgr, 0.5))));
+    EXPECT_TRUE(scaled_box.InBox(c, ToYuv(Scaled(bgr, 0.5))));
+    // A quarter of it is beyond brightness_range: rejected.
+    EXPECT_FALSE(scaled_box.InBox(c, ToYuv(Scaled(bgr, 0.2))));
+    // Brighter than the examples is not widened.
+    EXPECT_FALSE(scaled_box.InBox(c, ToYuv(Scaled(bgr, 1.6))));
+  }
+  // Dimmed grey and the other class's dimmed colour stay out.
+  EXPECT_FALSE(scaled_box.InBox(0, ToYuv(cv::Vec3b(60, 60, 60))));
+  EXPECT_FALSE(scaled_box.InBox(1, ToYuv(cv::Vec3b(60, 60, 60))));
+  EXPECT_FALSE(scaled_box.InBox(0, ToYuv(Scaled(kPink, 0.5))));
+  EXPECT_FALSE(scaled_box.InBox(1, ToYuv(Scaled(kGreen, 0.5))));
+  // The score measures the chroma against the class's, rescaled: a dimmed
+  // exact colour scores near 1 with the scaled shape.
+  const cv::Vec3b dim = ToYuv(Scaled(kGreen, 0.5));
+  const std::array<double, 3> dim_yuv = {double(dim[0]), double(dim[1]), double(dim[2])};
+  EXPECT_LT(scaled_box.SquaredDistance(*classes[0].colour, dim_yuv), 1.0);
+  EXPECT_GT(yuv_box.SquaredDistance(*classes[0].colour, dim_yuv), 9.0);
+}
+
+TEST(BlobDetector, FindsADimlyLitSliceOnlyWithTheBrightnessScaledBox) {
+  Scene scene;
+  scene.truth = {{0, {120.0, 0.5, 40.0, 0.35}}};
+  cv::Mat image(scene.camera.image_height(), scene.camera.image_width(), CV_8UC3,
+                cv::Scalar(40, 40, 40));
+  PaintSlice(&image, scene.camera, scene.truth[0].second, Scaled(kGreen, 0.55));
+  BlobDetectorOptions thesis;
+  thesis.colour.shape = ColourBoxShape::kYuv;
+  EXPECT_TRUE(BlobDetector(scene.camera, scene.classes, thesis).Detect(image, 0).empty());
+  const std::vector<Detection> found = BlobDetector(scene.camera, scene.classes).Detect(image, 0);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].class_index, 0);
+  EXPECT_NEAR(found[0].slice.u_r_px, 120.0, 1.0);
+  EXPECT_NEAR(found[0].slice.s_r_px, 40.0, 1.0);
+}
+
+TEST(ColourClassifier, BoxShapeParsingAndOptionChecks) {
+  ColourBoxShape shape = ColourBoxShape::kBrightnessScaled;
+  EXPECT_TRUE(ParseColourBoxShape("yuv", &shape));
+  EXPECT_EQ(shape, ColourBoxShape::kYuv);
+  EXPECT_TRUE(ParseColourBoxShape("scaled", &shape));
+  EXPECT_EQ(shape, ColourBoxShape::kBrightnessScaled);
+  EXPECT_FALSE(ParseColourBoxShape("hsv", &shape));
+  ColourClassifierOptions bad;
+  bad.brightness_range = 0.5;
+  EXPECT_THROW(ColourClassifier({ClassWithColour("green box", kGreen, 3)}, bad), Error);
 }
 
 TEST(ColourModel, LearntBoxRecoversMeanAndSpread) {
