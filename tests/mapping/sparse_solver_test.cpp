@@ -252,7 +252,9 @@ TEST(SolverTest, EveryOrderingGivesTheSameSolutionEvidenceAndCovariance) {
       const SolveResult result = solver.Solve(&graph);
       ASSERT_EQ(result.summary.termination, TerminationType::kConverged) << result.summary.message;
       ASSERT_TRUE(result.evidence.valid);
-      if (ordering != OrderingType::kAutomatic) EXPECT_EQ(result.summary.ordering, ordering);
+      if (ordering != OrderingType::kAutomatic) {
+        EXPECT_EQ(result.summary.ordering, ordering);
+      }
       std::vector<std::vector<int>> groups;
       for (int key = 0; key < graph.num_variables(); ++key)
         if (!graph.IsFixed(key)) groups.push_back({key});
