@@ -25,24 +25,10 @@ namespace fs = std::filesystem;
 
 const std::string kOMap = OSLAM_SOURCE_DIR "/tests/data/export_omap.json";
 
-struct CliResult {
-  int exit_code = -1;
-  std::string out, err;
-};
+using CliResult = testing::CommandResult;
 
 CliResult Oslam(const std::string& arguments) {
-  testing::TempDir dir;
-  const int status = std::system((std::string(OSLAM_BINARY) + " " + arguments + " >" +
-                                  dir.Path("out") + " 2>" + dir.Path("err"))
-                                     .c_str());
-  CliResult result;
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::stringstream out, err;
-  out << std::ifstream(dir.Path("out")).rdbuf();
-  err << std::ifstream(dir.Path("err")).rdbuf();
-  result.out = out.str();
-  result.err = err.str();
-  return result;
+  return testing::RunShellCommand(std::string(OSLAM_BINARY) + " " + arguments);
 }
 
 std::vector<std::string> FilesIn(const std::string& dir) {
