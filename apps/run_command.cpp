@@ -51,7 +51,8 @@ std::string Fixed(double value, int digits) {
 }
 
 std::string Report(const std::string& run_dir, const std::string& out_dir, const RunConfig& config,
-                   const std::vector<StageTime>& times, const MapMetrics* metrics) {
+                   const std::vector<StageTime>& times, const OMap& map,
+                   const nlohmann::json& omap_json, const MapMetrics* metrics) {
   std::ostringstream md;
   md << "# oslam run\n\nInput: `" << run_dir << "`; method: " << config.Get("slam", "method")
      << ", seed " << config.Get("slam", "seed") << ". Configuration: `config.yaml`.\n\n";
@@ -67,7 +68,6 @@ std::string Report(const std::string& run_dir, const std::string& out_dir, const
   }
   md << "| total | " << Fixed(total, 2) << " |\n\n";
 
-  const OMap map = ReadOMap((fs::path(out_dir) / "omap.json").string());
   md << "## Objects\n\n| id | class | existence | x m | y m | z m | diameter m | height m | detections |\n"
         "|---|---|---|---|---|---|---|---|---|\n";
   for (const OMapObject& o : map.objects) {
@@ -76,10 +76,8 @@ std::string Report(const std::string& run_dir, const std::string& out_dir, const
        << Fixed(o.base_world.z(), 2) << " | " << Fixed(o.diameter_m, 2) << " | "
        << Fixed(o.height_m, 2) << " | " << o.num_detections << " |\n";
   }
-  const nlohmann::json omap =
-      nlohmann::json::parse(ReadTextFile((fs::path(out_dir) / "omap.json").string()));
-  if (omap.contains("sampler")) {
-    md << "\n## Sampler convergence\n\n```json\n" << omap["sampler"].dump(1) << "\n```\n";
+  if (omap_json.contains("sampler")) {
+    md << "\n## Sampler convergence\n\n```json\n" << omap_json["sampler"].dump(1) << "\n```\n";
   }
   if (metrics) md << "\n## Against ground truth\n\n```\n" << metrics->Table() << "```\n";
   return md.str();
@@ -147,17 +145,21 @@ int RunRunCommand(const std::vector<std::string>& args) {
   stage("o-slam", 2, RunSlamCommand, slam_args, "slam");
   stage("export", 3, RunExportCommand, {omap, "--run", run_dir, "-o", out_dir}, "export");
 
+  // ReadOMap checks the file; the raw JSON also carries the sampler's report.
+  const OMap map = ReadOMap(omap);
+  const nlohmann::json omap_json = nlohmann::json::parse(ReadTextFile(omap));
   std::optional<MapMetrics> metrics;
   if (const std::optional<GroundTruth> truth = ReadGroundTruth(run_dir)) {
     MapMetricsOptions options;
     options.existence_threshold = std::stod(config.Get("eval", "threshold"));
     options.match_gate_m = std::stod(config.Get("eval", "gate_m"));
     const Odometry odometry = ReadOdometry(RunFolderPaths::Of(run_dir).odometry);
-    metrics = EvaluateMap(ReadOMap(omap), odometry.poses, *truth, options);
+    metrics = EvaluateMap(map, odometry.poses, *truth, options);
     WriteTextFileAtomically((fs::path(out_dir) / "eval.json").string(), metrics->Json());
   }
   const std::string report = (fs::path(out_dir) / "report.md").string();
-  WriteTextFileAtomically(report, Report(run_dir, out_dir, config, times, metrics ? &*metrics : nullptr));
+  WriteTextFileAtomically(report, Report(run_dir, out_dir, config, times, map, omap_json,
+                                         metrics ? &*metrics : nullptr));
   if (!quiet) {
     double total = 0;
     for (const StageTime& t : times) {
