@@ -87,6 +87,10 @@ class StateEvaluator {
   virtual EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) = 0;
   // Puts an evaluation computed elsewhere into the cache (chain start, swaps).
   virtual void Remember(const EvaluationPtr& evaluation) = 0;
+  // The same evaluation with what only recorded samples need (the objects'
+  // marginal covariances, for the spurious-object model) filled in. Proposals
+  // skip it because most are rejected; the default returns the input.
+  virtual EvaluationPtr Complete(const EvaluationPtr& evaluation) { return evaluation; }
   virtual size_t num_solves() const = 0;
   virtual size_t num_cache_hits() const = 0;
 };

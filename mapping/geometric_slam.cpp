@@ -218,6 +218,7 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     for (const auto& object : warm_start->objects) previous[object.id] = &object;
   struct ObjectKeys {
     int id, class_index, base, size, count;
+    size_t first_factor = 0, end_factor = 0;  // its detections' factors
   };
   std::vector<ObjectKeys> objects;
   for (const auto& [id, list] : by_object) {
@@ -283,13 +284,15 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
   for (long i = 1; i < num_poses; ++i)
     graph.Emplace<OdometryFactor>(pose_keys[i - 1], pose_keys[i], problem.increments[i],
                                   options_.motion);
-  for (const auto& object : objects) {
+  for (auto& object : objects) {
     const ClassPrior& prior = problem.classes[object.class_index];
     graph.Add(MakeLocationPrior(object.base, prior.location_mean_m, prior.location_std_m));
     graph.Add(MakeSizePrior(object.size, prior.size_mean_m, prior.size_std_m));
+    object.first_factor = graph.factors().size();
     for (const SliceObservation* observation : by_object[object.id])
       graph.Emplace<BoundingSliceFactor>(&camera_, pose_keys[observation->frame], object.base,
                                          object.size, observation->slice, options_.pixel_std_px);
+    object.end_factor = graph.factors().size();
   }
 
   // ---- solve and read out ----
@@ -312,6 +315,9 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     mapped.geometry.diameter_m = values.Data(object.size)[0];
     mapped.geometry.height_m = values.Data(object.size)[1];
     mapped.num_observations = object.count;
+    if (!solved.squared_errors.empty())
+      for (size_t f = object.first_factor; f < object.end_factor; ++f)
+        mapped.squared_residual += solved.squared_errors[f];
     result.objects.push_back(mapped);
   }
   if (!result.summary.IsUsable()) return result;
@@ -320,8 +326,10 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     std::vector<std::vector<int>> groups;
     for (const auto& object : objects) groups.push_back({object.base, object.size});
     std::vector<Eigen::MatrixXd> blocks;
-    if (solver_.MarginalCovariances(groups, &blocks, &result.covariance_message))
+    if (solver_.MarginalCovariances(groups, &blocks, &result.covariance_message)) {
       for (size_t j = 0; j < objects.size(); ++j) result.objects[j].covariance = blocks[j];
+      result.has_object_covariances = true;
+    }
   }
   if (options_.compute_pose_covariances) {
     std::vector<std::vector<int>> groups;

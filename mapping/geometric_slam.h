@@ -73,6 +73,9 @@ struct MappedObject {
   // Joint covariance of (x, y, z, d, h); zero when not computed.
   Eigen::Matrix<double, 5, 5> covariance = Eigen::Matrix<double, 5, 5>::Zero();
   int num_observations = 0;
+  // Sum of the whitened squared errors of its detections at the solution
+  // (r^2(j) of spec eq. 5.2, R = diag(E^2, (E/u_r)^2), W = 2R).
+  double squared_residual = 0;
 };
 
 struct GeometricSlamResult {
@@ -82,6 +85,7 @@ struct GeometricSlamResult {
   SolverSummary summary;
   Evidence evidence;
   std::string covariance_message;  // why covariances are missing, if they are
+  bool has_object_covariances = false;  // objects[].covariance were computed
 };
 
 // Objects' initial geometry from a first detection (spec §5.4): bearing from

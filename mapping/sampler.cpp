@@ -181,7 +181,10 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
     }
     summary.cold_trace.push_back(states[0]->log_target);
     if (states[0]->log_target > result.best->log_target) result.best = states[0];
-    if (t > options_.burn_in) result.samples.push_back(states[0]);
+    if (t > options_.burn_in) {
+      states[0] = evaluators[0]->Complete(states[0]);
+      result.samples.push_back(states[0]);
+    }
     if (progress) progress("MC3", t, options_.num_iterations);
   }
   summary.sampling = stats[0];

@@ -4,17 +4,29 @@
 #include <cmath>
 #include <map>
 
-#include "core/angles.h"
 #include "core/error.h"
-#include "mapping/observation_model.h"
 
 namespace oslam {
 namespace {
 
 GeometricSlamOptions StepOptions(const SlamTargetOptions& options) {
   GeometricSlamOptions step = options.slam;
-  step.solver.max_iterations = options.proposal_iterations;
+  step.solver.max_iterations = options.proposal_iterations - 1;
+  step.solver.apply_final_step = true;  // the Gauss-Newton step of the last linear system
+  step.compute_object_covariances = false;  // added by Complete() to recorded samples only
+  step.compute_pose_covariances = false;
   return step;
+}
+
+// Covariances at a given solution: no iteration, no step, no evidence.
+GeometricSlamOptions CovarianceOptions(const SlamTargetOptions& options) {
+  GeometricSlamOptions covariances = options.slam;
+  covariances.solver.max_iterations = 0;
+  covariances.solver.apply_final_step = false;
+  covariances.solver.compute_evidence = false;
+  covariances.compute_object_covariances = true;
+  covariances.compute_pose_covariances = false;
+  return covariances;
 }
 
 const MappedObject* FindObject(const GeometricSlamResult& result, int id) {
@@ -43,7 +55,8 @@ SlamEvaluator::SlamEvaluator(const SlamTargetData& data, const ClassConfusionMod
       model_(model),
       options_(options),
       full_(*data.camera, options.slam),
-      step_(*data.camera, StepOptions(options)) {
+      step_(*data.camera, StepOptions(options)),
+      covariances_(*data.camera, CovarianceOptions(options)) {
   std::string why;
   if (!options.Validate(&why)) throw Error("O-SLAM target options: " + why);
 }
@@ -84,33 +97,6 @@ GeometricSlamResult SlamEvaluator::WarmStart(const AssociationState& state,
   return start;
 }
 
-// r^2(j) of eq. 5.2: whitened squared measurement residuals of each object
-// at the solution (R = diag(E^2, (E/u_r)^2), W = 2R, as the factor uses).
-std::vector<double> SlamEvaluator::ObjectResiduals(const AssociationState& state,
-                                                   const GeometricSlamResult& solution) const {
-  const double e = options_.slam.pixel_std_px;
-  std::vector<double> residual2(state.blocks.size(), 0.0);
-  for (size_t j = 0; j < state.blocks.size(); ++j) {
-    const MappedObject* object = FindObject(solution, state.blocks[j].front());
-    if (!object) continue;
-    for (int t : state.blocks[j])
-      for (int d : data_.tracks[t].detections) {
-        const ClassedSlice& z = data_.detections[d];
-        BoundingSlice predicted;
-        if (!PredictSlice(*data_.camera, solution.trajectory[z.frame], object->geometry,
-                          &predicted))
-          continue;
-        const double angular = e / z.slice.u_r_px;
-        residual2[j] +=
-            std::pow((predicted.u_r_px - z.slice.u_r_px) / e, 2) +
-            std::pow(WrapAngle(predicted.u_phi_rad - z.slice.u_phi_rad) / angular, 2) +
-            std::pow(predicted.s_r_px - z.slice.s_r_px, 2) / (2 * e * e) +
-            std::pow(predicted.s_phi_rad - z.slice.s_phi_rad, 2) / (2 * angular * angular);
-      }
-  }
-  return residual2;
-}
-
 EvaluationPtr SlamEvaluator::Solve(const AssociationState& state, const StateEvaluation* from,
                                    bool full) {
   const auto start_time = std::chrono::steady_clock::now();
@@ -134,7 +120,10 @@ EvaluationPtr SlamEvaluator::Solve(const AssociationState& state, const StateEva
     evaluation->locations.push_back(object ? object->geometry.base_world : Eigen::Vector3d::Zero());
   }
   evaluation->log_target = log_target;
-  evaluation->residual2 = ObjectResiduals(state, *solution);
+  for (size_t j = 0; j < state.blocks.size(); ++j) {
+    const MappedObject* object = FindObject(*solution, state.blocks[j].front());
+    evaluation->residual2.push_back(object ? object->squared_residual : 0.0);
+  }
   evaluation->solution = std::move(solution);
   evaluation->evaluation_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
@@ -165,6 +154,26 @@ EvaluationPtr SlamEvaluator::Refine(const AssociationState& state, const StateEv
 
 void SlamEvaluator::Remember(const EvaluationPtr& evaluation) {
   Store(evaluation);
+}
+
+EvaluationPtr SlamEvaluator::Complete(const EvaluationPtr& evaluation) {
+  if (!evaluation || !evaluation->solution || evaluation->solution->has_object_covariances)
+    return evaluation;
+  // Linearised at the solution itself, so the covariances belong to exactly
+  // the estimate the sample records.
+  GeometricSlamResult at_solution = *evaluation->solution;
+  const GeometricSlamResult with =
+      covariances_.Solve(BuildProblem(evaluation->state), &at_solution);
+  ++solves_;
+  if (!with.has_object_covariances) return evaluation;  // reported by the fusion as zero
+  for (MappedObject& object : at_solution.objects)
+    for (const MappedObject& solved : with.objects)
+      if (solved.id == object.id) object.covariance = solved.covariance;
+  at_solution.has_object_covariances = true;
+  auto completed = std::make_shared<StateEvaluation>(*evaluation);
+  completed->solution = std::make_shared<GeometricSlamResult>(std::move(at_solution));
+  Store(completed);
+  return completed;
 }
 
 }  // namespace oslam

@@ -20,8 +20,10 @@ namespace oslam {
 
 struct SlamTargetOptions {
   GeometricSlamOptions slam;  // E, motion noise, solver (full optimisation)
-  // Solver iterations for a proposed state, linearised at the current
-  // state's solution (spec §9.6: one linear step; 1 = one Gauss-Newton step).
+  // Linear systems solved for a proposed state, linearised at the current
+  // state's solution: 1 = the thesis' single Gauss-Newton step with the
+  // evidence of that linear system (spec §9.6, §8.2 notes); k > 1 adds k - 1
+  // Levenberg-Marquardt iterations before it.
   int proposal_iterations = 1;
   // #37: false = P(C, J) uniform (thesis reading); true = prod_j 1/|classes|.
   bool class_prior_per_object = false;
@@ -49,6 +51,7 @@ class SlamEvaluator : public StateEvaluator {
   EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation* from) override;
   EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override;
   void Remember(const EvaluationPtr& evaluation) override;
+  EvaluationPtr Complete(const EvaluationPtr& evaluation) override;
   size_t num_solves() const override { return solves_; }
   size_t num_cache_hits() const override { return hits_; }
 
@@ -57,14 +60,12 @@ class SlamEvaluator : public StateEvaluator {
  private:
   EvaluationPtr Solve(const AssociationState& state, const StateEvaluation* from, bool full);
   GeometricSlamResult WarmStart(const AssociationState& state, const StateEvaluation& from) const;
-  std::vector<double> ObjectResiduals(const AssociationState& state,
-                                      const GeometricSlamResult& solution) const;
   void Store(const EvaluationPtr& evaluation);
 
   const SlamTargetData& data_;
   const ClassConfusionModel& model_;
   SlamTargetOptions options_;
-  GeometricSlam full_, step_;
+  GeometricSlam full_, step_, covariances_;
   std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
   size_t solves_ = 0, hits_ = 0;
 };

@@ -105,6 +105,9 @@ struct Evidence {
 struct SolveResult {
   SolverSummary summary;
   Evidence evidence;
+  // ||e_f||^2 of every factor (graph order) at the final values; empty
+  // when the solve failed.
+  std::vector<double> squared_errors;
 };
 
 class SparseSolver {
