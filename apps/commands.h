@@ -26,6 +26,7 @@ int RunEvalDetectCommand(const std::vector<std::string>& args);
 int RunEvalCommand(const std::vector<std::string>& args);
 int RunMapCommand(const std::vector<std::string>& args);
 int RunMapDispatchCommand(const std::vector<std::string>& args);
+int RunLandmarkMapCommand(const std::vector<std::string>& args);
 int RunTrainColorsCommand(const std::vector<std::string>& args);
 int RunSlamCommand(const std::vector<std::string>& args);
 int RunSimulateCommand(const std::vector<std::string>& args);

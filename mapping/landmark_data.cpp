@@ -371,4 +371,22 @@ std::vector<int> GivenAssociation(const LandmarkDataset& data) {
   return association;
 }
 
+std::vector<int> ReadAssociation(const std::string& path, size_t num_sightings) {
+  std::vector<int> association;
+  ForEachRow(path, [&](int line, const std::vector<std::string>& t) {
+    ExpectFields(path, line, t, 1, "landmark id");
+    errno = 0;
+    char* end = nullptr;
+    const long id = std::strtol(t[0].c_str(), &end, 10);
+    if (end == t[0].c_str() || *end != '\0' || errno == ERANGE || id < -1 ||
+        id > std::numeric_limits<int>::max())
+      throw Error::AtLine(path, line, "'" + t[0] + "' is not a landmark id (integer >= -1)");
+    association.push_back(static_cast<int>(id));
+  });
+  if (association.size() != num_sightings)
+    throw Error::InFile(path, std::to_string(association.size()) + " ids for " +
+                                  std::to_string(num_sightings) + " sightings");
+  return association;
+}
+
 }  // namespace oslam

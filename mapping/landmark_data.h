@@ -116,4 +116,10 @@ std::vector<GpsFix> ReadGps(const std::string& path);
 // where unknown.
 std::vector<int> GivenAssociation(const LandmarkDataset& data);
 
+// An association file: one integer per line, the landmark id of sighting k
+// on the k-th data line (ids >= 0, -1 = left out). Throws oslam::Error
+// "FILE:LINE: ..." on a bad line, "FILE: ..." unless it has exactly
+// `num_sightings` lines.
+std::vector<int> ReadAssociation(const std::string& path, size_t num_sightings);
+
 }  // namespace oslam

@@ -1,6 +1,7 @@
 #include "mapping/landmark_slam.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 
@@ -50,6 +51,10 @@ LandmarkSlam::LandmarkSlam(const LandmarkSlamOptions& options)
 LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
                                        const std::vector<int>& association,
                                        const LandmarkSlamResult* warm_start) {
+  const auto start_time = std::chrono::steady_clock::now();
+  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
   std::string why;
   if (!options_.Validate(&why)) throw Error("landmark SLAM options: " + why);
   if (data.num_poses < 1) throw Error("landmark SLAM: no poses");
@@ -79,6 +84,7 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
     staged = StagedInitialisation(data, association);
     if (!staged.trajectory.empty()) warm_start = &staged;
   }
+  const double initialisation_time_s = seconds_since(start_time);
 
   // ---- variables ----
   FactorGraph graph;
@@ -156,6 +162,7 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
   result.summary = solved.summary;
   result.evidence = solved.evidence;
   result.num_sightings_used = used;
+  result.initialisation_time_s = initialisation_time_s;
   const Values& values = graph.values();
   result.trajectory.reserve(data.num_poses);
   for (int key : pose_keys) {
@@ -170,7 +177,10 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
     mapped.num_sightings = landmark.count;
     result.landmarks.push_back(mapped);
   }
-  if (!result.summary.IsUsable()) return result;
+  if (!result.summary.IsUsable()) {
+    result.total_time_s = seconds_since(start_time);
+    return result;
+  }
 
   if (options_.compute_landmark_covariances && !landmarks.empty()) {
     std::vector<std::vector<int>> groups;
@@ -193,6 +203,7 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
     if (groups.empty() || solver_.MarginalCovariances(groups, &blocks, &result.covariance_message))
       for (size_t i = 0; i < blocks.size(); ++i) result.pose_covariances[i + 1] = blocks[i];
   }
+  result.total_time_s = seconds_since(start_time);
   return result;
 }
 

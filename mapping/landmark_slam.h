@@ -66,6 +66,9 @@ struct LandmarkSlamResult {
   Evidence evidence;
   std::string covariance_message;  // why covariances are missing, if they are
   int num_sightings_used = 0;
+  // Wall time of Solve (s): staged initialisation, final solve, covariances.
+  double total_time_s = 0;
+  double initialisation_time_s = 0;  // the staged initialisation's part
 };
 
 class LandmarkSlam {

@@ -212,5 +212,15 @@ TEST(GpsTest, ReadsFixesAndRejectsBadLines) {
   EXPECT_EQ(ErrorOf([&] { ReadGps(bad); }), bad + ":2: x: 'x' is not a number");
 }
 
+TEST(AssociationFileTest, OneIdPerSightingOrAnError) {
+  EXPECT_EQ(ReadAssociation(kData + "raw_association.txt", 4), (std::vector<int>{0, 1, 0, -1}));
+  EXPECT_EQ(ErrorOf([&] { ReadAssociation(kData + "raw_association.txt", 5); }),
+            kData + "raw_association.txt: 4 ids for 5 sightings");
+  testing::TempDir dir;
+  const std::string bad = WriteFile(dir, "a.txt", "3\n-2\n");
+  EXPECT_EQ(ErrorOf([&] { ReadAssociation(bad, 2); }),
+            bad + ":2: '-2' is not a landmark id (integer >= -1)");
+}
+
 }  // namespace
 }  // namespace oslam

@@ -1,0 +1,89 @@
+// oslam map --landmarks end to end on the fixtures: O-Map and trajectory CSV
+// written and readable, association files, one-line errors and exit codes.
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "core/csv.h"
+#include "mapping/omap.h"
+#include "test_util.h"
+
+namespace oslam {
+namespace {
+
+const std::string kData = std::string(OSLAM_SOURCE_DIR) + "/tests/data/landmarks/";
+
+testing::CommandResult RunOslam(const std::string& arguments) {
+  return testing::RunShellCommand(std::string(OSLAM_BINARY) + " " + arguments);
+}
+
+TEST(LandmarkMapCommand, GtsamFileGivesTreesAndTrajectory) {
+  testing::TempDir dir;
+  const testing::CommandResult run =
+      RunOslam("map --landmarks " + kData + "gtsam_small.txt -o " + dir.Path("omap.json"));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("2 landmarks from 3 sightings, 4 poses"), std::string::npos) << run.out;
+  const OMap map = ReadOMap(dir.Path("omap.json"));
+  ASSERT_EQ(map.objects.size(), 2u);
+  EXPECT_EQ(map.objects[0].id, 2);
+  EXPECT_EQ(map.objects[1].id, 7);
+  EXPECT_EQ(map.objects[0].class_name, "tree");
+  EXPECT_EQ(map.objects[0].num_detections, 2);
+  EXPECT_EQ(map.objects[0].diameter_m, 0.0);  // not measured in this format
+  EXPECT_GT(map.objects[0].covariance(0, 0), 0.0);
+  ASSERT_EQ(map.trajectory.size(), 4u);
+  EXPECT_EQ(map.trajectory[0].x, 0.0);  // the gauge
+  const CsvTable trajectory = CsvTable::Read(dir.Path("trajectory.csv"));
+  EXPECT_EQ(trajectory.header(),
+            (std::vector<std::string>{"pose", "pose_id", "x_m", "y_m", "theta_rad"}));
+  ASSERT_EQ(trajectory.num_rows(), 4u);
+  EXPECT_EQ(trajectory.Integer(2, trajectory.ColumnIndex("pose_id")), 3);
+  EXPECT_DOUBLE_EQ(trajectory.Double(3, trajectory.ColumnIndex("x_m")), map.trajectory[3].x);
+}
+
+TEST(LandmarkMapCommand, RawFormatWithAnAssociationFile) {
+  testing::TempDir dir;
+  const std::string common = "map --landmarks " + kData + "raw_measurements.dat --format " +
+                             "victoria-raw --inputs " + kData + "raw_inputs.dat -o " +
+                             dir.Path("omap.json") + " --trajectory " + dir.Path("t.csv");
+  // No ids in the raw files: an error naming the file, exit code 1.
+  const testing::CommandResult no_ids = RunOslam(common);
+  EXPECT_EQ(no_ids.exit_code, 1);
+  EXPECT_EQ(no_ids.err.rfind("oslam map: error: " + kData +
+                                 "raw_measurements.dat: the sightings have no landmark ids",
+                             0),
+            0u)
+      << no_ids.err;
+  const testing::CommandResult run =
+      RunOslam(common + " --association " + kData + "raw_association.txt --quiet");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.out, "");
+  const OMap map = ReadOMap(dir.Path("omap.json"));
+  ASSERT_EQ(map.objects.size(), 2u);
+  // Landmark 0: seen twice, trunk 0.30 m and 0.40 m -> fused 0.35 m.
+  EXPECT_NEAR(map.objects[0].diameter_m, 0.35, 1e-6);
+  EXPECT_GT(map.objects[0].covariance(3, 3), 0.0);
+  const CsvTable trajectory = CsvTable::Read(dir.Path("t.csv"));
+  EXPECT_EQ(trajectory.header()[2], "time_s");
+  EXPECT_EQ(trajectory.num_rows(), 3u);
+}
+
+TEST(LandmarkMapCommand, BadInputAndUsage) {
+  testing::TempDir dir;
+  const testing::CommandResult bad =
+      RunOslam("map --landmarks " + kData + "gtsam_bad_field.txt -o " + dir.Path("o.json"));
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_EQ(bad.err,
+            "oslam map: error: " + kData + "gtsam_bad_field.txt:3: y: 'five' is not a number\n");
+  EXPECT_EQ(RunOslam("map --landmarks " + kData + "gtsam_small.txt").exit_code, 2);  // no -o
+  EXPECT_EQ(RunOslam("map --landmarks " + kData + "gtsam_small.txt --format csv -o x").exit_code,
+            2);
+  const testing::CommandResult help = RunOslam("map --landmarks x --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("--association"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace oslam
