@@ -72,10 +72,15 @@ class CameraModel {
   // The ray that images at `pixel`. Returns false for pixels no ray reaches.
   virtual bool BackProjectPixel(const Eigen::Vector2d& pixel, Ray* ray) const = 0;
 
+  // The projection in polar image coordinates, with d(radius, angle)/d(point).
+  // By default through ProjectToPixel; a model whose polar form is direct
+  // (the hyperbolic mirror: radius = T(r, z), angle = bearing) overrides it,
+  // as it is the inner loop of the bounding-slice factor.
+  virtual bool ProjectToPolar(const Eigen::Vector3d& point_robot, PolarPoint* polar,
+                              Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const;
+
   // ---- shared by every model ----
 
-  bool ProjectToPolar(const Eigen::Vector3d& point_robot, PolarPoint* polar,
-                      Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const;
   PolarPoint PixelToPolar(const Eigen::Vector2d& pixel) const;
   Eigen::Vector2d PolarToPixel(const PolarPoint& polar) const;
   // d(radius, angle)/d(pixel) at `pixel`.

@@ -100,7 +100,7 @@ bool HyperbolicCamera::ImageRadius(double range_m, double height_m, double* radi
   const double a = parameters_.mirror_a_m, b = parameters_.mirror_b_m;
   const double e = Eccentricity();
   const double w = height_m - parameters_.focus_height_m;
-  const double s = std::hypot(range_m, w);
+  const double s = std::sqrt(range_m * range_m + w * w);  // hypot: slow, and no overflow here
   // The ray from the focus hits the mirror only below elevation asin(a/e).
   if (!(a * s > e * w)) return false;
   const double k = parameters_.focal_px * b * b;
@@ -168,6 +168,26 @@ bool HyperbolicCamera::ProjectToPixel(const Eigen::Vector3d& point_robot, Eigen:
     const Eigen::RowVector3d d_angle =
         AngleSign() * Eigen::RowVector3d(-point_robot.y() / range_sq, point_robot.x() / range_sq, 0);
     *jacobian = radial * d_radius + radius * tangential * d_angle;
+  }
+  return true;
+}
+
+bool HyperbolicCamera::ProjectToPolar(const Eigen::Vector3d& point_robot, PolarPoint* polar,
+                                      Eigen::Matrix<double, 2, 3>* jacobian) const {
+  const double range_sq = point_robot.x() * point_robot.x() + point_robot.y() * point_robot.y();
+  const double range = std::sqrt(range_sq);
+  if (!(range > 0.0)) return false;  // on the mirror axis: no bearing
+  double radius = 0, d_radius_d_range = 0, d_radius_d_height = 0;
+  if (!ImageRadius(range, point_robot.z(), &radius, jacobian ? &d_radius_d_range : nullptr,
+                   jacobian ? &d_radius_d_height : nullptr)) {
+    return false;
+  }
+  polar->radius_px = radius;
+  polar->angle_rad = ImageAngleOfBearing(std::atan2(point_robot.y(), point_robot.x()));
+  if (jacobian) {
+    *jacobian << d_radius_d_range * point_robot.x() / range,
+        d_radius_d_range * point_robot.y() / range, d_radius_d_height,
+        -AngleSign() * point_robot.y() / range_sq, AngleSign() * point_robot.x() / range_sq, 0.0;
   }
   return true;
 }

@@ -51,6 +51,8 @@ class HyperbolicCamera final : public CameraModel {
 
   bool ProjectToPixel(const Eigen::Vector3d& point_robot, Eigen::Vector2d* pixel,
                       Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const override;
+  bool ProjectToPolar(const Eigen::Vector3d& point_robot, PolarPoint* polar,
+                      Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const override;
   bool BackProjectPixel(const Eigen::Vector2d& pixel, Ray* ray) const override;
 
   // T(r, z) and its partial derivatives. Returns false when the ray from the

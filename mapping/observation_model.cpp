@@ -9,7 +9,7 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
                   SliceJacobians* jacobians) {
   const Eigen::Vector3d base_robot = robot_pose_world.WorldToRobot(object.base_world);
   const Eigen::Vector3d top_robot = base_robot + Eigen::Vector3d(0, 0, object.height_m);
-  const double range = std::hypot(base_robot.x(), base_robot.y());
+  const double range = std::sqrt(base_robot.x() * base_robot.x() + base_robot.y() * base_robot.y());
   if (!(range > 0.0)) return false;
 
   PolarPoint base_polar, top_polar;
