@@ -1,6 +1,8 @@
 // oslam detect: colour-blob detections (bounding slices) for every frame of a
 // run folder.
+#include <algorithm>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -13,6 +15,7 @@
 #include "calib/camera_io.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/progress.h"
 #include "core/run_folder.h"
 #include "detect/blob_detector.h"
@@ -64,6 +67,8 @@ int RunDetectCommand(const std::vector<std::string>& args) {
   arguments.AddOption("sift-templates", "", "FILE.yaml",
                       "keep a detection of a class with templates only if SIFT verifies it");
   arguments.AddFlag("skip-bad-frames", "warn about unreadable frames and go on");
+  arguments.AddOption("threads", "", "N", "frames decoded and searched at once (0 = one per core)",
+                      "2");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
 
@@ -94,39 +99,75 @@ int RunDetectCommand(const std::vector<std::string>& args) {
     verifier.emplace(ReadSiftTemplates(arguments.Get("sift-templates"), classes));
   size_t rejected = 0;
 
+  // Frames are decoded and searched in parallel, a block at a time; the
+  // results are then taken in frame order, so the output, the warnings and
+  // the first error reported do not depend on the threads.
+  struct FrameResult {
+    cv::Mat frame;  // kept only for the SIFT check and debug images
+    std::vector<Detection> detections;
+    std::exception_ptr read_error, error;
+  };
+  if (arguments.GetInt("threads") < 0) throw UsageError("--threads must be >= 0");
+  const bool keep_frames = verifier.has_value() || arguments.Has("debug-images");
+  const int threads = ThreadCount(static_cast<int>(arguments.GetInt("threads")), frames.size());
+  const size_t block = 16 * static_cast<size_t>(threads);
   std::vector<Detection> all;
   size_t skipped = 0;
   Progress progress("detect", frames.size(), "frames", quiet);
-  for (size_t i = 0; i < frames.size(); ++i) {
-    cv::Mat frame;
-    try {
-      frame = frames.Read(i);
-    } catch (const Error& e) {
-      if (!arguments.Flag("skip-bad-frames")) throw;
-      std::cerr << "oslam detect: warning: skipping frame " << i << ": " << e.what() << "\n";
-      ++skipped;
-      continue;
+  for (size_t first = 0; first < frames.size(); first += block) {
+    const size_t last = std::min(frames.size(), first + block);
+    std::vector<FrameResult> results(last - first);
+    ParallelFor(first, last, threads, [&](size_t i) {
+      FrameResult& result = results[i - first];
+      cv::Mat frame;
+      try {
+        frame = frames.Read(i);
+      } catch (const Error&) {
+        result.read_error = std::current_exception();
+        return;
+      }
+      try {
+        if (frame.cols != camera->image_width() || frame.rows != camera->image_height())
+          throw Error::InFile(frames.Name(i), "image is " + std::to_string(frame.cols) + "x" +
+                                                  std::to_string(frame.rows) +
+                                                  " but camera.yaml says " +
+                                                  std::to_string(camera->image_width()) + "x" +
+                                                  std::to_string(camera->image_height()));
+        result.detections = detector.Detect(frame, static_cast<long>(i));
+        if (keep_frames) result.frame = frame;
+      } catch (...) {
+        result.error = std::current_exception();
+      }
+    });
+    for (size_t i = first; i < last; ++i) {
+      FrameResult& result = results[i - first];
+      if (result.read_error) {
+        if (!arguments.Flag("skip-bad-frames")) std::rethrow_exception(result.read_error);
+        try {
+          std::rethrow_exception(result.read_error);
+        } catch (const Error& e) {
+          std::cerr << "oslam detect: warning: skipping frame " << i << ": " << e.what() << "\n";
+        }
+        ++skipped;
+        continue;
+      }
+      if (result.error) std::rethrow_exception(result.error);
+      std::vector<Detection>& detections = result.detections;
+      if (verifier) {
+        const size_t before = detections.size();
+        detections = verifier->Filter(result.frame, *camera, detections);
+        rejected += before - detections.size();
+      }
+      if (arguments.Has("debug-images")) {
+        char name[32];
+        std::snprintf(name, sizeof(name), "%06zu.png", i);
+        SaveDebugImage(result.frame, detections, *camera, classes,
+                       (std::filesystem::path(arguments.Get("debug-images")) / name).string());
+      }
+      all.insert(all.end(), detections.begin(), detections.end());
+      result = FrameResult();
+      progress.Update(i + 1);
     }
-    if (frame.cols != camera->image_width() || frame.rows != camera->image_height())
-      throw Error::InFile(frames.Name(i), "image is " + std::to_string(frame.cols) + "x" +
-                                              std::to_string(frame.rows) +
-                                              " but camera.yaml says " +
-                                              std::to_string(camera->image_width()) + "x" +
-                                              std::to_string(camera->image_height()));
-    std::vector<Detection> detections = detector.Detect(frame, static_cast<long>(i));
-    if (verifier) {
-      const size_t before = detections.size();
-      detections = verifier->Filter(frame, *camera, detections);
-      rejected += before - detections.size();
-    }
-    if (arguments.Has("debug-images")) {
-      char name[32];
-      std::snprintf(name, sizeof(name), "%06zu.png", i);
-      SaveDebugImage(frame, detections, *camera, classes,
-                     (std::filesystem::path(arguments.Get("debug-images")) / name).string());
-    }
-    all.insert(all.end(), detections.begin(), detections.end());
-    progress.Update(i + 1);
   }
   progress.Done(std::to_string(all.size()) + " detections" +
                 (verifier ? ", " + std::to_string(rejected) + " rejected by SIFT" : "") +

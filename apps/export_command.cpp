@@ -28,6 +28,8 @@ int RunExportCommand(const std::vector<std::string>& args) {
   arguments.AddFlag("ascii-ply", "write ASCII PLY instead of binary");
   arguments.AddFlag("overlays", "also draw the map on the run's frames (overlays/NNNNNN.png)");
   arguments.AddOption("frames", "", "LIST", "overlay only these frames, e.g. 0,10,20-30");
+  arguments.AddOption("threads", "", "N", "overlays drawn and written at once (0 = one per core)",
+                      "2");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("output")) throw UsageError("missing -o OUT_DIR");
@@ -45,6 +47,8 @@ int RunExportCommand(const std::vector<std::string>& args) {
   std::string why;
   if (!options.Validate(&why) || !figures.Validate(&why)) throw UsageError(why);
   const bool quiet = arguments.Flag("quiet");
+  const long threads = arguments.GetInt("threads");
+  if (threads < 0) throw UsageError("--threads must be >= 0");
 
   ExportScene scene;
   scene.map = ReadOMap(arguments.Get("OMAP"));
@@ -57,7 +61,9 @@ int RunExportCommand(const std::vector<std::string>& args) {
 
   WriteModels(scene, options, out, arguments.Flag("ascii-ply"), quiet);
   WriteFigures(scene, figures, out, quiet);
-  if (overlays) WriteOverlays(scene, *overlays, options.min_existence, out / "overlays", quiet);
+  if (overlays)
+    WriteOverlays(scene, *overlays, options.min_existence, out / "overlays", quiet,
+                  static_cast<int>(threads));
   if (!quiet) std::printf("wrote %s\n", out.string().c_str());
   return 0;
 }

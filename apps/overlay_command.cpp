@@ -20,6 +20,8 @@ int RunOverlayCommand(const std::vector<std::string>& args) {
   arguments.AddOption("frames", "", "LIST", "only these frames, e.g. 0,10,20-30 (default: all)");
   arguments.AddOption("min-existence", "", "P", "leave out objects with existence probability < P",
                       "0.1");
+  arguments.AddOption("threads", "", "N", "overlays drawn and written at once (0 = one per core)",
+                      "2");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("output")) throw UsageError("missing -o OUT_DIR");
@@ -28,6 +30,8 @@ int RunOverlayCommand(const std::vector<std::string>& args) {
   std::string why;
   if (!options.Validate(&why)) throw UsageError(why);
   const bool quiet = arguments.Flag("quiet");
+  const long threads = arguments.GetInt("threads");
+  if (threads < 0) throw UsageError("--threads must be >= 0");
 
   ExportScene scene;
   scene.map = ReadOMap(arguments.Get("OMAP"));
@@ -35,7 +39,7 @@ int RunOverlayCommand(const std::vector<std::string>& args) {
   const OverlayInput input =
       PrepareOverlays(scene, arguments.Get("RUN_DIR"), arguments.Get("frames"));
   const std::string out = arguments.Get("output");
-  WriteOverlays(scene, input, options.min_existence, out, quiet);
+  WriteOverlays(scene, input, options.min_existence, out, quiet, static_cast<int>(threads));
   if (!quiet) std::printf("wrote %zu overlays to %s\n", input.chosen.size(), out.c_str());
   return 0;
 }

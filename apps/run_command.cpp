@@ -107,9 +107,8 @@ int RunRunCommand(const std::vector<std::string>& args) {
   if (arguments.Has("config")) config.LoadYaml(arguments.Get("config"));
   for (const std::string& assignment : arguments.GetAll("set")) config.Override(assignment);
   if (arguments.Has("seed")) config.Override("slam.seed=" + arguments.Get("seed"));
+  config.Check();
   const std::string method = config.Get("slam", "method");
-  if (method != "oslam" && method != "nn")
-    throw UsageError("slam.method must be oslam or nn, not '" + method + "'");
 
   const std::string run_dir = arguments.Get("VIDEO_DIR");
   const std::string out_dir = arguments.Get("output");
@@ -121,6 +120,10 @@ int RunRunCommand(const std::vector<std::string>& args) {
   WriteTextFileAtomically((fs::path(out_dir) / "config.yaml").string(), config.ToYaml());
   if (verbose) std::fputs(config.ToYaml().c_str(), stdout);
 
+  // The export stage's overlays reuse the frames the detect stage decoded
+  // (1 GiB holds about 1100 frames of 640x480; beyond it frames are decoded
+  // again).
+  SetFrameCacheLimit(size_t{1} << 30);
   const std::string detections = (fs::path(out_dir) / "detections.csv").string();
   const std::string omap = (fs::path(out_dir) / "omap.json").string();
   std::vector<StageTime> times;
@@ -184,7 +187,10 @@ int RunConfigCommand(const std::vector<std::string>& args) {
   if (arguments.Flag("print-defaults") == arguments.Has("check"))
     throw UsageError("give exactly one of --print-defaults and --check");
   RunConfig config;
-  if (arguments.Has("check")) config.LoadYaml(arguments.Get("check"));
+  if (arguments.Has("check")) {
+    config.LoadYaml(arguments.Get("check"));
+    config.Check();
+  }
   std::fputs(config.ToYaml().c_str(), stdout);
   return 0;
 }

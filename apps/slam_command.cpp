@@ -13,6 +13,7 @@
 
 #include "apps/arguments.h"
 #include "apps/commands.h"
+#include "apps/slam_options.h"
 #include "calib/camera_io.h"
 #include "core/angles.h"
 #include "core/error.h"
@@ -34,26 +35,7 @@ void AddOptions(Arguments* a) {
   a->AddPositional("RUN_DIR", "run folder (camera.yaml, classes.yaml, odometry.csv)");
   a->AddOption("output", "-o", "OMAP.json", "where to write the O-Map (atomically)");
   a->AddOption("detections", "", "FILE", "detections CSV (default RUN_DIR/detections.csv)");
-  a->AddOption("seed", "", "N", "seed of the sampler", "1");
-  a->AddOption("samples", "", "N", "MC3 iterations including burn-in (spec §13 #21)", "667");
-  a->AddOption("burn-in", "", "N", "iterations discarded", "70");
-  a->AddOption("hill-climb", "", "N", "hill-climbing steps", "100");
-  a->AddOption("chains", "", "N", "MC3 chains (1 = Metropolis-Hastings)", "3");
-  a->AddOption("delta-t", "", "DT", "temperature step between chains", "3.33");
-  a->AddOption("baseline", "", "nn", "instead of O-SLAM: gated nearest-neighbour association");
-  a->AddOption("min-track-length", "", "N", "drop shorter tracks (Sec. 6.3: 3)", "3");
-  a->AddOption("max-gap", "", "N",
-               "join tracks across up to N missed frames (occlusions; 0 = thesis)", "2");
-  a->AddFlag("no-identity-merge",
-             "keep one map object per sample identity (thesis Algorithm 3 as printed)");
-  a->AddOption("identity-distance", "", "M",
-               "identities closer than this that rarely co-occur become one object", "0.5");
-  a->AddOption("proposal-iterations", "", "N", "solver iterations per proposed state", "1");
-  a->AddOption("mismatch-penalty", "", "X", "class-mismatch factor on e_j (inf = never)", "3");
-  a->AddOption("location-std-xy", "", "M", "class location prior std, x and y", "10");
-  a->AddOption("location-std-z", "", "M", "class location prior std, z", "2");
-  a->AddFlag("known-classes", "assume perfect classes: no switch moves, P_merge = P_split = 0.5");
-  a->AddFlag("sequential", "step the chains one after another (same result as threads)");
+  AddSlamOptions(a);
   a->AddFlag("quiet", "print nothing but errors");
 }
 
@@ -66,7 +48,7 @@ struct Input {
   std::vector<Pose2> odometry;
 };
 
-Input Load(const Arguments& arguments, TrackOptions track_options) {
+Input Load(const Arguments& arguments, const SlamSettings& settings) {
   const std::string run_dir = arguments.Get("RUN_DIR");
   const RunFolderPaths paths = RunFolderPaths::Of(run_dir);
   Input input;
@@ -79,9 +61,8 @@ Input Load(const Arguments& arguments, TrackOptions track_options) {
     prior.name = c.name;
     prior.size_mean_m = {c.diameter_mean_m, c.height_mean_m};
     prior.size_std_m = {c.diameter_std_m, c.height_std_m};
-    prior.location_std_m = {arguments.GetDouble("location-std-xy"),
-                            arguments.GetDouble("location-std-xy"),
-                            arguments.GetDouble("location-std-z")};
+    prior.location_std_m = {settings.location_std_xy_m, settings.location_std_xy_m,
+                            settings.location_std_z_m};
     input.data.classes.push_back(prior);
     input.class_names.push_back(c.name);
   }
@@ -99,7 +80,7 @@ Input Load(const Arguments& arguments, TrackOptions track_options) {
                           "frame " + std::to_string(d.frame) + " is beyond the odometry's frames");
     if (d.slice.u_r_px > 1.0) input.data.detections.push_back({d.frame, d.class_index, d.slice});
   }
-  input.tracks = BuildTracks(input.data.detections, track_options);
+  input.tracks = BuildTracks(input.data.detections, settings.tracks);
   input.data.tracks = input.tracks.tracks;
   input.data.camera = input.camera.get();
   return input;
@@ -150,37 +131,14 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   if (!arguments.Has("output")) throw UsageError("give the output file with -o OMAP.json");
   if (arguments.Has("baseline") && arguments.Get("baseline") != "nn")
     throw UsageError("--baseline takes 'nn' (nearest neighbour)");
-  if (arguments.GetInt("seed") < 0) throw UsageError("--seed must be >= 0");
-  const bool quiet = arguments.Flag("quiet"), known = arguments.Flag("known-classes");
+  const SlamSettings settings = SlamSettingsFrom(arguments);
+  const bool quiet = arguments.Flag("quiet"), known = settings.known_classes;
+  const TrackOptions& track_options = settings.tracks;
+  const FusionOptions& fusion_options = settings.fusion;
+  const SlamTargetOptions& target_options = settings.target;
+  const SamplerOptions& sampler_options = settings.sampler;
 
-  TrackOptions track_options;
-  track_options.min_length = static_cast<int>(arguments.GetInt("min-track-length"));
-  track_options.max_gap_frames = static_cast<int>(arguments.GetInt("max-gap"));
-  FusionOptions fusion_options;
-  fusion_options.merge_identities = !arguments.Flag("no-identity-merge");
-  fusion_options.identity_merge_distance_m = arguments.GetDouble("identity-distance");
-  SlamTargetOptions target_options;
-  target_options.proposal_iterations = static_cast<int>(arguments.GetInt("proposal-iterations"));
-  SamplerOptions sampler_options;
-  sampler_options.seed = static_cast<unsigned long>(arguments.GetInt("seed"));
-  sampler_options.num_iterations = static_cast<int>(arguments.GetInt("samples"));
-  sampler_options.burn_in = static_cast<int>(arguments.GetInt("burn-in"));
-  sampler_options.hill_climb_steps = static_cast<int>(arguments.GetInt("hill-climb"));
-  sampler_options.num_chains = static_cast<int>(arguments.GetInt("chains"));
-  sampler_options.delta_temperature = arguments.GetDouble("delta-t");
-  sampler_options.parallel_chains = !arguments.Flag("sequential");
-  sampler_options.moves.class_mismatch_penalty = arguments.GetDouble("mismatch-penalty");
-  if (known) {
-    sampler_options.sampling_moves = {0.5, 0.5, 0.0};
-    sampler_options.moves.class_mismatch_penalty = std::numeric_limits<double>::infinity();
-  }
-  std::string why;
-  if (!track_options.Validate(&why) || !target_options.Validate(&why) ||
-      !fusion_options.Validate(&why) ||
-      !sampler_options.Validate(&why))
-    throw UsageError(why);
-
-  const Input input = Load(arguments, track_options);
+  const Input input = Load(arguments, settings);
   if (input.tracks.tracks.empty()) throw Error("no tracks: no detections survived pre-association");
   std::vector<int> track_class, track_size;
   for (const Track& t : input.tracks.tracks) {
@@ -190,8 +148,9 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   const int num_classes = static_cast<int>(input.class_names.size());
   const ClassConfusionModel model =
       (input.confusion && !known)
-          ? ClassConfusionModel(*input.confusion, 1e-3, track_class, track_size)
-          : ClassConfusionModel::Identity(num_classes, 1e-3, track_class, track_size);
+          ? ClassConfusionModel(*input.confusion, settings.confusion_floor, track_class, track_size)
+          : ClassConfusionModel::Identity(num_classes, settings.confusion_floor, track_class,
+                                          track_size);
   const TrackSummary& ts = input.tracks.summary;
   if (!quiet)
     std::printf(
@@ -209,9 +168,11 @@ int RunSlamCommand(const std::vector<std::string>& args) {
     SlamEvaluator evaluator(input.data, model, target_options);
     const EvaluationPtr separate = evaluator.Refine(start, nullptr);
     const EvaluationPtr solved =
-        evaluator.Refine(NearestNeighbourAssociation(*separate, {}), separate.get());
+        evaluator.Refine(NearestNeighbourAssociation(*separate, settings.baseline), separate.get());
     result.samples = {solved};
-    source.association = "nearest neighbour (gated, 0.5 m)";
+    char gate[64];
+    std::snprintf(gate, sizeof(gate), "nearest neighbour (gated, %g m)", settings.baseline.gate_m);
+    source.association = gate;
   } else {
     Progress progress("o-slam", sampler_options.hill_climb_steps + sampler_options.num_iterations,
                       "steps", quiet);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <sstream>
 
 #include <opencv2/core.hpp>
@@ -227,6 +229,31 @@ bool IsImageFile(const fs::path& path) {
 
 }  // namespace
 
+namespace {
+
+struct FrameCache {
+  std::mutex mutex;
+  size_t limit_bytes = 0, used_bytes = 0;
+  std::map<std::string, cv::Mat> frames;
+};
+
+FrameCache& TheFrameCache() {
+  static FrameCache cache;
+  return cache;
+}
+
+}  // namespace
+
+void SetFrameCacheLimit(size_t bytes) {
+  FrameCache& cache = TheFrameCache();
+  const std::lock_guard<std::mutex> lock(cache.mutex);
+  cache.limit_bytes = bytes;
+  if (cache.used_bytes > bytes) {
+    cache.frames.clear();
+    cache.used_bytes = 0;
+  }
+}
+
 FrameSource::FrameSource(const std::string& run_dir) {
   if (!fs::is_directory(run_dir)) throw Error::InFile(run_dir, "run folder not found");
   const fs::path frames_dir = fs::path(run_dir) / "frames";
@@ -261,8 +288,19 @@ cv::Mat FrameSource::Read(size_t index) const {
       throw Error::InFile(video_path_, "cannot decode frame " + std::to_string(index));
     return frame;
   }
-  cv::Mat image = cv::imread(image_paths_[index], cv::IMREAD_COLOR);
-  if (image.empty()) throw Error::InFile(image_paths_[index], "cannot read image (corrupt or not an image)");
+  const std::string& path = image_paths_[index];
+  FrameCache& cache = TheFrameCache();
+  {
+    const std::lock_guard<std::mutex> lock(cache.mutex);
+    const auto it = cache.frames.find(path);
+    if (it != cache.frames.end()) return it->second;
+  }
+  cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
+  if (image.empty()) throw Error::InFile(path, "cannot read image (corrupt or not an image)");
+  const size_t bytes = image.total() * image.elemSize();
+  const std::lock_guard<std::mutex> lock(cache.mutex);
+  if (cache.used_bytes + bytes <= cache.limit_bytes && cache.frames.emplace(path, image).second)
+    cache.used_bytes += bytes;
   return image;
 }
 

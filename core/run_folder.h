@@ -70,6 +70,13 @@ void WriteOdometryPoses(const std::vector<Pose2>& poses, const std::string& path
 
 // ---- frames ----
 
+// Decoded image frames may be kept in memory, process-wide, up to `bytes`
+// (0, the default: none kept; lowering the limit drops the kept frames).
+// `oslam run` sets it so the export stage's overlays reuse the frames the
+// detect stage decoded. Frames are kept by file path for the life of the
+// process: callers must not modify a frame Read returns (clone it first).
+void SetFrameCacheLimit(size_t bytes);
+
 // Frames of a run: the images in RUN/frames/ sorted by name (png, jpg, jpeg,
 // bmp, tif, tiff), or else a single video file RUN/video.* read by OpenCV.
 class FrameSource {
@@ -77,6 +84,7 @@ class FrameSource {
   explicit FrameSource(const std::string& run_dir);
   size_t size() const { return count_; }
   // Colour (BGR 8-bit) frame i; throws naming the file when it cannot be read.
+  // Safe to call from several threads at once.
   cv::Mat Read(size_t index) const;
   // File name of frame i (the video file for videos).
   std::string Name(size_t index) const;

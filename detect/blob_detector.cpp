@@ -154,8 +154,7 @@ std::vector<Detection> ReadDetections(const std::string& path,
   return detections;
 }
 
-void DrawSlice(cv::Mat* image, const CameraModel& camera, const BoundingSlice& slice,
-               const cv::Scalar& colour, int thickness) {
+std::vector<cv::Point> SliceOutline(const CameraModel& camera, const BoundingSlice& slice) {
   const int steps = std::max(2, static_cast<int>(std::ceil(slice.s_phi_rad / 0.02)));
   const double begin = slice.u_phi_rad - 0.5 * slice.s_phi_rad;
   std::vector<cv::Point> outline;
@@ -166,7 +165,12 @@ void DrawSlice(cv::Mat* image, const CameraModel& camera, const BoundingSlice& s
   for (int i = 0; i <= steps; ++i) add(slice.u_r_px, begin + slice.s_phi_rad * i / steps);
   for (int i = steps; i >= 0; --i)
     add(slice.u_r_px + slice.s_r_px, begin + slice.s_phi_rad * i / steps);
-  cv::polylines(*image, outline, true, colour, thickness, cv::LINE_AA);
+  return outline;
+}
+
+void DrawSlice(cv::Mat* image, const CameraModel& camera, const BoundingSlice& slice,
+               const cv::Scalar& colour, int thickness) {
+  cv::polylines(*image, SliceOutline(camera, slice), true, colour, thickness, cv::LINE_AA);
 }
 
 }  // namespace oslam

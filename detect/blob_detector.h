@@ -70,6 +70,10 @@ void WriteDetections(const std::vector<Detection>& detections, const std::string
 std::vector<Detection> ReadDetections(const std::string& path,
                                       const std::vector<ObjectClass>& classes);
 
+// The outline of a bounding slice (annular sector) in pixels: inner arc,
+// then outer arc backwards; what DrawSlice draws.
+std::vector<cv::Point> SliceOutline(const CameraModel& camera, const BoundingSlice& slice);
+
 // Draws a bounding slice (annular sector outline) on an image.
 void DrawSlice(cv::Mat* image, const CameraModel& camera, const BoundingSlice& slice,
                const cv::Scalar& colour, int thickness = 1);

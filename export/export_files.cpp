@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <mutex>
 #include <sstream>
 
 #include "calib/camera_io.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/progress.h"
 #include "export/gltf_writer.h"
 #include "export/overlay.h"
@@ -109,18 +111,23 @@ OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_di
 }
 
 void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double min_existence,
-                   const fs::path& overlays_dir, bool quiet) {
+                   const fs::path& overlays_dir, bool quiet, int threads) {
   CreateOutputFolder(overlays_dir);
   Progress progress("overlays", input.chosen.size(), "frames", quiet);
-  for (size_t i = 0; i < input.chosen.size(); ++i) {
+  std::mutex progress_mutex;
+  size_t done = 0;
+  // Every frame is independent: read (or taken from the frame cache), drawn
+  // and written by whichever thread takes it.
+  ParallelFor(0, input.chosen.size(), threads, [&](size_t i) {
     const long frame = input.chosen[i];
     char name[32];
     std::snprintf(name, sizeof(name), "%06ld.png", frame);
     const cv::Mat image = DrawOverlay(input.frames->Read(frame), frame, *input.camera, scene,
                                       input.detections, min_existence);
     WritePng(image, (overlays_dir / name).string());
-    progress.Update(i + 1);
-  }
+    const std::lock_guard<std::mutex> lock(progress_mutex);
+    progress.Update(++done);
+  });
   progress.Done(std::to_string(input.chosen.size()) + " overlays" +
                 (input.detections.empty() ? " (no detections.csv: map only)" : ""));
 }

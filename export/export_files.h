@@ -51,8 +51,10 @@ struct OverlayInput {
 OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_dir,
                              const std::string& frame_list);
 
-// One PNG per chosen frame: `overlays_dir`/NNNNNN.png (folder created).
+// One PNG per chosen frame: `overlays_dir`/NNNNNN.png (folder created),
+// `threads` frames at a time (0 = one per core); the files do not depend on
+// it. On an error the files of the frames before the failing one are written.
 void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double min_existence,
-                   const std::filesystem::path& overlays_dir, bool quiet);
+                   const std::filesystem::path& overlays_dir, bool quiet, int threads = 2);
 
 }  // namespace oslam

@@ -41,16 +41,63 @@ void BlendDisc(cv::Mat* image, cv::Point centre, int radius, const cv::Scalar& c
   });
 }
 
+namespace {
+
+constexpr int kLabelThickness = 3;  // the halo
+
+// DrawLabel's origin: moved inside the image, since a label cut off at the
+// border is useless.
+cv::Point LabelOrigin(cv::Size image_size, const std::string& text, cv::Point origin, double scale,
+                      cv::Size* text_size, int* baseline) {
+  *text_size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, kLabelThickness, baseline);
+  origin.x = std::max(2, std::min(origin.x, image_size.width - 2 - text_size->width));
+  origin.y = std::max(text_size->height + 2, std::min(origin.y, image_size.height - 2 - *baseline));
+  return origin;
+}
+
+void PutLabel(cv::Mat* image, const std::string& text, cv::Point origin, const cv::Scalar& colour,
+              double scale) {
+  cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255),
+              kLabelThickness, cv::LINE_AA);
+  cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv::LINE_AA);
+}
+
+}  // namespace
+
 void DrawLabel(cv::Mat* image, const std::string& text, cv::Point origin, const cv::Scalar& colour,
                double scale) {
-  // Shifted inside the image: a label cut off at the border is useless.
+  cv::Size size;
   int baseline = 0;
-  const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 3, &baseline);
-  origin.x = std::max(2, std::min(origin.x, image->cols - 2 - size.width));
-  origin.y = std::max(size.height + 2, std::min(origin.y, image->rows - 2 - baseline));
-  cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), 3,
-              cv::LINE_AA);
-  cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv::LINE_AA);
+  origin = LabelOrigin(image->size(), text, origin, scale, &size, &baseline);
+  PutLabel(image, text, origin, colour, scale);
+}
+
+cv::Rect LabelRegion(cv::Size image_size, const std::string& text, cv::Point origin, double scale) {
+  cv::Size size;
+  int baseline = 0;
+  origin = LabelOrigin(image_size, text, origin, scale, &size, &baseline);
+  // Hershey strokes, the halo and anti-aliasing reach a few pixels beyond
+  // getTextSize's box: a wide margin costs little.
+  const int margin = 8 + kLabelThickness;
+  const cv::Rect box(origin.x - margin, origin.y - size.height - margin, size.width + 2 * margin,
+                     size.height + baseline + 2 * margin);
+  return box & cv::Rect(cv::Point(0, 0), image_size);
+}
+
+void DrawLabelInRegion(cv::Mat* region, cv::Point offset, cv::Size image_size,
+                       const std::string& text, cv::Point origin, const cv::Scalar& colour,
+                       double scale) {
+  cv::Size size;
+  int baseline = 0;
+  origin = LabelOrigin(image_size, text, origin, scale, &size, &baseline);
+  PutLabel(region, text, origin - offset, colour, scale);
+}
+
+cv::Rect PolylineRegion(const std::vector<cv::Point>& points, int margin, cv::Size image_size) {
+  if (points.empty()) return {};
+  cv::Rect box = cv::boundingRect(points);
+  box = cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin);
+  return box & cv::Rect(cv::Point(0, 0), image_size);
 }
 
 void DrawDotted(cv::Mat* image, const std::vector<cv::Point2d>& points, const cv::Scalar& colour,

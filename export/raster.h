@@ -33,6 +33,20 @@ void BlendDisc(cv::Mat* image, cv::Point centre, int radius, const cv::Scalar& c
 // moved inside the image when it would cross the border.
 void DrawLabel(cv::Mat* image, const std::string& text, cv::Point origin, const cv::Scalar& colour,
                double scale = 0.4);
+// The pixels DrawLabel may touch on an image of `image_size` (halo included),
+// clipped to the image.
+cv::Rect LabelRegion(cv::Size image_size, const std::string& text, cv::Point origin,
+                     double scale = 0.4);
+// DrawLabel on `region`, a part of a larger image starting at `offset`:
+// exactly what DrawLabel on that image would draw there, provided `region`
+// contains LabelRegion of the larger image.
+void DrawLabelInRegion(cv::Mat* region, cv::Point offset, cv::Size image_size,
+                       const std::string& text, cv::Point origin, const cv::Scalar& colour,
+                       double scale = 0.4);
+
+// Polyline bounds widened by `margin` pixels (thickness, anti-aliasing),
+// clipped to an image of `image_size`.
+cv::Rect PolylineRegion(const std::vector<cv::Point>& points, int margin, cv::Size image_size);
 
 // Dotted polyline (the thesis draws the inferred trajectory black dotted).
 void DrawDotted(cv::Mat* image, const std::vector<cv::Point2d>& points, const cv::Scalar& colour,
