@@ -38,6 +38,11 @@ bool LandmarkSlamOptions::Validate(std::string* why) const {
     if (why) *why = "the diameter noise must be > 0 and finite";
     return false;
   }
+  if (!(landmark_prior_std_m >= 0) || !std::isfinite(landmark_prior_std_m) ||
+      !landmark_prior_mean_m.allFinite()) {
+    if (why) *why = "the landmark prior std must be >= 0 and the mean finite";
+    return false;
+  }
   if (initialisation_window_poses < 0) {
     if (why) *why = "the initialisation window must be >= 0 poses";
     return false;
@@ -143,6 +148,12 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
                                                       options_.diameter_std_m);
   int used = 0;
   for (const LandmarkKeys& landmark : landmarks) {
+    if (options_.landmark_prior_std_m > 0)
+      graph.Emplace<PriorFactor>(
+          landmark.position, Eigen::VectorXd(options_.landmark_prior_mean_m),
+          Eigen::MatrixXd(Eigen::Matrix2d::Identity() * options_.landmark_prior_std_m *
+                          options_.landmark_prior_std_m),
+          "landmark prior");
     for (int k : by_landmark[landmark.id]) {
       const LandmarkSighting& s = data.sightings[k];
       graph.Emplace<RangeBearingFactor>(pose_keys[s.pose], landmark.position, s.range_m,

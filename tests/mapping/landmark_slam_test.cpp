@@ -208,6 +208,25 @@ TEST(LandmarkSlamTest, EvidencePrefersTheTrueAssociation) {
   EXPECT_LT(wrong_merge.evidence.log_evidence, right.evidence.log_evidence - 100.0);
   EXPECT_LT(wrong_split.evidence.log_evidence, right.evidence.log_evidence);
   EXPECT_EQ(wrong_merge.landmarks.size(), right.landmarks.size() - 1);
+
+  // A singleton landmark with a flat prior: one sighting moved off tree 20
+  // onto a landmark of its own. With the location prior (proper evidence)
+  // that must cost evidence; the prior barely moves the map.
+  LandmarkSlamOptions with_prior;
+  with_prior.landmark_prior_std_m = 100.0;
+  LandmarkSlam proper(with_prior);
+  std::vector<int> singleton = truth;
+  for (size_t k = 0; k < truth.size(); ++k)
+    if (truth[k] == 20) {
+      singleton[k] = 98;
+      break;
+    }
+  const LandmarkSlamResult right_proper = proper.Solve(world.data, truth);
+  const LandmarkSlamResult singleton_proper = proper.Solve(world.data, singleton);
+  ASSERT_TRUE(singleton_proper.evidence.valid);
+  EXPECT_LT(singleton_proper.evidence.log_evidence, right_proper.evidence.log_evidence);
+  for (size_t j = 0; j < right.landmarks.size(); ++j)
+    EXPECT_LT((right_proper.landmarks[j].position_m - right.landmarks[j].position_m).norm(), 1e-3);
   EXPECT_EQ(wrong_split.landmarks.size(), right.landmarks.size() + 1);
 }
 
