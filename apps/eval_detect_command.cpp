@@ -19,6 +19,9 @@ int RunEvalDetectCommand(const std::vector<std::string>& args) {
   arguments.AddOption("max-range", "", "M", "objects farther than this do not count for recall", "3");
   arguments.AddOption("min-visible", "", "F", "sightings less visible do not count for recall", "0.9");
   arguments.AddOption("json", "", "FILE", "also write the figures as JSON");
+  arguments.AddOption("write-confusion", "", "CLASSES.yaml",
+                      "store the measured class confusion P(detected | true) in this classes "
+                      "file (the one O-SLAM reads)");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   const std::string run_dir = arguments.Get("RUN_DIR");
@@ -35,6 +38,20 @@ int RunEvalDetectCommand(const std::vector<std::string>& args) {
       EvaluateDetections(ReadDetections(detections_path, classes), *truth, classes, options);
   if (!arguments.Flag("quiet")) std::fputs(evaluation.Table().c_str(), stdout);
   if (arguments.Has("json")) WriteTextFileAtomically(arguments.Get("json"), evaluation.Json());
+  if (arguments.Has("write-confusion")) {
+    const std::string path = arguments.Get("write-confusion");
+    const std::vector<ObjectClass> target = ReadClasses(path);
+    if (target.size() != classes.size())
+      throw Error::InFile(path, "has " + std::to_string(target.size()) + " classes, the run has " +
+                                    std::to_string(classes.size()));
+    for (size_t c = 0; c < classes.size(); ++c)
+      if (target[c].name != classes[c].name)
+        throw Error::InFile(path, "class " + std::to_string(c) + " is '" + target[c].name +
+                                      "', the run's is '" + classes[c].name + "'");
+    const ConfusionMatrix confusion = ConfusionFromCounts(evaluation.confusion_counts);
+    WriteClasses(target, path, confusion);
+    if (!arguments.Flag("quiet")) std::printf("wrote the measured confusion into %s\n", path.c_str());
+  }
   return 0;
 }
 

@@ -25,13 +25,26 @@ double Overlap(double begin_a, double length_a, double begin_b, double length_b)
 // The detection's slice and the true slice overlap, radially and angularly
 // (with `slack_px` of tolerance). The base points themselves may differ: a box
 // close to the robot shows its near edge well inside the base centre's radius.
-bool Matches(const Detection& d, const GroundTruthSighting& s, double slack_px) {
+// Angular (as arc length at the sighting's radius) and radial overlap, px.
+std::pair<double, double> SliceOverlap(const Detection& d, const GroundTruthSighting& s) {
   const double radius = std::max(1.0, s.u_r_px);
   const double angle_offset = WrapAngle(d.slice.u_phi_rad - s.u_phi_rad);
   const double angular = Overlap(-0.5 * s.s_phi_rad, s.s_phi_rad,
                                  angle_offset - 0.5 * d.slice.s_phi_rad, d.slice.s_phi_rad);
   const double radial = Overlap(s.u_r_px, s.s_r_px, d.slice.u_r_px, d.slice.s_r_px);
-  return angular * radius > -slack_px && radial > -slack_px;
+  return {angular * radius, radial};
+}
+
+bool Matches(const Detection& d, const GroundTruthSighting& s, double slack_px) {
+  const auto [angular, radial] = SliceOverlap(d, s);
+  return angular > -slack_px && radial > -slack_px;
+}
+
+// Overlap area of the two slices in the polar image (0 when they only touch
+// within the slack): which of several objects a confused detection is on.
+double OverlapArea(const Detection& d, const GroundTruthSighting& s) {
+  const auto [angular, radial] = SliceOverlap(d, s);
+  return std::max(0.0, angular) * std::max(0.0, radial);
 }
 
 double Median(std::vector<double> values) {
@@ -50,6 +63,7 @@ DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
   result.per_class.resize(classes.size());
   for (size_t c = 0; c < classes.size(); ++c) result.per_class[c].class_name = classes[c].name;
   result.total.class_name = "all";
+  result.confusion_counts.assign(classes.size(), std::vector<int>(classes.size(), 0));
 
   std::map<int, const GroundTruthObject*> objects;
   for (const GroundTruthObject& o : truth.objects) objects[o.id] = &o;
@@ -73,14 +87,23 @@ DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
     ++stats.detections;
     const auto& frame_sightings = sightings_by_frame[d.frame];
     bool same = false, other = false;
+    int other_class = -1;
+    double other_overlap = -1.0;
     for (const SightingInfo& info : frame_sightings) {
       if (info.class_index < 0 || !Matches(d, *info.sighting, options.slack_px)) continue;
       (info.class_index == d.class_index ? same : other) = true;
+      const double overlap = OverlapArea(d, *info.sighting);
+      if (info.class_index != d.class_index && overlap > other_overlap) {
+        other_class = info.class_index;
+        other_overlap = overlap;
+      }
     }
     if (same) {
       ++stats.true_positives;
+      ++result.confusion_counts[d.class_index][d.class_index];
     } else if (other) {
       ++stats.confused;
+      ++result.confusion_counts[other_class][d.class_index];
     } else {
       ++stats.spurious;
     }
@@ -124,6 +147,24 @@ DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
   result.median_s_phi_error_px = Median(s_phi);
   result.median_position_error_px = Median(position);
   return result;
+}
+
+std::vector<std::vector<double>> ConfusionFromCounts(const std::vector<std::vector<int>>& counts,
+                                                     double floor) {
+  const size_t n = counts.size();
+  std::vector<std::vector<double>> confusion(n, std::vector<double>(n, 0.0));
+  for (size_t c = 0; c < n; ++c) {
+    double total = 0;
+    for (int count : counts[c]) total += count;
+    double floored_total = 0;
+    for (size_t a = 0; a < n; ++a) {
+      const double p = total > 0 ? counts[c][a] / total : (a == c ? 1.0 : 0.0);
+      confusion[c][a] = std::max(p, floor);
+      floored_total += confusion[c][a];
+    }
+    for (double& p : confusion[c]) p /= floored_total;
+  }
+  return confusion;
 }
 
 std::string DetectionEvaluation::Table() const {

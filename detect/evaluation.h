@@ -41,6 +41,9 @@ struct DetectionEvaluation {
   double median_u_r_error_px = 0, median_u_phi_error_px = 0;
   double median_s_r_error_px = 0, median_s_phi_error_px = 0;
   double median_position_error_px = 0;  // |base point detected - true| in the image
+  // counts[c][a]: detections of class a on an object of class c (a detection
+  // on an object of its own class counts there even if others overlap it).
+  std::vector<std::vector<int>> confusion_counts;
   std::string Table() const;
   std::string Json() const;
 };
@@ -49,5 +52,12 @@ DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
                                        const GroundTruth& truth,
                                        const std::vector<ObjectClass>& classes,
                                        const DetectionEvaluationOptions& options = {});
+
+// P(detected a | true c) measured from confusion counts (spec §7.1, what
+// the thesis estimated on training data): rows normalised, entries floored at
+// `floor` and renormalised; a class with no detection gets the identity row.
+// matrix[c][a], like ColourConfusion.
+std::vector<std::vector<double>> ConfusionFromCounts(const std::vector<std::vector<int>>& counts,
+                                                     double floor = 1e-3);
 
 }  // namespace oslam

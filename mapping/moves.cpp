@@ -41,6 +41,23 @@ double LogOf(double p) {
   return p > 0 ? std::log(p) : kNegInf;
 }
 
+// log q(c | Psi) of the class a move draws: the data-driven proposal of
+// Algorithms 5-7 (prod P(a | c)) mixed with a uniform one. The data-driven
+// part alone almost never proposes a class the detector rarely reports (an
+// orange door seen as orange balls: (P(ball|door) / P(ball|ball))^n for n
+// detections), although the geometric evidence (the size prior) may favour
+// it strongly; the uniform part keeps such classes reachable.
+std::vector<double> LogClassProposal(const ClassConfusionModel& model,
+                                     const std::vector<int>& block, const MoveOptions& options) {
+  std::vector<double> log_q = model.ClassLogProposal(block);
+  const double mix = options.class_proposal_uniform;
+  if (mix <= 0) return log_q;
+  const double log_uniform = std::log(mix / static_cast<double>(log_q.size()));
+  const double log_data = std::log1p(-mix);
+  for (double& x : log_q) x = LogSumExp({log_data + x, log_uniform});
+  return log_q;
+}
+
 // log d~_j normalised (Algorithm 5 steps 2-3); false if all are zero.
 bool MergeFirstWeights(const StateEvaluation& s, const MoveOptions& options,
                        std::vector<double>* log_d) {
@@ -110,7 +127,7 @@ Proposal ProposeMerge(const StateEvaluation& s, const ClassConfusionModel& model
   p.old_class_a = s.state.classes[j1];
   p.old_class_b = s.state.classes[j2];
   const std::vector<int> merged = Union(p.part_a, p.part_b);
-  const int c = SampleLog(model.ClassLogProposal(merged), rng);
+  const int c = SampleLog(LogClassProposal(model, merged, options), rng);
   p.state = s.state;
   p.state.blocks[j1] = merged;
   p.state.classes[j1] = c;
@@ -151,8 +168,8 @@ Proposal ProposeSplit(const StateEvaluation& s, const ClassConfusionModel& model
   std::set_difference(block.begin(), block.end(), p.part_b.begin(), p.part_b.end(),
                       std::back_inserter(p.part_a));
   p.old_class_a = s.state.classes[j];
-  const int ca = SampleLog(model.ClassLogProposal(p.part_a), rng);
-  const int cb = SampleLog(model.ClassLogProposal(p.part_b), rng);
+  const int ca = SampleLog(LogClassProposal(model, p.part_a, options), rng);
+  const int cb = SampleLog(LogClassProposal(model, p.part_b, options), rng);
   p.state = s.state;
   p.state.blocks[j] = p.part_a;
   p.state.classes[j] = ca;
@@ -173,19 +190,20 @@ std::vector<double> SwitchWeights(const StateEvaluation& s, const ClassConfusion
 }
 
 Proposal ProposeSwitch(const StateEvaluation& s, const ClassConfusionModel& model,
-                       const MoveProbabilities& probabilities, Rng& rng) {
+                       const MoveOptions& options, const MoveProbabilities& probabilities,
+                       Rng& rng) {
   Proposal p;
   p.type = MoveType::kSwitch;
   std::vector<double> log_p = SwitchWeights(s, model);
   if (!NormaliseLog(&log_p)) return p;
   const int j = SampleLog(log_p, rng);
-  const int c = SampleLog(model.ClassLogProposal(s.state.blocks[j]), rng);
+  const int c = SampleLog(LogClassProposal(model, s.state.blocks[j], options), rng);
   if (c == s.state.classes[j]) return p;  // same state: accepted without a solve
   p.track = s.state.blocks[j].front();
   p.old_class_a = s.state.classes[j];
   p.state = s.state;
   p.state.classes[j] = c;
-  p.log_q_forward = LogSwitchProbability(s, j, c, model, probabilities);
+  p.log_q_forward = LogSwitchProbability(s, j, c, model, options, probabilities);
   p.self_transition = false;
   return p;
 }
@@ -214,6 +232,8 @@ bool MoveOptions::Validate(std::string* why) const {
   if (!(class_mismatch_penalty >= 1)) return fail("the class-mismatch penalty must be >= 1");
   if (!(merge_count_smoothing >= 0) || std::isinf(merge_count_smoothing))
     return fail("the merge count smoothing must be >= 0");
+  if (!(class_proposal_uniform >= 0) || !(class_proposal_uniform < 1))
+    return fail("the uniform share of the class proposal must be in [0, 1)");
   return true;
 }
 
@@ -229,7 +249,7 @@ double LogMergeProbability(const StateEvaluation& s, int a, int b, int merged_cl
       MergePartnerWeights(s, b, options, &log_eb) ? log_d[b] + log_eb[a] : kNegInf;
   const std::vector<int> merged = Union(s.state.blocks[a], s.state.blocks[b]);
   return LogOf(probabilities.merge) + LogSumExp({order_ab, order_ba}) +
-         model.ClassLogProposal(merged)[merged_class];
+         LogClassProposal(model, merged, options)[merged_class];
 }
 
 double LogSplitProbability(const StateEvaluation& s, int block, const std::vector<int>& part_first,
@@ -241,17 +261,17 @@ double LogSplitProbability(const StateEvaluation& s, int block, const std::vecto
   const size_t n = s.state.blocks[block].size();
   return LogOf(probabilities.split) + log_w[block] +
          LogPartitionProbability(n, part_second.size(), options.split_sampler) +
-         model.ClassLogProposal(part_first)[class_first] +
-         model.ClassLogProposal(part_second)[class_second];
+         LogClassProposal(model, part_first, options)[class_first] +
+         LogClassProposal(model, part_second, options)[class_second];
 }
 
 double LogSwitchProbability(const StateEvaluation& s, int block, int new_class,
-                            const ClassConfusionModel& model,
+                            const ClassConfusionModel& model, const MoveOptions& options,
                             const MoveProbabilities& probabilities) {
   std::vector<double> log_p = SwitchWeights(s, model);
   if (!NormaliseLog(&log_p)) return kNegInf;
   return LogOf(probabilities.switch_class) + log_p[block] +
-         model.ClassLogProposal(s.state.blocks[block])[new_class];
+         LogClassProposal(model, s.state.blocks[block], options)[new_class];
 }
 
 Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& model,
@@ -260,7 +280,7 @@ Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& 
   if (u < probabilities.merge) return ProposeMerge(current, model, options, probabilities, rng);
   if (u < probabilities.merge + probabilities.split)
     return ProposeSplit(current, model, options, probabilities, rng);
-  return ProposeSwitch(current, model, probabilities, rng);
+  return ProposeSwitch(current, model, options, probabilities, rng);
 }
 
 double LogReverseProbability(const Proposal& p, const StateEvaluation& proposed,
@@ -280,7 +300,7 @@ double LogReverseProbability(const Proposal& p, const StateEvaluation& proposed,
       return LogMergeProbability(proposed, s.BlockOf(p.part_a.front()), s.BlockOf(p.part_b.front()),
                                  p.old_class_a, model, options, probabilities);
     case MoveType::kSwitch:
-      return LogSwitchProbability(proposed, s.BlockOf(p.track), p.old_class_a, model,
+      return LogSwitchProbability(proposed, s.BlockOf(p.track), p.old_class_a, model, options,
                                   probabilities);
   }
   return kNegInf;

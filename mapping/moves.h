@@ -36,6 +36,10 @@ struct MoveOptions {
   double merge_count_smoothing = 0.1;      // epsilon_d added to every d_j (#16)
   bool merge_count_includes_self = false;  // d_j counts o_j itself (#41)
   SplitSampler split_sampler = SplitSampler::kUniform;
+  // Share of a uniform distribution in the class drawn by merge, split and
+  // switch, q(c) = (1 - u) prod P(a | c) / Z + u / |classes| (0 = thesis).
+  // Without it a class the detector seldom reports is never proposed.
+  double class_proposal_uniform = 0.1;
 
   bool Validate(std::string* why) const;
 };
@@ -72,7 +76,7 @@ double LogSplitProbability(const StateEvaluation& s, int block, const std::vecto
                            const ClassConfusionModel& model, const MoveOptions& options,
                            const MoveProbabilities& probabilities);
 double LogSwitchProbability(const StateEvaluation& s, int block, int new_class,
-                            const ClassConfusionModel& model,
+                            const ClassConfusionModel& model, const MoveOptions& options,
                             const MoveProbabilities& probabilities);
 
 }  // namespace oslam
