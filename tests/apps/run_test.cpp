@@ -163,14 +163,34 @@ TEST_F(RunCommand, CorruptFrameIsNamedUnlessSkipped) {
 
 TEST_F(RunCommand, UsageErrorsExitWithTwo) {
   for (const std::string& arguments : std::vector<std::string>{"run " + Run(), "run " + Run() + " -o x --set nosuch.key=1", "run " + Run() + " -o x --set slam.samples",
-        "run " + Run() + " -o x --set slam.method=magic", std::string("config")}) {
+        "run " + Run() + " -o x --set slam.method=magic",
+        "run " + Run() + " -o x --set slam.merge_sigma_m=-1",
+        "run " + Run() + " -o x --set slam.burn_in=700",
+        "run " + Run() + " -o x --set slam.pixel_noise_px=thirty", std::string("config")}) {
     const Result result = Oslam(arguments);
     EXPECT_EQ(result.exit_code, 2) << arguments << ": " << result.err;
     EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   }
   const Result defaults = Oslam("config --print-defaults");
   EXPECT_EQ(defaults.exit_code, 0);
-  EXPECT_NE(defaults.out.find("samples: 667"), std::string::npos) << defaults.out;
+  for (const char* line : {"samples: 667", "pixel_noise_px: 30", "spurious_t0_m2: 0.16",
+                           "spurious_tau_m2: 0.04", "track_gate_radius_px: 30",
+                           "motion_mult_fwd: 0.1", "merge_distance_m: 0.5"})
+    EXPECT_NE(defaults.out.find(line), std::string::npos) << line << " in " << defaults.out;
+  EXPECT_FALSE(fs::exists("x")) << "output written despite a bad configuration";
+
+  // The printed defaults are a valid configuration file; a bad value in a
+  // file is a one-line error naming the file and the key (exit code 1).
+  testing::TempDir dir;
+  std::ofstream(dir.Path("defaults.yaml")) << defaults.out;
+  const Result check = Oslam("config --check " + dir.Path("defaults.yaml"));
+  EXPECT_EQ(check.exit_code, 0) << check.err;
+  EXPECT_EQ(check.out, defaults.out);
+  std::ofstream(dir.Path("bad.yaml")) << "slam:\n  spurious_tau_m2: wide\n";
+  const Result bad = Oslam("config --check " + dir.Path("bad.yaml"));
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_NE(bad.err.find("bad.yaml: slam.spurious_tau_m2"), std::string::npos) << bad.err;
 }
 
 // Ctrl-C in the middle of writing frames leaves complete files only: no temp

@@ -1,0 +1,238 @@
+// The configuration of `oslam run`: the printed defaults read back to the
+// same configuration, they are the mapping code's defaults, every O-SLAM
+// parameter has a key, an override reaches the options struct the sampler
+// gets, and bad values are one-line errors naming the file or the key.
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <set>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "apps/arguments.h"
+#include "apps/run_config.h"
+#include "apps/slam_options.h"
+#include "core/error.h"
+#include "test_util.h"
+
+namespace oslam {
+namespace {
+
+// What `oslam slam` would run with, given the configuration's slam section.
+SlamSettings SettingsOf(const RunConfig& config) {
+  Arguments arguments("", "");
+  AddSlamOptions(&arguments);
+  EXPECT_TRUE(arguments.Parse(config.OptionsFor("slam")));
+  return SlamSettingsFrom(arguments);
+}
+
+std::string Message(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(RunConfig, PrintedDefaultsLoadBackToTheSameConfiguration) {
+  testing::TempDir dir;
+  const RunConfig defaults;
+  std::ofstream(dir.Path("defaults.yaml")) << defaults.ToYaml();
+  RunConfig loaded;
+  loaded.LoadYaml(dir.Path("defaults.yaml"));
+  EXPECT_NO_THROW(loaded.Check());
+  EXPECT_EQ(loaded.ToYaml(), defaults.ToYaml());
+  ASSERT_EQ(loaded.entries().size(), defaults.entries().size());
+  for (size_t i = 0; i < defaults.entries().size(); ++i)
+    EXPECT_EQ(loaded.entries()[i].value, defaults.entries()[i].value) << defaults.entries()[i].key;
+
+  // A changed value survives the round trip too, at full precision.
+  RunConfig changed;
+  changed.Override("slam.motion_add_heading_rad=0.0123456789012345");
+  changed.Override("slam.mismatch_penalty=inf");
+  std::ofstream(dir.Path("changed.yaml")) << changed.ToYaml();
+  RunConfig reloaded;
+  reloaded.LoadYaml(dir.Path("changed.yaml"));
+  EXPECT_EQ(reloaded.ToYaml(), changed.ToYaml());
+  EXPECT_EQ(SettingsOf(reloaded).target.slam.motion.additive_std[2], 0.0123456789012345);
+  EXPECT_TRUE(std::isinf(SettingsOf(reloaded).sampler.moves.class_mismatch_penalty));
+}
+
+TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
+  const SlamSettings s = SettingsOf(RunConfig());
+  const SamplerOptions sampler;
+  EXPECT_EQ(s.sampler.num_iterations, 667);
+  EXPECT_EQ(s.sampler.burn_in, 70);
+  EXPECT_EQ(s.sampler.hill_climb_steps, 100);
+  EXPECT_EQ(s.sampler.refine_every, 50);
+  EXPECT_EQ(s.sampler.num_chains, 3);
+  EXPECT_EQ(s.sampler.delta_temperature, 3.33);
+  EXPECT_EQ(s.sampler.hill_climb_moves.merge, sampler.hill_climb_moves.merge);
+  EXPECT_EQ(s.sampler.hill_climb_moves.split, sampler.hill_climb_moves.split);
+  EXPECT_EQ(s.sampler.sampling_moves.merge, 0.4);
+  EXPECT_EQ(s.sampler.sampling_moves.switch_class, 0.2);
+  EXPECT_EQ(s.sampler.moves.merge_distance_m, 0.5);
+  EXPECT_EQ(s.sampler.moves.merge_sigma_m, 0.5);
+  EXPECT_EQ(s.sampler.moves.class_mismatch_penalty, 3.0);
+  EXPECT_EQ(s.sampler.moves.merge_count_smoothing, 0.1);
+  EXPECT_FALSE(s.sampler.moves.merge_count_includes_self);
+  EXPECT_EQ(s.sampler.moves.split_sampler, SplitSampler::kUniform);
+  // Spec §9.8: E = 30 px, t0 = (0.4 m)^2, tau = (0.2 m)^2, eq. 6.1 gates.
+  EXPECT_EQ(s.target.slam.pixel_std_px, 30.0);
+  EXPECT_EQ(s.fusion.spurious_t0_m2, 0.16);
+  EXPECT_EQ(s.fusion.spurious_tau_m2, 0.04);
+  EXPECT_TRUE(s.fusion.spurious_model);
+  EXPECT_EQ(s.tracks.max_radius_change_px, 30.0);
+  EXPECT_NEAR(s.tracks.max_angle_change_rad, 20.0 * M_PI / 180.0, 1e-6);
+  EXPECT_EQ(s.tracks.max_relative_size_change, 0.2);
+  EXPECT_EQ(s.tracks.min_length, 3);
+  EXPECT_EQ(s.tracks.link_rule, TrackLinkRule::kNearest);
+  EXPECT_EQ(s.tracks.max_gap_frames, 2);  // oslam's occlusion bridging (docs/oslam.md 6b)
+  // Spec §13 #1: Q_add = diag(5 mm, 5 mm, 1 deg), Q_mult = diag(0.1, 0.01, 0.15), std devs.
+  const MotionNoiseOptions& q = s.target.slam.motion;
+  EXPECT_EQ(q.additive_std[0], 0.005);
+  EXPECT_EQ(q.additive_std[1], 0.005);
+  EXPECT_DOUBLE_EQ(q.additive_std[2], M_PI / 180.0);
+  EXPECT_EQ(q.multiplicative[0], 0.1);
+  EXPECT_EQ(q.multiplicative[1], 0.01);
+  EXPECT_EQ(q.multiplicative[2], 0.15);
+  EXPECT_FALSE(q.entries_are_variances || q.heading_scales_with_distance || q.world_frame);
+  EXPECT_EQ(s.target.proposal_iterations, 1);
+  EXPECT_FALSE(s.target.class_prior_per_object);
+  EXPECT_EQ(s.target.slam.solver.max_iterations, SolverOptions().max_iterations);
+  EXPECT_EQ(s.target.slam.solver.step_tolerance, SolverOptions().step_tolerance);
+  EXPECT_TRUE(s.fusion.merge_identities);
+  EXPECT_EQ(s.fusion.identity_merge_distance_m, 0.5);
+  EXPECT_EQ(s.fusion.identity_class_mismatch_penalty, 3.0);
+  EXPECT_EQ(s.fusion.identity_max_cooccurrence, 0.1);
+  EXPECT_EQ(s.baseline.gate_m, 0.5);
+  EXPECT_EQ(s.confusion_floor, 1e-3);
+  EXPECT_EQ(s.location_std_xy_m, 10.0);
+  EXPECT_EQ(s.location_std_z_m, 2.0);
+  EXPECT_FALSE(s.known_classes);
+}
+
+// Every parameter `oslam slam` takes has a configuration key, so nothing is
+// settable on the single command but not in `oslam run`.
+TEST(RunConfig, EveryOslamSlamParameterHasAKey) {
+  Arguments slam("", "");
+  AddSlamOptions(&slam);
+  std::set<std::string> options;
+  std::istringstream help(slam.Help());
+  for (std::string word; help >> word;)
+    if (word.rfind("--", 0) == 0 && word != "--help") options.insert(word);
+  // Not parameters: the baseline is slam.method, the threading changes no result.
+  options.erase("--baseline");
+  options.erase("--sequential");
+  const RunConfig config;
+  for (const std::string& option : options) {
+    bool found = false;
+    for (const ConfigEntry& e : config.entries())
+      found |= e.section == "slam" && e.option == option;
+    EXPECT_TRUE(found) << option << " has no slam.* key";
+  }
+  EXPECT_GE(options.size(), 40u);
+}
+
+TEST(RunConfig, AnOverrideReachesTheOptionsTheSamplerGets) {
+  struct Case {
+    std::string assignment;
+    std::function<bool(const SlamSettings&)> applied;
+  };
+  const std::vector<Case> cases = {
+      {"slam.pixel_noise_px=15",
+       [](const SlamSettings& s) { return s.target.slam.pixel_std_px == 15; }},
+      {"slam.motion_add_fwd_m=0.02",
+       [](const SlamSettings& s) { return s.target.slam.motion.additive_std[0] == 0.02; }},
+      {"slam.motion_mult_heading=0.3",
+       [](const SlamSettings& s) { return s.target.slam.motion.multiplicative[2] == 0.3; }},
+      {"slam.motion_noise_is_variance=1",
+       [](const SlamSettings& s) { return s.target.slam.motion.entries_are_variances; }},
+      {"slam.spurious_t0_m2=0.25",
+       [](const SlamSettings& s) { return s.fusion.spurious_t0_m2 == 0.25; }},
+      {"slam.spurious_tau_m2=0.01",
+       [](const SlamSettings& s) { return s.fusion.spurious_tau_m2 == 0.01; }},
+      {"slam.spurious_model=0", [](const SlamSettings& s) { return !s.fusion.spurious_model; }},
+      {"slam.identity_merge=0", [](const SlamSettings& s) { return !s.fusion.merge_identities; }},
+      {"slam.track_gate_radius_px=12",
+       [](const SlamSettings& s) { return s.tracks.max_radius_change_px == 12; }},
+      {"slam.track_gate_angle_rad=0.1",
+       [](const SlamSettings& s) { return s.tracks.max_angle_change_rad == 0.1; }},
+      {"slam.track_gate_size_change=0.3",
+       [](const SlamSettings& s) { return s.tracks.max_relative_size_change == 0.3; }},
+      {"slam.track_link_rule=refuse-ambiguous",
+       [](const SlamSettings& s) { return s.tracks.link_rule == TrackLinkRule::kRefuseAmbiguous; }},
+      {"slam.merge_sigma_m=0.8",
+       [](const SlamSettings& s) { return s.sampler.moves.merge_sigma_m == 0.8; }},
+      {"slam.split_sampler=thesis",
+       [](const SlamSettings& s) {
+         return s.sampler.moves.split_sampler == SplitSampler::kThesis;
+       }},
+      {"slam.sampling_moves=0.5,0.3,0.2",
+       [](const SlamSettings& s) { return s.sampler.sampling_moves.split == 0.3; }},
+      {"slam.refine_every=7", [](const SlamSettings& s) { return s.sampler.refine_every == 7; }},
+      {"slam.solver_iterations=9",
+       [](const SlamSettings& s) { return s.target.slam.solver.max_iterations == 9; }},
+      {"slam.confusion_floor=0.01",
+       [](const SlamSettings& s) { return s.confusion_floor == 0.01; }},
+      {"slam.nn_gate_m=0.8", [](const SlamSettings& s) { return s.baseline.gate_m == 0.8; }},
+      {"slam.known_classes=1",
+       [](const SlamSettings& s) {
+         return s.sampler.sampling_moves.merge == 0.5 &&
+                s.sampler.sampling_moves.switch_class == 0 &&
+                std::isinf(s.sampler.moves.class_mismatch_penalty);
+       }},
+  };
+  const SlamSettings defaults = SettingsOf(RunConfig());
+  for (const Case& c : cases) {
+    EXPECT_FALSE(c.applied(defaults)) << c.assignment << " is already the default";
+    RunConfig config;
+    config.Override(c.assignment);
+    EXPECT_NO_THROW(config.Check()) << c.assignment;
+    EXPECT_TRUE(c.applied(SettingsOf(config))) << c.assignment;
+  }
+}
+
+TEST(RunConfig, BadValuesAreOneLineErrorsNamingTheKeyOrFile) {
+  RunConfig config;
+  const std::string not_number = Message([&] { config.Override("slam.pixel_noise_px=abc"); });
+  EXPECT_NE(not_number.find("slam.pixel_noise_px"), std::string::npos) << not_number;
+  EXPECT_NE(not_number.find("not a finite number"), std::string::npos) << not_number;
+  EXPECT_THROW(config.Override("slam.samples=1.5"), UsageError);
+  EXPECT_THROW(config.Override("slam.sampling_moves=0.5,0.5"), UsageError);
+  EXPECT_THROW(config.Override("slam.spurious_model=yes"), UsageError);
+  EXPECT_THROW(config.Override("slam.nosuch=1"), UsageError);
+
+  // Well-formed but invalid: reported by Check, with the key's name.
+  RunConfig invalid;
+  invalid.Override("slam.burn_in=700");
+  const std::string burn_in = Message([&] { invalid.Check(); });
+  EXPECT_NE(burn_in.find("burn-in"), std::string::npos) << burn_in;
+  RunConfig rule;
+  rule.Override("slam.track_link_rule=closest");
+  const std::string link = Message([&] { rule.Check(); });
+  EXPECT_NE(link.find("slam.track_link_rule"), std::string::npos) << link;
+
+  testing::TempDir dir;
+  std::ofstream(dir.Path("bad.yaml")) << "slam:\n  motion_add_fwd_m: fast\n";
+  RunConfig from_file;
+  const std::string in_file = Message([&] { from_file.LoadYaml(dir.Path("bad.yaml")); });
+  EXPECT_NE(in_file.find("bad.yaml"), std::string::npos) << in_file;
+  EXPECT_NE(in_file.find("slam.motion_add_fwd_m"), std::string::npos) << in_file;
+  std::ofstream(dir.Path("negative.yaml")) << "slam:\n  merge_sigma_m: -1\n";
+  RunConfig negative;
+  negative.LoadYaml(dir.Path("negative.yaml"));
+  try {
+    negative.Check();
+    ADD_FAILURE() << "a negative sigma_E passed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("negative.yaml"), std::string::npos) << e.what();
+  }
+  for (const std::string& message : {not_number, burn_in, link, in_file})
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace oslam
