@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install what is missing, build, and run oslam on the shipped `lab` sample:
-# simulate the omnidirectional video (once), learn the class colours from the
-# simulated ground truth, then `oslam run` (detect, O-SLAM, export, evaluate).
+# simulate the omnidirectional video (once), learn the class colours and the
+# class confusion from the simulated ground truth, then `oslam run` (detect,
+# O-SLAM, export, evaluate).
 # The O-Map is written to runs/lab_out/map.glb (override the folders with
 # OSLAM_RUN_DIR and OSLAM_OUT_DIR).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -17,5 +18,10 @@ if [[ ! -f "$run_dir/odometry.csv" ]]; then
   "$oslam" simulate "$OSLAM_ROOT/samples/scenes/lab.yaml" -o "$run_dir" --seed 1
 fi
 "$oslam" train-colors "$run_dir/classes.yaml" --from-ground-truth "$run_dir" --quiet
+# The class confusion P(detected | true) measured with the learnt colours
+# (the ball detector also fires on the orange door).
+"$oslam" detect "$run_dir" -o "$run_dir/training_detections.csv" --quiet
+"$oslam" eval-detect "$run_dir" --detections "$run_dir/training_detections.csv" \
+  --write-confusion "$run_dir/classes.yaml" --quiet
 "$oslam" run "$run_dir" -o "$out_dir" --seed 1
 oslam_log "O-Map: $out_dir/map.glb (Blender: File > Import > glTF 2.0); report: $out_dir/report.md"
