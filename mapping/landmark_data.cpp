@@ -1,5 +1,6 @@
 #include "mapping/landmark_data.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -362,6 +363,62 @@ std::vector<GpsFix> ReadGps(const std::string& path) {
     fixes.push_back(fix);
   });
   return fixes;
+}
+
+GpsError CompareWithGps(const std::vector<Pose2>& trajectory, const std::vector<double>& times_s,
+                        const std::vector<GpsFix>& gps, double max_gap_s) {
+  if (trajectory.size() != times_s.size())
+    throw Error("GPS comparison: " + std::to_string(trajectory.size()) + " poses but " +
+                std::to_string(times_s.size()) + " times");
+  for (size_t i = 1; i < times_s.size(); ++i)
+    if (times_s[i] < times_s[i - 1]) throw Error("GPS comparison: pose times decrease");
+  std::vector<Eigen::Vector2d> estimated, measured;
+  size_t i = 0;
+  for (const GpsFix& fix : gps) {
+    while (i + 2 < times_s.size() && times_s[i + 1] <= fix.time_s) ++i;
+    if (times_s.size() < 2 || fix.time_s < times_s[i] || fix.time_s > times_s[i + 1]) continue;
+    const double gap = times_s[i + 1] - times_s[i];
+    if (!(gap > 0) || gap > max_gap_s) continue;
+    const double w = (fix.time_s - times_s[i]) / gap;
+    const Pose2& a = trajectory[i];
+    const Pose2& b = trajectory[i + 1];
+    estimated.emplace_back((1 - w) * a.x + w * b.x, (1 - w) * a.y + w * b.y);
+    measured.emplace_back(fix.x_m, fix.y_m);
+  }
+  const size_t n = estimated.size();
+  if (n < 2) throw Error("GPS comparison: fewer than 2 fixes fall within the trajectory's times");
+  Eigen::Vector2d mean_e = Eigen::Vector2d::Zero(), mean_m = Eigen::Vector2d::Zero();
+  for (size_t k = 0; k < n; ++k) {
+    mean_e += estimated[k];
+    mean_m += measured[k];
+  }
+  mean_e /= n;
+  mean_m /= n;
+  // Planar Procrustes: the rotation angle maximising sum m_k . R e_k.
+  double dot = 0, cross = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const Eigen::Vector2d e = estimated[k] - mean_e, m = measured[k] - mean_m;
+    dot += e.dot(m);
+    cross += e.x() * m.y() - e.y() * m.x();
+  }
+  GpsError result;
+  result.rotation_rad = std::atan2(cross, dot);
+  const double c = std::cos(result.rotation_rad), s = std::sin(result.rotation_rad);
+  const Eigen::Matrix2d rotation = (Eigen::Matrix2d() << c, -s, s, c).finished();
+  result.translation_m = mean_m - rotation * mean_e;
+  std::vector<double> errors(n);
+  double sum_sq = 0;
+  for (size_t k = 0; k < n; ++k) {
+    errors[k] = (rotation * estimated[k] + result.translation_m - measured[k]).norm();
+    sum_sq += errors[k] * errors[k];
+  }
+  std::sort(errors.begin(), errors.end());
+  result.num_fixes = static_cast<int>(n);
+  result.rmse_m = std::sqrt(sum_sq / n);
+  result.median_m = errors[n / 2];
+  result.p95_m = errors[std::min(n - 1, n * 95 / 100)];
+  result.max_m = errors.back();
+  return result;
 }
 
 std::vector<int> GivenAssociation(const LandmarkDataset& data) {

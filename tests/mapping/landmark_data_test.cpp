@@ -212,6 +212,40 @@ TEST(GpsTest, ReadsFixesAndRejectsBadLines) {
   EXPECT_EQ(ErrorOf([&] { ReadGps(bad); }), bad + ":2: x: 'x' is not a number");
 }
 
+TEST(GpsTest, CompareAlignsRigidlyAndInterpolatesInTime) {
+  // A trajectory along x at 1 m/s, poses every second; GPS in a frame turned
+  // by 30 deg and shifted, fixes between poses, one 5 m outlier.
+  std::vector<Pose2> trajectory;
+  std::vector<double> times;
+  for (int i = 0; i <= 20; ++i) {
+    trajectory.push_back({static_cast<double>(i), 0.1 * i * i / 20.0, 0.0});
+    times.push_back(10.0 + i);
+  }
+  const double angle = DegToRad(30), c = std::cos(angle), s = std::sin(angle);
+  std::vector<GpsFix> gps;
+  for (double t = 9.0; t <= 31.0; t += 0.5) {  // some before and after the poses
+    const double u = t - 10.0;
+    const double x = u, y = 0.1 *
+                            (std::floor(u) * std::floor(u) +
+                             (u - std::floor(u)) * (2 * std::floor(u) + 1)) /
+                            20.0;
+    gps.push_back({t, 100 + c * x - s * y, -50 + s * x + c * y});
+  }
+  GpsError exact = CompareWithGps(trajectory, times, gps);
+  EXPECT_EQ(exact.num_fixes, 41);  // t = 10 .. 30
+  EXPECT_LT(exact.rmse_m, 1e-9);
+  EXPECT_NEAR(exact.rotation_rad, angle, 1e-9);
+  EXPECT_NEAR(exact.translation_m.x(), 100, 1e-9);
+  gps[20].x_m += 5.0;  // one outlier moves the max, hardly the median
+  const GpsError outlier = CompareWithGps(trajectory, times, gps);
+  EXPECT_GT(outlier.max_m, 4.5);
+  EXPECT_LT(outlier.median_m, 0.2);
+  // A gap longer than max_gap_s between two poses drops the fixes inside it.
+  times.back() += 5.0;
+  EXPECT_LT(CompareWithGps(trajectory, times, gps, 1.0).num_fixes, 41);
+  EXPECT_THROW(CompareWithGps(trajectory, {1.0}, gps), Error);
+}
+
 TEST(AssociationFileTest, OneIdPerSightingOrAnError) {
   EXPECT_EQ(ReadAssociation(kData + "raw_association.txt", 4), (std::vector<int>{0, 1, 0, -1}));
   EXPECT_EQ(ErrorOf([&] { ReadAssociation(kData + "raw_association.txt", 5); }),
