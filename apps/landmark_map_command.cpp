@@ -55,6 +55,10 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("class", "", "NAME", "class name of the landmarks in the O-Map", "tree");
   arguments.AddOption("init-window", "", "POSES",
                       "staged initialisation window (0: start from dead reckoning)", "500");
+  arguments.AddOption("landmark-prior-std", "", "M",
+                      "std of a zero-mean location prior on every landmark (0: none; makes the "
+                      "evidence comparable across associations)",
+                      "0");
   arguments.AddFlag("pose-covariances", "also compute every pose's covariance (slower)");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
@@ -94,6 +98,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   LandmarkSlamOptions options;
   options.initialisation_window_poses = static_cast<int>(arguments.GetInt("init-window"));
   options.compute_pose_covariances = arguments.Flag("pose-covariances");
+  options.landmark_prior_std_m = arguments.GetDouble("landmark-prior-std");
+  std::string why;
+  if (!options.Validate(&why)) throw UsageError(why);
   LandmarkSlam slam(options);
   const LandmarkSlamResult result = slam.Solve(data, association);
 

@@ -80,6 +80,10 @@ TEST(LandmarkMapCommand, BadInputAndUsage) {
   EXPECT_EQ(RunOslam("map --landmarks " + kData + "gtsam_small.txt").exit_code, 2);  // no -o
   EXPECT_EQ(RunOslam("map --landmarks " + kData + "gtsam_small.txt --format csv -o x").exit_code,
             2);
+  EXPECT_EQ(RunOslam("map --landmarks " + kData + "gtsam_small.txt --landmark-prior-std -1 -o " +
+                     dir.Path("o.json"))
+                .exit_code,
+            2);
   const testing::CommandResult help = RunOslam("map --landmarks x --help");
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.out.find("--association"), std::string::npos);
