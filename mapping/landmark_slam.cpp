@@ -113,7 +113,13 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
   std::vector<LandmarkKeys> landmarks;
   landmarks.reserve(by_landmark.size());
   for (const auto& [id, list] : by_landmark) {
-    const LandmarkSighting& first = data.sightings[list.front()];
+    // The first sighting with a bearing (range > 0) places the landmark.
+    const auto with_range = std::find_if(list.begin(), list.end(),
+                                         [&](int k) { return data.sightings[k].range_m > 0; });
+    if (with_range == list.end())
+      throw Error("landmark SLAM: every sighting of landmark " + std::to_string(id) +
+                  " has range 0 (no bearing)");
+    const LandmarkSighting& first = data.sightings[*with_range];
     const auto found = previous.find(id);
     const Eigen::Vector2d start =
         found != previous.end() ? found->second->position_m

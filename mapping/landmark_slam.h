@@ -87,9 +87,9 @@ class LandmarkSlam {
   // Pose 0 is held at the origin (the gauge); the other poses start from the
   // dead reckoning, or from warm_start's trajectory when it has as many
   // poses; a landmark starts where warm_start has it, else at its first
-  // sighting (lowest pose index). Throws oslam::Error for invalid input
-  // (options, association size, ids < -1); numerical trouble is reported in
-  // the summary.
+  // sighting (lowest pose index) with a range > 0. Throws oslam::Error for
+  // invalid input (options, association size, ids < -1, a landmark seen only
+  // at range 0); numerical trouble is reported in the summary.
   LandmarkSlamResult Solve(const LandmarkDataset& data, const std::vector<int>& association,
                            const LandmarkSlamResult* warm_start = nullptr);
 

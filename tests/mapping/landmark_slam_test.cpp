@@ -268,6 +268,16 @@ TEST(LandmarkSlamTest, WarmStartLeftOutSightingsAndPrefix) {
   std::vector<int> bad = truth;
   bad[0] = -2;
   EXPECT_THROW(slam.Solve(world.data, bad), Error);
+
+  // A zero-range first sighting does not place the landmark; only zero
+  // ranges is an error.
+  LandmarkDataset zero = world.data;
+  zero.sightings[0].range_m = 0.0;
+  const LandmarkSlamResult with_zero = slam.Solve(zero, truth);
+  EXPECT_EQ(with_zero.summary.termination, TerminationType::kConverged);
+  for (LandmarkSighting& s : zero.sightings)
+    if (s.landmark == truth[0]) s.range_m = 0.0;
+  EXPECT_THROW(slam.Solve(zero, truth), Error);
 }
 
 TEST(LandmarkSlamTest, OMapHasOneTreePerLandmark) {
