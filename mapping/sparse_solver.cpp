@@ -493,9 +493,11 @@ struct SparseSolver::Impl {
       const Eigen::MatrixXd& jacobian = evaluation.jacobians[f];
       const int columns = factor_columns[f];
       auto local = local_hessian.topLeftCorner(columns, columns);
-      local.noalias() = jacobian.transpose() * jacobian;
+      // Factor Jacobians are a few rows by a few columns: a plain (lazy)
+      // product, not Eigen's blocked GEMM, whose set-up dominates at this size.
+      local.noalias() = jacobian.transpose().lazyProduct(jacobian);
       auto local_g = local_gradient.head(columns);
-      local_g.noalias() = jacobian.transpose() * evaluation.errors[f];
+      local_g.noalias() = jacobian.transpose().lazyProduct(evaluation.errors[f]);
       for (int k = pair_begin[f]; k < pair_begin[f + 1]; ++k) {
         const BlockPair& pair = pairs[k];
         for (int q = 0; q < pair.b_dim; ++q) {
