@@ -144,9 +144,9 @@ int RunRunCommand(const std::vector<std::string>& args) {
     const auto start = std::chrono::steady_clock::now();
     const std::clock_t cpu_start = std::clock();
     const int code = command(stage_args);
-    times.push_back({name,
-                     std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-                     static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC});
+    times.push_back(
+        {name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+         static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC});
     if (code != 0) throw Error("stage " + name + " failed (exit code " + std::to_string(code) + ")");
   };
   stage("detect", 1, RunDetectCommand, {run_dir, "-o", detections}, "detect");
