@@ -100,8 +100,8 @@ void PrintMoves(const char* phase, const std::array<MoveStatistics, 3>& stats) {
 
 void PrintReport(const SamplerResult& result) {
   const SamplerSummary& s = result.summary;
-  std::printf("hill climbing: log target %.2f -> %.2f in %.2f s\n", s.initial_log_target,
-              s.hill_climbed_log_target, s.hill_climb_time_s);
+  std::printf("hill climbing: %d steps, log target %.2f -> %.2f in %.2f s\n", s.hill_climb_steps,
+              s.initial_log_target, s.hill_climbed_log_target, s.hill_climb_time_s);
   PrintMoves("hill", s.hill_climb);
   std::printf("MC3: %zu samples in %.2f s; swaps %ld/%ld accepted; ESS(log target) %.1f\n",
               result.samples.size(), s.sampling_time_s, s.swaps_accepted, s.swaps_proposed,

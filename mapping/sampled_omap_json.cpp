@@ -60,6 +60,7 @@ Json SummaryJson(const SamplerSummary& s) {
           {"effective_sample_size", Number(s.effective_sample_size)},
           {"num_solves", s.num_solves},
           {"num_cache_hits", s.num_cache_hits},
+          {"hill_climb_steps", s.hill_climb_steps},
           {"hill_climb_time_s", s.hill_climb_time_s},
           {"sampling_time_s", s.sampling_time_s},
           {"cold_chain_proposals_per_second", Number(seconds > 0 ? proposals / seconds : NAN)},

@@ -33,6 +33,9 @@ bool SamplerOptions::Validate(std::string* why) const {
     return false;
   };
   if (hill_climb_steps < 0) return fail("the hill-climbing steps must be >= 0");
+  if (hill_climb_patience < 0) return fail("the hill-climbing patience must be >= 0");
+  if (hill_climb_max_steps < hill_climb_steps)
+    return fail("hill_climb_max_steps must be >= hill_climb_steps");
   if (refine_every < 1) return fail("the refinement interval K_NL must be >= 1");
   if (!ValidProbabilities(hill_climb_moves) || !ValidProbabilities(sampling_moves))
     return fail("move probabilities must be >= 0 and sum to 1");
@@ -128,16 +131,31 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
   EvaluationPtr current = evaluators[0]->Refine(start, nullptr);
   if (!current || !current->valid) throw Error("the start state could not be evaluated");
   summary.initial_log_target = current->log_target;
-  for (int step = 1; step <= options_.hill_climb_steps; ++step) {
+  auto refine = [&] {
+    EvaluationPtr refined = evaluators[0]->Refine(current->state, current.get());
+    if (refined && refined->valid) current = refined;
+  };
+  int last_accepted = 0, step = 0;
+  auto go_on = [&] {
+    if (step < options_.hill_climb_steps) return true;
+    return options_.hill_climb_steps > 0 && options_.hill_climb_patience > 0 &&
+           step < options_.hill_climb_max_steps &&
+           step - last_accepted < options_.hill_climb_patience;
+  };
+  while (go_on()) {
+    ++step;
+    const EvaluationPtr before = current;
     current = MetropolisStep(current, 1.0, true, *evaluators[0], model_, options_.moves,
                              options_.hill_climb_moves, rngs[0], &summary.hill_climb);
-    if (step % options_.refine_every == 0 || step == options_.hill_climb_steps) {
-      EvaluationPtr refined = evaluators[0]->Refine(current->state, current.get());
-      if (refined && refined->valid) current = refined;
-    }
+    if (current != before) last_accepted = step;
+    const bool last = !go_on();
+    if (step % options_.refine_every == 0 || last) refine();
     summary.hill_climb_trace.push_back(current->log_target);
-    if (progress) progress("hill climbing", step, options_.hill_climb_steps);
+    if (progress)
+      progress("hill climbing", std::min(step, options_.hill_climb_steps),
+               options_.hill_climb_steps);
   }
+  summary.hill_climb_steps = step;
   result.hill_climbed = current;
   summary.hill_climbed_log_target = current->log_target;
   summary.hill_climb_time_s = Seconds(clock);

@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/error.h"
 #include "mapping/association_state.h"
 #include "mapping/moves.h"
 #include "mapping/sampler.h"
@@ -227,6 +228,37 @@ TEST(SamplerTest, HillClimbingNeverDecreasesTheTarget) {
     previous = v;
   }
   EXPECT_GT(result.summary.hill_climbed_log_target, result.summary.initial_log_target);
+}
+
+// Climbing stops exactly `patience` steps after the last accepted move once
+// the minimum is done, never before the minimum, never beyond the maximum.
+TEST(SamplerTest, HillClimbingGoesOnWhileItImprovesWithinTheLimits) {
+  const ClassConfusionModel model = TestModel();
+  SamplerOptions options = TestOptions(1, 2);
+  options.burn_in = 0;
+  options.hill_climb_steps = 3;
+  options.hill_climb_patience = 25;
+  const SamplerResult result = RunTest(options, model);
+  const auto& trace = result.summary.hill_climb_trace;
+  ASSERT_EQ(static_cast<int>(trace.size()), result.summary.hill_climb_steps);
+  ASSERT_GE(result.summary.hill_climb_steps, options.hill_climb_patience);
+  int last_change = 0;
+  double previous = result.summary.initial_log_target;
+  for (size_t i = 0; i < trace.size(); ++i) {
+    if (trace[i] != previous) last_change = static_cast<int>(i) + 1;
+    previous = trace[i];
+  }
+  // The last step's refinement may itself change the value; otherwise the
+  // stop comes `patience` steps after the last improvement.
+  EXPECT_LE(result.summary.hill_climb_steps - last_change, options.hill_climb_patience);
+
+  options.hill_climb_patience = 0;  // the thesis' fixed count
+  EXPECT_EQ(RunTest(options, model).summary.hill_climb_steps, 3);
+  options.hill_climb_patience = 1000;
+  options.hill_climb_max_steps = 40;
+  EXPECT_EQ(RunTest(options, model).summary.hill_climb_steps, 40);
+  options.hill_climb_max_steps = 2;  // below the minimum
+  EXPECT_THROW(RunTest(options, model), Error);
 }
 
 TEST(SamplerTest, EffectiveSampleSizeOfIndependentAndCorrelatedSeries) {

@@ -136,7 +136,9 @@ TEST(SlamCommand, OSlamMapReadsBackWithObjectsAndTrajectory) {
   const auto& sampler = json.at("sampler");
   EXPECT_EQ(sampler["cold_chain_log_target"].size(), 120u);
   EXPECT_TRUE(sampler["effective_sample_size"].is_number());
-  EXPECT_EQ(sampler["hill_climb_log_target"].size(), 30u);
+  // --hill-climb 30 is the minimum; patience may climb further.
+  EXPECT_GE(sampler["hill_climb_log_target"].size(), 30u);
+  EXPECT_EQ(sampler["hill_climb_log_target"].size(), sampler["hill_climb_steps"].get<size_t>());
   EXPECT_GT(sampler["cold_chain_proposals_per_second"].get<double>(), 0.0);
   for (const char* move : {"merge", "split", "switch"}) {
     EXPECT_TRUE(sampler["sampling_moves"][move].contains("acceptance_rate")) << move;
