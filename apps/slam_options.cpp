@@ -59,7 +59,13 @@ void AddSlamOptions(Arguments* a) {
   a->AddOption("samples", "", "N", "MC3 iterations including burn-in (spec §13 #21)",
                std::to_string(s.num_iterations));
   a->AddOption("burn-in", "", "N", "iterations discarded", std::to_string(s.burn_in));
-  a->AddOption("hill-climb", "", "N", "hill-climbing steps", std::to_string(s.hill_climb_steps));
+  a->AddOption("hill-climb", "", "N", "hill-climbing steps (the minimum)",
+               std::to_string(s.hill_climb_steps));
+  a->AddOption("hill-climb-patience", "", "N",
+               "then climb on while a move was accepted in the last N steps (0 = fixed count)",
+               std::to_string(s.hill_climb_patience));
+  a->AddOption("hill-climb-max", "", "N", "at most this many hill-climbing steps",
+               std::to_string(s.hill_climb_max_steps));
   a->AddOption("refine-every", "", "N",
                "K_NL: full re-optimisation of the current state every N hill-climbing steps",
                std::to_string(s.refine_every));
@@ -113,6 +119,9 @@ void AddSlamOptions(Arguments* a) {
                Number(s.moves.merge_distance_m));
   a->AddOption("merge-sigma", "", "M", "merge proposal sigma_E (spec §13 #14)",
                Number(s.moves.merge_sigma_m));
+  a->AddOption("class-proposal-uniform", "", "U",
+               "uniform share of the class drawn by merge/split/switch (0 = thesis)",
+               Number(s.moves.class_proposal_uniform));
   a->AddOption("merge-count-smoothing", "", "EPS", "epsilon_d added to every d_j (#16)",
                Number(s.moves.merge_count_smoothing));
   a->AddFlag("merge-count-includes-self", "d_j counts o_j itself (#41)");
@@ -201,6 +210,8 @@ SlamSettings SlamSettingsFrom(const Arguments& arguments) {
   sampler.num_iterations = integer("samples");
   sampler.burn_in = integer("burn-in");
   sampler.hill_climb_steps = integer("hill-climb");
+  sampler.hill_climb_patience = integer("hill-climb-patience");
+  sampler.hill_climb_max_steps = integer("hill-climb-max");
   sampler.refine_every = integer("refine-every");
   sampler.hill_climb_moves = GetMoves(arguments, "hill-climb-moves");
   sampler.sampling_moves = GetMoves(arguments, "sampling-moves");
@@ -212,6 +223,7 @@ SlamSettings SlamSettingsFrom(const Arguments& arguments) {
   m.merge_distance_m = number("merge-distance");
   m.merge_sigma_m = number("merge-sigma");
   m.merge_count_smoothing = number("merge-count-smoothing");
+  m.class_proposal_uniform = number("class-proposal-uniform");
   m.merge_count_includes_self = arguments.Flag("merge-count-includes-self");
   const std::string split = arguments.Get("split-sampler");
   if (split == "uniform") {

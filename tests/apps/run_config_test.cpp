@@ -66,6 +66,8 @@ TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
   EXPECT_EQ(s.sampler.num_iterations, 667);
   EXPECT_EQ(s.sampler.burn_in, 70);
   EXPECT_EQ(s.sampler.hill_climb_steps, 100);
+  EXPECT_EQ(s.sampler.hill_climb_patience, 50);
+  EXPECT_EQ(s.sampler.hill_climb_max_steps, 2000);
   EXPECT_EQ(s.sampler.refine_every, 50);
   EXPECT_EQ(s.sampler.num_chains, 3);
   EXPECT_EQ(s.sampler.delta_temperature, 3.33);
@@ -77,6 +79,7 @@ TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
   EXPECT_EQ(s.sampler.moves.merge_sigma_m, 0.5);
   EXPECT_EQ(s.sampler.moves.class_mismatch_penalty, 3.0);
   EXPECT_EQ(s.sampler.moves.merge_count_smoothing, 0.1);
+  EXPECT_EQ(s.sampler.moves.class_proposal_uniform, 0.1);
   EXPECT_FALSE(s.sampler.moves.merge_count_includes_self);
   EXPECT_EQ(s.sampler.moves.split_sampler, SplitSampler::kUniform);
   // Spec §9.8: E = 30 px, t0 = (0.4 m)^2, tau = (0.2 m)^2, eq. 6.1 gates.
@@ -173,6 +176,12 @@ TEST(RunConfig, AnOverrideReachesTheOptionsTheSamplerGets) {
       {"slam.sampling_moves=0.5,0.3,0.2",
        [](const SlamSettings& s) { return s.sampler.sampling_moves.split == 0.3; }},
       {"slam.refine_every=7", [](const SlamSettings& s) { return s.sampler.refine_every == 7; }},
+      {"slam.hill_climb_patience=0",
+       [](const SlamSettings& s) { return s.sampler.hill_climb_patience == 0; }},
+      {"slam.hill_climb_max=700",
+       [](const SlamSettings& s) { return s.sampler.hill_climb_max_steps == 700; }},
+      {"slam.class_proposal_uniform=0",
+       [](const SlamSettings& s) { return s.sampler.moves.class_proposal_uniform == 0.0; }},
       {"slam.solver_iterations=9",
        [](const SlamSettings& s) { return s.target.slam.solver.max_iterations == 9; }},
       {"slam.confusion_floor=0.01",
