@@ -134,6 +134,8 @@ struct SparseSolver::Impl {
   OrderingType ordering_used = OrderingType::kAmd;
   OrderingType analysed_ordering = OrderingType::kAutomatic;  // the request the cache was made for
   std::vector<int> factor_row;  // first row of each factor in J
+  std::vector<std::vector<int>> scratch_rows;  // SetUp's block pattern, reused
+  std::vector<int> scratch_free;
   int m = 0;
   Eigen::VectorXd gradient, diagonal;
   cholmod_dense* rhs = nullptr;
@@ -191,15 +193,19 @@ struct SparseSolver::Impl {
       *why = "the graph has no free variable";
       return false;
     }
-    std::vector<std::vector<int>> rows(num_free);
+    // Scratch kept across solves (a proposal's graph is much like the last one).
+    std::vector<std::vector<int>>& rows = scratch_rows;
+    rows.resize(num_free);
+    for (auto& column : rows) column.clear();
     std::vector<char> constrained(num_free, 0);
     const auto& factors = graph.factors();
     m = 0;
     factor_row.resize(factors.size());
+    std::vector<int>& free = scratch_free;
     for (size_t f = 0; f < factors.size(); ++f) {
       factor_row[f] = m;
       m += factors[f]->Dimension();
-      std::vector<int> free;
+      free.clear();
       for (int key : factors[f]->keys())
         if (free_index[key] >= 0) free.push_back(free_index[key]);
       for (int a : free) {
@@ -252,7 +258,8 @@ struct SparseSolver::Impl {
       pair_begin[f] = static_cast<int>(pairs.size());
       const auto& keys = factors[f]->keys();
       int total = 0;
-      std::vector<int> columns;
+      std::vector<int>& columns = scratch_free;
+      columns.clear();
       for (int key : keys) {
         columns.push_back(total);
         total += graph.values().Dim(key);
@@ -421,39 +428,34 @@ struct SparseSolver::Impl {
     const auto* hp = static_cast<const int*>(hessian->p);
     const auto* hi = static_cast<const int*>(hessian->i);
     const int hnz = hp[n];
-    std::vector<int> count(n + 1, 0);
+    // Entry k of the upper-triangular hessian goes to (max, min) of its
+    // permuted row and column in the lower-triangular `permuted`. Two
+    // counting sorts (by row, then stably by column) give sorted row indices
+    // in every column, as CHOLMOD's `sorted` flag promises, in O(nnz).
+    std::vector<int> entry_row(hnz), entry_column(hnz);
     for (int j = 0; j < n; ++j)
-      for (int k = hp[j]; k < hp[j + 1]; ++k)
-        ++count[std::min(inverse_permutation[hi[k]], inverse_permutation[j])];
+      for (int k = hp[j]; k < hp[j + 1]; ++k) {
+        const int a = inverse_permutation[hi[k]], b = inverse_permutation[j];
+        entry_row[k] = std::max(a, b);
+        entry_column[k] = std::min(a, b);
+      }
+    std::vector<int> by_row(hnz), start(n + 1, 0);
+    for (int k = 0; k < hnz; ++k) ++start[entry_row[k] + 1];
+    for (int r = 0; r < n; ++r) start[r + 1] += start[r];
+    for (int k = 0; k < hnz; ++k) by_row[start[entry_row[k]]++] = k;
     permuted = cholmod_allocate_sparse(n, n, hnz, 1, 1, -1, CHOLMOD_REAL, &cc);
     if (!permuted) return nullptr;
     auto* pp = static_cast<int*>(permuted->p);
     auto* pi = static_cast<int*>(permuted->i);
-    pp[0] = 0;
-    for (int j = 0; j < n; ++j) pp[j + 1] = pp[j] + count[j];
+    std::fill(pp, pp + n + 1, 0);
+    for (int k = 0; k < hnz; ++k) ++pp[entry_column[k] + 1];
+    for (int j = 0; j < n; ++j) pp[j + 1] += pp[j];
     std::vector<int> fill(pp, pp + n);
     permuted_entry.resize(hnz);
-    for (int j = 0; j < n; ++j)
-      for (int k = hp[j]; k < hp[j + 1]; ++k) {
-        const int a = inverse_permutation[hi[k]], b = inverse_permutation[j];
-        const int column = std::min(a, b);
-        permuted_entry[k] = fill[column];
-        pi[fill[column]++] = std::max(a, b);
-      }
-    // Rows sorted within each column (CHOLMOD's sorted flag), carrying the map.
-    std::vector<int> order, rows, where(hnz);
-    for (int k = 0; k < hnz; ++k) where[permuted_entry[k]] = k;
-    for (int j = 0; j < n; ++j) {
-      const int begin = pp[j], end = pp[j + 1];
-      order.resize(end - begin);
-      std::iota(order.begin(), order.end(), begin);
-      std::sort(order.begin(), order.end(), [&](int x, int y) { return pi[x] < pi[y]; });
-      rows.resize(order.size());
-      for (size_t q = 0; q < order.size(); ++q) rows[q] = pi[order[q]];
-      for (size_t q = 0; q < order.size(); ++q) {
-        pi[begin + q] = rows[q];
-        permuted_entry[where[order[q]]] = begin + static_cast<int>(q);
-      }
+    for (int k : by_row) {
+      const int position = fill[entry_column[k]]++;
+      pi[position] = entry_row[k];
+      permuted_entry[k] = position;
     }
     cc.method[0].ordering = CHOLMOD_NATURAL;
     cc.postorder = 0;
