@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <set>
 #include <sstream>
 
 #include "apps/arguments.h"
@@ -14,6 +15,7 @@
 #include "core/error.h"
 #include "mapping/landmark_data.h"
 #include "mapping/landmark_slam.h"
+#include "mapping/landmark_target.h"
 #include "mapping/omap_json.h"
 
 namespace oslam {
@@ -31,6 +33,102 @@ std::string TrajectoryCsv(const LandmarkDataset& data, const LandmarkSlamResult&
     out << CsvNumber(p.x) << ',' << CsvNumber(p.y) << ',' << CsvNumber(p.theta) << '\n';
   }
   return out.str();
+}
+
+std::string OutputTrajectoryPath(const Arguments& arguments) {
+  return arguments.Has("trajectory")
+             ? arguments.Get("trajectory")
+             : (std::filesystem::path(arguments.Get("output")).parent_path() / "trajectory.csv")
+                   .string();
+}
+
+void PrintGpsError(const Arguments& arguments, const LandmarkDataset& data,
+                   const std::vector<Pose2>& trajectory) {
+  if (!arguments.Has("gps")) return;
+  if (static_cast<int>(data.pose_times.size()) != data.num_poses)
+    throw Error::InFile(data.path, "--gps needs pose times, which this format has not");
+  const GpsError e = CompareWithGps(trajectory, data.pose_times, ReadGps(arguments.Get("gps")));
+  std::printf("vs GPS (%d fixes, rigid alignment): RMSE %.2f m, median %.2f m, max %.2f m\n",
+              e.num_fixes, e.rmse_m, e.median_m, e.max_m);
+}
+
+// --unknown-association: the file's ids are hidden from the solve and used
+// only to score it.
+int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& data) {
+  const bool quiet = arguments.Flag("quiet");
+  UnknownAssociationOptions options;
+  options.tracks.gate_m = arguments.GetDouble("track-gate");
+  options.tracks.max_pose_gap = static_cast<int>(arguments.GetInt("track-gap"));
+  options.window_poses = static_cast<int>(arguments.GetInt("window"));
+  options.free_poses = static_cast<int>(arguments.GetInt("free-poses"));
+  options.hill_climb_steps_per_track = arguments.GetDouble("hill-climb");
+  options.final_hill_climb_steps = static_cast<int>(arguments.GetInt("final-steps"));
+  options.samples = static_cast<int>(arguments.GetInt("samples"));
+  options.burn_in = options.samples / 10;
+  options.num_chains = static_cast<int>(arguments.GetInt("chains"));
+  options.seed = static_cast<unsigned long>(arguments.GetInt("seed"));
+  options.moves.merge_distance_m = arguments.GetDouble("merge-distance");
+  options.moves.merge_sigma_m = options.moves.merge_distance_m / 2;
+  options.target.slam.initialisation_window_poses =
+      static_cast<int>(arguments.GetInt("init-window"));
+  // A location prior is required to compare landmark counts: 100 m unless given.
+  options.target.slam.landmark_prior_std_m =
+      arguments.Has("landmark-prior-std") ? arguments.GetDouble("landmark-prior-std") : 100.0;
+  const std::string mode = arguments.Get("evaluation");
+  if (mode != "local" && mode != "exact")
+    throw UsageError("--evaluation must be local or exact, not '" + mode + "'");
+  options.target.mode =
+      mode == "exact" ? LandmarkEvaluationMode::kExact : LandmarkEvaluationMode::kLocal;
+  std::string why;
+  if (!options.Validate(&why)) throw UsageError(why);
+
+  const UnknownAssociationResult result =
+      SolveUnknownAssociation(data, options, [&](const std::string& line) {
+        if (!quiet) std::printf("%s\n", line.c_str());
+        std::fflush(stdout);
+      });
+  const LandmarkSlamResult& solution = result.solution;
+  const std::string output = arguments.Get("output");
+  const std::string trajectory_path = OutputTrajectoryPath(arguments);
+  OMapSource source{data.path,
+                    "unknown (O-SLAM hill climbing" +
+                        std::string(options.samples > 0 ? " + MC3" : "") + ", seed " +
+                        arguments.Get("seed") + ")",
+                    std::nan(""), 0};
+  WriteOMap(output, LandmarkResultAsOMap(solution), {arguments.Get("class")}, source);
+  WriteTextFileAtomically(trajectory_path, TrajectoryCsv(data, solution));
+  if (quiet) return solution.summary.IsUsable() ? 0 : 1;
+
+  std::printf(
+      "%zu landmarks from %zu tracks of %d sightings; %ld proposals (%ld accepted), "
+      "%.3f ms per proposal; hill climbing %.2f s, MC3 %.2f s, total %.2f s\n",
+      solution.landmarks.size(), result.tracks.size(), solution.num_sightings_used,
+      result.proposals, result.accepted,
+      result.proposals > 0 ? 1e3 * result.proposal_time_s / result.proposals : 0.0,
+      result.hill_climb_time_s, result.sampling_time_s, result.total_time_s);
+  if (data.has_landmark_ids) {
+    const std::vector<int> shipped = GivenAssociation(data);
+    const PairwiseAgreement a = ComparePairwise(result.association, shipped);
+    std::set<int> ids(shipped.begin(), shipped.end());
+    ids.erase(-1);
+    std::printf(
+        "vs the file's ids: pairwise agreement %.5f, 'same landmark' pairs precision "
+        "%.4f recall %.4f (%lld / %lld / %lld); landmarks %zu vs %zu\n",
+        a.agreement, a.precision, a.recall, a.same_both, a.same_estimate, a.same_truth,
+        solution.landmarks.size(), ids.size());
+    LandmarkSlamOptions known_options = options.target.slam;
+    known_options.compute_landmark_covariances = false;
+    LandmarkSlam known(known_options);
+    const LandmarkSlamResult reference = known.Solve(data, shipped);
+    std::printf(
+        "trajectory vs the shipped-association solve: RMSE %.3f m (its log evidence "
+        "%.1f, ours %.1f)\n",
+        TrajectoryRmse(solution.trajectory, reference.trajectory), reference.evidence.log_evidence,
+        result.log_target);
+  }
+  PrintGpsError(arguments, data, solution.trajectory);
+  std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());
+  return solution.summary.IsUsable() ? 0 : 1;
 }
 
 }  // namespace
@@ -60,6 +158,40 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                       "evidence comparable across associations)",
                       "0");
   arguments.AddFlag("pose-covariances", "also compute every pose's covariance (slower)");
+  arguments.AddFlag("unknown-association",
+                    "ignore the file's landmark ids: tracks, O-SLAM hill climbing in growing "
+                    "windows, optional MC3; compared with the ids when the file has them");
+  arguments.AddOption("seed", "", "N", "unknown association: random seed", "1");
+  arguments.AddOption("hill-climb", "", "STEPS",
+                      "unknown association: hill-climbing steps per track of each window", "4");
+  arguments.AddOption("final-steps", "", "STEPS",
+                      "unknown association: global hill-climbing steps after the windows", "0");
+  arguments.AddOption("samples", "", "N", "unknown association: MC3 iterations (0: none)", "0");
+  arguments.AddOption("chains", "", "N", "unknown association: MC3 chains", "2");
+  arguments.AddOption("window", "", "POSES",
+                      "unknown association: poses added per hill-climbing window (0: one window)",
+                      "500");
+  arguments.AddOption("track-gate", "", "M",
+                      "unknown association: a sighting continues a track when its world position "
+                      "is this close to the track's last one",
+                      "1.0");
+  arguments.AddOption("track-gap", "", "POSES",
+                      "unknown association: at most this many poses between a track's sightings",
+                      "20");
+  arguments.AddOption("merge-distance", "", "M",
+                      "unknown association: landmarks closer than this are merge candidates",
+                      "3.0");
+  arguments.AddOption("free-poses", "", "POSES",
+                      "unknown association: poses free in a window's solves, earlier ones held "
+                      "(0: all free)",
+                      "0");
+  arguments.AddOption("odometry-noise-scale", "", "K",
+                      "multiply every odometry covariance by K (a model choice)", "1");
+  arguments.AddOption("evaluation", "", "MODE",
+                      "unknown association: local (poses held per proposal) or exact", "local");
+  arguments.AddOption(
+      "gps", "", "FILE",
+      "compare the trajectory with GPS fixes (gps.dat: time x y; needs pose times)");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("landmarks")) throw UsageError("give the data set with --landmarks FILE");
@@ -82,6 +214,11 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                                    : (measurements.parent_path() / "inputs.dat").string();
     data = ReadVictoriaRaw(measurements.string(), inputs);
   }
+  const double odometry_scale = arguments.GetDouble("odometry-noise-scale");
+  if (!(odometry_scale > 0) || !std::isfinite(odometry_scale))
+    throw UsageError("--odometry-noise-scale must be > 0");
+  for (RelativePoseMeasurement& edge : data.odometry) edge.covariance *= odometry_scale;
+  if (arguments.Flag("unknown-association")) return RunUnknownAssociation(arguments, data);
   std::vector<int> association;
   std::string association_source = "known (landmark ids in the file)";
   if (arguments.Has("association")) {
@@ -92,7 +229,7 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   } else {
     throw Error::InFile(data.path,
                         "the sightings have no landmark ids; give them with --association FILE "
-                        "(the unknown-association solve is issue 10's next step)");
+                        "or solve with --unknown-association");
   }
 
   LandmarkSlamOptions options;

@@ -12,10 +12,6 @@
 
 namespace oslam {
 
-namespace {
-
-// `solved` (the first poses) followed by the later poses of `dead_reckoning`
-// moved rigidly so that they continue from the last solved pose.
 std::vector<Pose2> ExtendByOdometry(const std::vector<Pose2>& solved,
                                     const std::vector<Pose2>& dead_reckoning) {
   std::vector<Pose2> poses = solved;
@@ -31,8 +27,6 @@ std::vector<Pose2> ExtendByOdometry(const std::vector<Pose2>& solved,
   return poses;
 }
 
-}  // namespace
-
 bool LandmarkSlamOptions::Validate(std::string* why) const {
   if (!(diameter_std_m > 0) || !std::isfinite(diameter_std_m)) {
     if (why) *why = "the diameter noise must be > 0 and finite";
@@ -41,6 +35,10 @@ bool LandmarkSlamOptions::Validate(std::string* why) const {
   if (!(landmark_prior_std_m >= 0) || !std::isfinite(landmark_prior_std_m) ||
       !landmark_prior_mean_m.allFinite()) {
     if (why) *why = "the landmark prior std must be >= 0 and the mean finite";
+    return false;
+  }
+  if (held_poses < 0) {
+    if (why) *why = "the held poses must be >= 0";
     return false;
   }
   if (initialisation_window_poses < 0) {
@@ -101,7 +99,7 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
   std::vector<int> pose_keys(data.num_poses);
   for (int i = 0; i < data.num_poses; ++i)
     pose_keys[i] = graph.AddPose(initial[i].x, initial[i].y, initial[i].theta,
-                                 /*fixed=*/i == 0);  // gauge
+                                 /*fixed=*/i == 0 || i < options_.held_poses);  // gauge
 
   std::map<int, const MappedLandmark*> previous;
   if (warm_start)

@@ -50,6 +50,10 @@ struct LandmarkSlamOptions {
   // reckoning crawls on long drives (Victoria Park: hundreds of metres of
   // drift). 0: start from dead reckoning.
   int initialisation_window_poses = 500;
+  // Poses 0..held_poses-1 are held at their start values (pose 0 always is):
+  // a windowed solve of the recent drive, its evidence conditional on the
+  // held poses (for comparing associations within one window).
+  int held_poses = 0;
   bool compute_landmark_covariances = true;
   bool compute_pose_covariances = false;
 
@@ -113,6 +117,11 @@ LandmarkDataset PosePrefix(const LandmarkDataset& data, int num_poses,
 // base point (x, y, 0), diameter when measured else 0, height 0 = not
 // observed; covariance rows (x, y, diameter) filled), for WriteOMap.
 GeometricSlamResult LandmarkResultAsOMap(const LandmarkSlamResult& result);
+
+// `solved` (the first poses) followed by the later poses of `dead_reckoning`
+// moved rigidly so that they continue from the last solved pose.
+std::vector<Pose2> ExtendByOdometry(const std::vector<Pose2>& solved,
+                                    const std::vector<Pose2>& dead_reckoning);
 
 // Sum of the distances between consecutive poses (m).
 double TrajectoryLength(const std::vector<Pose2>& trajectory);

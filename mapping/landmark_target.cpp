@@ -1,0 +1,640 @@
+#include "mapping/landmark_target.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "core/angles.h"
+#include "core/error.h"
+#include "mapping/factor_graph.h"
+#include "mapping/factors.h"
+#include "mapping/landmark_factors.h"
+
+namespace oslam {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+const MappedLandmark* FindLandmark(const LandmarkSlamResult& result, int id) {
+  const auto it = std::lower_bound(result.landmarks.begin(), result.landmarks.end(), id,
+                                   [](const MappedLandmark& l, int v) { return l.id < v; });
+  return it != result.landmarks.end() && it->id == id ? &*it : nullptr;
+}
+
+std::string Format(const char* format, double a, double b = 0, double c = 0, double d = 0,
+                   double e = 0, double f = 0, double g = 0) {
+  char line[256];
+  std::snprintf(line, sizeof(line), format, a, b, c, d, e, f, g);
+  return line;
+}
+
+}  // namespace
+
+bool LandmarkTrackOptions::Validate(std::string* why) const {
+  if (!(gate_m > 0) || !std::isfinite(gate_m)) {
+    if (why) *why = "the track gate must be > 0 m and finite";
+    return false;
+  }
+  if (max_pose_gap < 1) {
+    if (why) *why = "the track's pose gap must be >= 1";
+    return false;
+  }
+  return true;
+}
+
+std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
+                                                  const std::vector<Pose2>& trajectory,
+                                                  const LandmarkTrackOptions& options) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("landmark tracks: " + why);
+  if (static_cast<int>(trajectory.size()) != data.num_poses)
+    throw Error("landmark tracks: the trajectory has " + std::to_string(trajectory.size()) +
+                " poses for " + std::to_string(data.num_poses));
+  std::vector<int> order;
+  for (size_t k = 0; k < data.sightings.size(); ++k)
+    if (data.sightings[k].range_m > 0) order.push_back(static_cast<int>(k));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return data.sightings[a].pose < data.sightings[b].pose; });
+  struct Active {
+    int track, last_pose;
+    Eigen::Vector2d last_m;
+  };
+  std::vector<std::vector<int>> tracks;
+  std::vector<Active> active;
+  const double gate2 = options.gate_m * options.gate_m;
+  for (size_t begin = 0; begin < order.size();) {
+    const int pose = data.sightings[order[begin]].pose;
+    size_t end = begin;
+    while (end < order.size() && data.sightings[order[end]].pose == pose) ++end;
+    active.erase(
+        std::remove_if(active.begin(), active.end(),
+                       [&](const Active& a) { return pose - a.last_pose > options.max_pose_gap; }),
+        active.end());
+    const size_t n = end - begin;
+    std::vector<Eigen::Vector2d> world(n);
+    std::vector<int> claim(n, -1);  // index into `active`
+    std::vector<int> claims(active.size(), 0);
+    for (size_t i = 0; i < n; ++i) {
+      const LandmarkSighting& s = data.sightings[order[begin + i]];
+      world[i] = LandmarkFromRangeBearing(trajectory[pose], s.range_m, s.bearing_rad,
+                                          data.sensor_offset_m);
+      int candidates = 0;
+      for (size_t a = 0; a < active.size(); ++a)
+        if ((active[a].last_m - world[i]).squaredNorm() <= gate2) {
+          ++candidates;
+          claim[i] = static_cast<int>(a);
+        }
+      if (candidates != 1) claim[i] = -1;  // none, or ambiguous
+      if (claim[i] >= 0) ++claims[claim[i]];
+    }
+    std::vector<Active> next;
+    for (size_t i = 0; i < n; ++i) {
+      const int k = order[begin + i];
+      if (claim[i] >= 0 && claims[claim[i]] == 1) {
+        Active& a = active[claim[i]];
+        tracks[a.track].push_back(k);
+        a.last_pose = pose;
+        a.last_m = world[i];
+      } else {
+        tracks.push_back({k});
+        next.push_back({static_cast<int>(tracks.size()) - 1, pose, world[i]});
+      }
+    }
+    active.insert(active.end(), next.begin(), next.end());
+    begin = end;
+  }
+  return tracks;
+}
+
+bool LandmarkTargetOptions::Validate(std::string* why) const {
+  if (!(slam.landmark_prior_std_m > 0)) {
+    if (why)
+      *why =
+          "the landmark location prior std must be > 0 (a flat prior makes the evidence "
+          "improper across landmark counts)";
+    return false;
+  }
+  if (proposal_iterations < 1 || local_iterations < 1) {
+    if (why) *why = "the solver iterations per proposal must be >= 1";
+    return false;
+  }
+  if (max_cache_entries < 1) {
+    if (why) *why = "the state cache needs room for at least one entry";
+    return false;
+  }
+  return slam.Validate(why);
+}
+
+size_t LandmarkEvaluator::BlockHash::operator()(const std::vector<int>& block) const {
+  size_t h = block.size();
+  for (int t : block) h ^= std::hash<int>()(t) + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+  return h;
+}
+
+namespace {
+
+LandmarkSlamOptions FullOptions(const LandmarkTargetOptions& options) {
+  LandmarkSlamOptions full = options.slam;
+  full.compute_landmark_covariances = false;  // Solve() adds them for the output only
+  full.compute_pose_covariances = false;
+  return full;
+}
+
+LandmarkSlamOptions StepOptions(const LandmarkTargetOptions& options) {
+  LandmarkSlamOptions step = FullOptions(options);
+  step.solver.max_iterations = options.proposal_iterations;
+  return step;
+}
+
+}  // namespace
+
+LandmarkEvaluator::LandmarkEvaluator(const LandmarkTargetData& data,
+                                     const LandmarkTargetOptions& options)
+    : data_(data), options_(options), full_(FullOptions(options)), step_(StepOptions(options)) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("landmark O-SLAM target options: " + why);
+  if (!data.data) throw Error("landmark O-SLAM target: no data set");
+  SolverOptions local = options.slam.solver;
+  local.max_iterations = options.local_iterations;
+  local.reuse_symbolic_analysis = false;
+  local_solver_.set_options(local);
+}
+
+std::vector<int> LandmarkEvaluator::Association(const AssociationState& state) const {
+  std::vector<int> association(data_.data->sightings.size(), -1);
+  for (const auto& block : state.blocks)
+    for (int t : block)
+      for (int k : data_.tracks.at(t)) association[k] = block.front();
+  return association;
+}
+
+LandmarkSlamResult LandmarkEvaluator::WarmStart(const StateEvaluation& from) const {
+  LandmarkSlamResult warm;
+  if (from.solution) warm.trajectory = from.solution->trajectory;
+  for (size_t j = 0; j < from.state.blocks.size() && j < from.locations.size(); ++j) {
+    MappedLandmark l;
+    l.id = from.state.blocks[j].front();
+    l.position_m = from.locations[j].head<2>();
+    warm.landmarks.push_back(l);
+  }
+  std::sort(warm.landmarks.begin(), warm.landmarks.end(),
+            [](const MappedLandmark& a, const MappedLandmark& b) { return a.id < b.id; });
+  return warm;
+}
+
+double SightingResidual2(const LandmarkDataset& data, const std::vector<Pose2>& trajectory,
+                         const std::vector<int>& sightings, const Eigen::Vector2d& landmark_m) {
+  double sum = 0;
+  for (int k : sightings) {
+    const LandmarkSighting& s = data.sightings[k];
+    const Pose2& pose = trajectory[s.pose];
+    const Eigen::Vector3d sensor =
+        pose.RobotToWorld(Eigen::Vector3d(data.sensor_offset_m.x(), data.sensor_offset_m.y(), 0.0));
+    const Eigen::Vector2d d = landmark_m - sensor.head<2>();
+    const double range_error = (d.norm() - s.range_m) / s.range_std_m;
+    const double bearing_error =
+        WrapAngle(std::atan2(d.y(), d.x()) - pose.theta - s.bearing_rad) / s.bearing_std_rad;
+    sum += range_error * range_error + bearing_error * bearing_error;
+  }
+  return sum;
+}
+
+EvaluationPtr LandmarkEvaluator::FullEvaluation(const AssociationState& state,
+                                                const StateEvaluation* from, bool refine) {
+  const auto start = std::chrono::steady_clock::now();
+  const LandmarkDataset& data = *data_.data;
+  LandmarkSlamResult warm;
+  const bool use_warm = from != nullptr;
+  if (use_warm) warm = WarmStart(*from);
+  LandmarkSlam& slam = refine ? full_ : step_;
+  const LandmarkSlamResult result =
+      slam.Solve(data, Association(state), use_warm ? &warm : nullptr);
+  ++solves_;
+  auto evaluation = std::make_shared<StateEvaluation>();
+  evaluation->state = state;
+  evaluation->valid = result.summary.IsUsable() && result.evidence.valid &&
+                      std::isfinite(result.evidence.log_evidence);
+  evaluation->log_target = result.evidence.log_evidence;
+  auto solution = std::make_shared<GeometricSlamResult>();
+  solution->trajectory = result.trajectory;
+  solution->summary = result.summary;
+  solution->evidence = result.evidence;
+  evaluation->solution = std::move(solution);
+  for (const auto& block : state.blocks) {
+    const MappedLandmark* l = FindLandmark(result, block.front());
+    const Eigen::Vector2d p = l ? l->position_m : Eigen::Vector2d::Zero();
+    evaluation->locations.push_back(Eigen::Vector3d(p.x(), p.y(), 0));
+    std::vector<int> sightings;
+    for (int t : block)
+      sightings.insert(sightings.end(), data_.tracks[t].begin(), data_.tracks[t].end());
+    evaluation->residual2.push_back(SightingResidual2(data, result.trajectory, sightings, p));
+  }
+  evaluation->evaluation_time_s = SecondsSince(start);
+  return evaluation;
+}
+
+const LandmarkEvaluator::BlockValue& LandmarkEvaluator::LocalBlock(const std::vector<int>& block,
+                                                                   const StateEvaluation* from) {
+  const auto found = block_cache_.find(block);
+  if (found != block_cache_.end()) return found->second;
+  const LandmarkDataset& data = *data_.data;
+  const std::vector<Pose2>& trajectory = reference_->solution->trajectory;
+  std::vector<int> sightings;
+  for (int t : block)
+    sightings.insert(sightings.end(), data_.tracks[t].begin(), data_.tracks[t].end());
+  // Start where `from` has the block of the earliest track, else at the
+  // first sighting with a bearing.
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();
+  bool placed = false;
+  if (from) {
+    const int j = from->state.BlockOf(block.front());
+    if (j >= 0 && j < static_cast<int>(from->locations.size())) {
+      start = from->locations[j].head<2>();
+      placed = true;
+    }
+  }
+  double diameter_sum = 0;
+  int diameters = 0;
+  for (int k : sightings) {
+    const LandmarkSighting& s = data.sightings[k];
+    if (!placed && s.range_m > 0) {
+      start = LandmarkFromRangeBearing(trajectory[s.pose], s.range_m, s.bearing_rad,
+                                       data.sensor_offset_m);
+      placed = true;
+    }
+    if (std::isfinite(s.diameter_m)) {
+      diameter_sum += s.diameter_m;
+      ++diameters;
+    }
+  }
+  FactorGraph graph;
+  const int landmark = graph.AddVariable(start);
+  const int diameter =
+      diameters > 0 ? graph.AddVariable(Eigen::Matrix<double, 1, 1>(diameter_sum / diameters)) : -1;
+  const double prior_var = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
+  graph.Emplace<PriorFactor>(landmark, Eigen::VectorXd(options_.slam.landmark_prior_mean_m),
+                             Eigen::MatrixXd(Eigen::Matrix2d::Identity() * prior_var),
+                             "landmark prior");
+  const Eigen::Matrix<double, 1, 1> diameter_var(options_.slam.diameter_std_m *
+                                                 options_.slam.diameter_std_m);
+  std::map<int, int> pose_keys;
+  for (int k : sightings) {
+    const LandmarkSighting& s = data.sightings[k];
+    auto it = pose_keys.find(s.pose);
+    if (it == pose_keys.end()) {
+      const Pose2& p = trajectory[s.pose];
+      it = pose_keys.emplace(s.pose, graph.AddPose(p.x, p.y, p.theta, /*fixed=*/true)).first;
+    }
+    graph.Emplace<RangeBearingFactor>(it->second, landmark, s.range_m, s.bearing_rad, s.range_std_m,
+                                      s.bearing_std_rad, data.sensor_offset_m);
+    if (diameter >= 0 && std::isfinite(s.diameter_m))
+      graph.Emplace<PriorFactor>(diameter, Eigen::Matrix<double, 1, 1>(s.diameter_m), diameter_var,
+                                 "diameter");
+  }
+  const SolveResult solved = local_solver_.Solve(&graph);
+  ++solves_;
+  BlockValue value;
+  value.log_evidence = solved.summary.IsUsable() && solved.evidence.valid
+                           ? solved.evidence.log_evidence
+                           : -std::numeric_limits<double>::infinity();
+  value.position_m = graph.values().Get(landmark);
+  value.residual2 = SightingResidual2(data, trajectory, sightings, value.position_m);
+  return block_cache_.emplace(block, value).first->second;
+}
+
+EvaluationPtr LandmarkEvaluator::LocalEvaluation(const AssociationState& state,
+                                                 const StateEvaluation* from) {
+  const auto start = std::chrono::steady_clock::now();
+  auto evaluation = std::make_shared<StateEvaluation>();
+  evaluation->state = state;
+  evaluation->solution = reference_->solution;
+  std::vector<char> kept(reference_->state.blocks.size(), 0);
+  double log_target = reference_->log_target;
+  for (const auto& block : state.blocks) {
+    const auto in_reference = reference_blocks_.find(block);
+    if (in_reference != reference_blocks_.end()) {
+      const int j = in_reference->second;
+      kept[j] = 1;
+      evaluation->locations.push_back(reference_->locations[j]);
+      evaluation->residual2.push_back(reference_->residual2[j]);
+      continue;
+    }
+    const BlockValue& value = LocalBlock(block, from);
+    log_target += value.log_evidence;
+    evaluation->locations.push_back(Eigen::Vector3d(value.position_m.x(), value.position_m.y(), 0));
+    evaluation->residual2.push_back(value.residual2);
+  }
+  for (size_t j = 0; j < kept.size(); ++j)
+    if (!kept[j])
+      log_target -= LocalBlock(reference_->state.blocks[j], reference_.get()).log_evidence;
+  evaluation->log_target = log_target;
+  evaluation->valid = std::isfinite(log_target);
+  evaluation->evaluation_time_s = SecondsSince(start);
+  return evaluation;
+}
+
+void LandmarkEvaluator::Store(const EvaluationPtr& evaluation) {
+  if (cache_.size() >= options_.max_cache_entries) cache_.clear();
+  cache_[evaluation->state] = evaluation;
+}
+
+EvaluationPtr LandmarkEvaluator::Evaluate(const AssociationState& state,
+                                          const StateEvaluation* from) {
+  const auto found = cache_.find(state);
+  if (found != cache_.end()) {
+    ++hits_;
+    return found->second;
+  }
+  if (options_.mode == LandmarkEvaluationMode::kLocal && !reference_) return Refine(state, from);
+  EvaluationPtr evaluation = options_.mode == LandmarkEvaluationMode::kExact
+                                 ? FullEvaluation(state, from, false)
+                                 : LocalEvaluation(state, from);
+  Store(evaluation);
+  return evaluation;
+}
+
+EvaluationPtr LandmarkEvaluator::Refine(const AssociationState& state,
+                                        const StateEvaluation* from) {
+  EvaluationPtr evaluation = FullEvaluation(state, from, true);
+  if (options_.mode == LandmarkEvaluationMode::kLocal && evaluation->valid) {
+    // A new linearisation point: values computed at the old one are stale.
+    reference_ = evaluation;
+    reference_blocks_.clear();
+    for (size_t j = 0; j < state.blocks.size(); ++j)
+      reference_blocks_[state.blocks[j]] = static_cast<int>(j);
+    block_cache_.clear();
+    cache_.clear();
+  }
+  Store(evaluation);
+  return evaluation;
+}
+
+void LandmarkEvaluator::Remember(const EvaluationPtr& evaluation) {
+  Store(evaluation);
+}
+
+LandmarkSlamResult LandmarkEvaluator::Solve(const AssociationState& state,
+                                            const StateEvaluation* from) {
+  LandmarkSlamOptions options = options_.slam;
+  options.compute_landmark_covariances = true;
+  options.held_poses = 0;
+  LandmarkSlam slam(options);
+  LandmarkSlamResult warm;
+  if (from) warm = WarmStart(*from);
+  return slam.Solve(*data_.data, Association(state), from ? &warm : nullptr);
+}
+
+PairwiseAgreement ComparePairwise(const std::vector<int>& estimate, const std::vector<int>& truth) {
+  if (estimate.size() != truth.size())
+    throw Error("pairwise comparison: " + std::to_string(estimate.size()) + " vs " +
+                std::to_string(truth.size()) + " sightings");
+  // -1 becomes a label of its own per sighting.
+  const long long n = static_cast<long long>(estimate.size());
+  auto label = [](int id, long long k) { return id >= 0 ? static_cast<long long>(id) : -1 - k; };
+  std::map<long long, long long> count_e, count_t;
+  std::map<std::pair<long long, long long>, long long> count_both;
+  for (long long k = 0; k < n; ++k) {
+    const long long e = label(estimate[k], k), t = label(truth[k], k);
+    ++count_e[e];
+    ++count_t[t];
+    ++count_both[{e, t}];
+  }
+  auto pairs = [](long long c) { return c * (c - 1) / 2; };
+  PairwiseAgreement a;
+  a.pairs = pairs(n);
+  for (const auto& [key, c] : count_e) a.same_estimate += pairs(c);
+  for (const auto& [key, c] : count_t) a.same_truth += pairs(c);
+  for (const auto& [key, c] : count_both) a.same_both += pairs(c);
+  const long long disagree = a.same_estimate + a.same_truth - 2 * a.same_both;
+  a.agreement = a.pairs > 0 ? 1.0 - double(disagree) / double(a.pairs) : 1.0;
+  a.precision = a.same_estimate > 0 ? double(a.same_both) / double(a.same_estimate) : 1.0;
+  a.recall = a.same_truth > 0 ? double(a.same_both) / double(a.same_truth) : 1.0;
+  return a;
+}
+
+double TrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b) {
+  if (a.size() != b.size() || a.empty())
+    throw Error("trajectory RMSE: " + std::to_string(a.size()) + " vs " + std::to_string(b.size()) +
+                " poses");
+  double sum = 0;
+  for (size_t i = 0; i < a.size(); ++i)
+    sum += (a[i].x - b[i].x) * (a[i].x - b[i].x) + (a[i].y - b[i].y) * (a[i].y - b[i].y);
+  return std::sqrt(sum / double(a.size()));
+}
+
+bool UnknownAssociationOptions::Validate(std::string* why) const {
+  if (!tracks.Validate(why) || !target.Validate(why) || !moves.Validate(why)) return false;
+  if (window_poses < 0 || free_poses < 0 || !(hill_climb_steps_per_track >= 0) ||
+      final_hill_climb_steps < 0 || refine_every < 1 || samples < 0 || num_chains < 1 ||
+      burn_in < 0 || (samples > 0 && burn_in >= samples)) {
+    if (why)
+      *why =
+          "windows, steps and samples must be >= 0, refine_every and chains >= 1, burn-in "
+          "below the samples";
+    return false;
+  }
+  return true;
+}
+
+UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
+                                                 const UnknownAssociationOptions& options_in,
+                                                 const LandmarkProgress& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options_in.Validate(&why)) throw Error("unknown-association landmark SLAM: " + why);
+  UnknownAssociationOptions options = options_in;
+  auto say = [&](const std::string& line) {
+    if (progress) progress(line);
+  };
+  UnknownAssociationResult result;
+  result.tracks = BuildLandmarkTracks(data, data.dead_reckoning, options.tracks);
+  const int num_tracks = static_cast<int>(result.tracks.size());
+  if (num_tracks == 0) throw Error::InFile(data.path, "no sighting with a range > 0");
+  // The prior's centre: the mean of the dead-reckoned sightings.
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  int placed = 0;
+  std::vector<int> first_pose(num_tracks), track_size(num_tracks);
+  for (int t = 0; t < num_tracks; ++t) {
+    first_pose[t] = data.sightings[result.tracks[t].front()].pose;
+    track_size[t] = static_cast<int>(result.tracks[t].size());
+    for (int k : result.tracks[t]) {
+      const LandmarkSighting& s = data.sightings[k];
+      centre += LandmarkFromRangeBearing(data.dead_reckoning[s.pose], s.range_m, s.bearing_rad,
+                                         data.sensor_offset_m);
+      ++placed;
+    }
+  }
+  options.target.slam.landmark_prior_mean_m = centre / placed;
+  result.track_time_s = SecondsSince(start);
+  say(Format("tracks: %.0f sightings -> %.0f tracks (gate %.2f m, pose gap %.0f), %.2f s",
+             double(placed), double(num_tracks), options.tracks.gate_m,
+             double(options.tracks.max_pose_gap), result.track_time_s));
+
+  const ClassConfusionModel model =
+      ClassConfusionModel::Identity(1, 1e-3, std::vector<int>(num_tracks, 0), track_size);
+  std::vector<int> ends;
+  if (options.window_poses > 0)
+    for (int n = options.window_poses; n < data.num_poses; n += options.window_poses)
+      ends.push_back(n);
+  ends.push_back(data.num_poses);
+
+  // ---- hill climbing in growing windows ----
+  const auto climb_start = std::chrono::steady_clock::now();
+  Rng rng(options.seed);
+  AssociationState state;
+  EvaluationPtr previous;  // last window's final full solve
+  int tracks_before = 0;
+  std::array<MoveStatistics, 3> stats{};
+  std::unique_ptr<LandmarkDataset> window_dataset;  // kept alive with the evaluator
+  std::unique_ptr<LandmarkTargetData> window_data;
+  std::unique_ptr<LandmarkEvaluator> evaluator;
+  EvaluationPtr current;
+  auto climb = [&](long steps) {
+    long accepted = 0;
+    for (long step = 1; step <= steps; ++step) {
+      const EvaluationPtr before = current;
+      current = MetropolisStep(current, 1.0, true, *evaluator, model, options.moves,
+                               options.hill_climb_moves, rng, &stats);
+      if (current != before) ++accepted;
+      if (step % options.refine_every == 0 || step == steps) {
+        const EvaluationPtr refined = evaluator->Refine(current->state, current.get());
+        if (refined->valid) current = refined;
+      }
+    }
+    result.proposals += steps;
+    result.accepted += accepted;
+    return accepted;
+  };
+  for (size_t w = 0; w < ends.size(); ++w) {
+    const auto window_start = std::chrono::steady_clock::now();
+    const int n = ends[w];
+    std::vector<int> kept;
+    auto prefix = std::make_unique<LandmarkDataset>(PosePrefix(data, n, &kept));
+    std::vector<int> to_prefix(data.sightings.size(), -1);
+    for (size_t i = 0; i < kept.size(); ++i) to_prefix[kept[i]] = static_cast<int>(i);
+    int tracks_now = tracks_before;
+    while (tracks_now < num_tracks && first_pose[tracks_now] < n) ++tracks_now;
+    auto target_data = std::make_unique<LandmarkTargetData>();
+    target_data->data = prefix.get();
+    for (int t = 0; t < tracks_now; ++t) {
+      std::vector<int> in;
+      for (int k : result.tracks[t])
+        if (to_prefix[k] >= 0) in.push_back(to_prefix[k]);
+      target_data->tracks.push_back(in);
+    }
+    LandmarkTargetOptions window_target = options.target;
+    const int previous_end = w > 0 ? ends[w - 1] : 0;
+    if (options.free_poses > 0)
+      window_target.slam.held_poses = std::min(previous_end, std::max(0, n - options.free_poses));
+    auto window_evaluator = std::make_unique<LandmarkEvaluator>(*target_data, window_target);
+    for (int t = tracks_before; t < tracks_now; ++t) {
+      state.blocks.push_back({t});
+      state.classes.push_back(0);
+    }
+    state.Canonicalize();
+    // Warm start: the previous window's solution, its trajectory continued
+    // by the odometry.
+    StateEvaluation seed;
+    if (previous) {
+      seed = *previous;
+      auto extended = std::make_shared<GeometricSlamResult>();
+      extended->trajectory =
+          ExtendByOdometry(previous->solution->trajectory, prefix->dead_reckoning);
+      seed.solution = std::move(extended);
+    }
+    current = window_evaluator->Refine(state, previous ? &seed : nullptr);
+    if (!current->valid)
+      throw Error::InFile(data.path,
+                          "the solve of the first " + std::to_string(n) + " poses failed");
+    // Keep the data alive as long as its evaluator.
+    evaluator = std::move(window_evaluator);
+    window_data = std::move(target_data);
+    window_dataset = std::move(prefix);
+    const long steps =
+        std::lround(options.hill_climb_steps_per_track * double(tracks_now - tracks_before));
+    const long accepted = climb(steps);
+    state = current->state;
+    previous = current;
+    say(Format("window %.0f/%.0f: %.0f poses, %.0f tracks, %.0f steps (%.0f accepted) -> "
+               "%.0f landmarks,",
+               double(w + 1), double(ends.size()), double(n), double(tracks_now), double(steps),
+               double(accepted), double(state.blocks.size())) +
+        Format(" log target %.1f, %.2f s", current->log_target, SecondsSince(window_start)));
+    tracks_before = tracks_now;
+  }
+  if (options.free_poses > 0 && options.free_poses < data.num_poses) {
+    // The windows held early poses: solve the whole problem once more.
+    auto whole = std::make_unique<LandmarkEvaluator>(*window_data, options.target);
+    const EvaluationPtr refined = whole->Refine(current->state, current.get());
+    if (refined->valid) current = refined;
+    evaluator = std::move(whole);
+    say(Format("all poses free: log target %.1f", current->log_target));
+  }
+  if (options.final_hill_climb_steps > 0) {
+    const auto pass_start = std::chrono::steady_clock::now();
+    const long accepted = climb(options.final_hill_climb_steps);
+    state = current->state;
+    say(Format("global pass: %.0f steps (%.0f accepted) -> %.0f landmarks, log target %.1f, %.2f s",
+               double(options.final_hill_climb_steps), double(accepted),
+               double(state.blocks.size()), current->log_target, SecondsSince(pass_start)));
+  }
+  result.hill_climb_time_s = SecondsSince(climb_start);
+  for (const MoveStatistics& s : stats) result.proposal_time_s += s.time_s;
+  result.solves = static_cast<long>(evaluator->num_solves());
+  result.cache_hits = static_cast<long>(evaluator->num_cache_hits());
+  EvaluationPtr best = current;
+
+  // ---- MC³ ----
+  if (options.samples > 0) {
+    const auto sampling_start = std::chrono::steady_clock::now();
+    SamplerOptions sampler_options;
+    sampler_options.hill_climb_steps = 0;
+    sampler_options.refine_every = options.refine_every;
+    sampler_options.sampling_moves = {0.5, 0.5, 0.0};  // one class: nothing to switch
+    sampler_options.moves = options.moves;
+    sampler_options.num_chains = options.num_chains;
+    sampler_options.num_iterations = options.samples;
+    sampler_options.burn_in = options.burn_in;
+    sampler_options.seed = options.seed;
+    const LandmarkTargetData& full_data = *window_data;
+    const LandmarkTargetOptions target = options.target;
+    Sampler sampler(
+        model,
+        [&full_data, target]() -> std::unique_ptr<StateEvaluator> {
+          return std::make_unique<LandmarkEvaluator>(full_data, target);
+        },
+        sampler_options);
+    size_t last_report = 0;
+    const SamplerResult sampled =
+        sampler.Run(state, [&](const char* stage, size_t done, size_t total) {
+          if (done == total || done >= last_report + std::max<size_t>(1, total / 10)) {
+            last_report = done;
+            say(std::string(stage) + Format(": %.0f/%.0f", double(done), double(total)));
+          }
+        });
+    result.sampler = sampled.summary;
+    if (sampled.best && sampled.best->valid && sampled.best->log_target > best->log_target)
+      best = sampled.best;
+    result.sampling_time_s = SecondsSince(sampling_start);
+    say(Format("MC3: %.0f iterations, %.0f chains, swaps %.0f/%.0f, %.2f s",
+               double(options.samples), double(options.num_chains),
+               double(sampled.summary.swaps_accepted), double(sampled.summary.swaps_proposed),
+               result.sampling_time_s));
+  }
+
+  // ---- the best state, solved in full ----
+  result.state = best->state;
+  result.association = evaluator->Association(result.state);
+  result.solution = evaluator->Solve(result.state, best.get());
+  result.log_target = result.solution.evidence.log_evidence;
+  result.total_time_s = SecondsSince(start);
+  say(Format("final solve: %.0f landmarks, log evidence %.1f, total %.2f s",
+             double(result.solution.landmarks.size()), result.log_target, result.total_time_s));
+  return result;
+}
+
+}  // namespace oslam
