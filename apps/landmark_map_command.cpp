@@ -75,10 +75,11 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.target.slam.landmark_prior_std_m =
       arguments.Has("landmark-prior-std") ? arguments.GetDouble("landmark-prior-std") : 100.0;
   const std::string mode = arguments.Get("evaluation");
-  if (mode != "local" && mode != "exact")
-    throw UsageError("--evaluation must be local or exact, not '" + mode + "'");
-  options.target.mode =
-      mode == "exact" ? LandmarkEvaluationMode::kExact : LandmarkEvaluationMode::kLocal;
+  if (mode != "local" && mode != "exact" && mode != "marginal")
+    throw UsageError("--evaluation must be marginal, local or exact, not '" + mode + "'");
+  options.target.mode = mode == "exact"   ? LandmarkEvaluationMode::kExact
+                        : mode == "local" ? LandmarkEvaluationMode::kLocal
+                                          : LandmarkEvaluationMode::kMarginal;
   std::string why;
   if (!options.Validate(&why)) throw UsageError(why);
 
@@ -188,7 +189,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("odometry-noise-scale", "", "K",
                       "multiply every odometry covariance by K (a model choice)", "1");
   arguments.AddOption("evaluation", "", "MODE",
-                      "unknown association: local (poses held per proposal) or exact", "local");
+                      "unknown association: marginal (merges in closed form from the joint "
+                      "marginal covariance), local (poses held) or exact (whole re-solve)",
+                      "marginal");
   arguments.AddOption(
       "gps", "", "FILE",
       "compare the trajectory with GPS fixes (gps.dat: time x y; needs pose times)");

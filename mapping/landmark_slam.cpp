@@ -191,6 +191,7 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
     if (landmark.diameter >= 0) mapped.diameter_m = values.Data(landmark.diameter)[0];
     mapped.num_sightings = landmark.count;
     result.landmarks.push_back(mapped);
+    result.landmark_position_keys.push_back(landmark.position);
   }
   if (!result.summary.IsUsable()) {
     result.total_time_s = seconds_since(start_time);

@@ -74,6 +74,9 @@ struct LandmarkSlamResult {
   std::vector<Pose2> trajectory;                  // one per pose of the data set
   std::vector<Eigen::Matrix3d> pose_covariances;  // empty unless asked; pose 0 is zero
   std::vector<MappedLandmark> landmarks;          // sorted by id
+  // The solver's variable key of each landmark's position (parallel to
+  // landmarks), for MarginalCovariances on solver() after this solve.
+  std::vector<int> landmark_position_keys;
   SolverSummary summary;
   Evidence evidence;
   std::string covariance_message;  // why covariances are missing, if they are

@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <limits>
 
+#include <Eigen/Cholesky>
+
 #include "core/angles.h"
 #include "core/error.h"
 #include "mapping/factor_graph.h"
@@ -203,10 +205,26 @@ double SightingResidual2(const LandmarkDataset& data, const std::vector<Pose2>& 
   return sum;
 }
 
+bool LandmarkEvaluator::SharesAScan(const std::vector<int>& block) const {
+  if (!options_.one_sighting_per_scan || block.size() < 2) return false;
+  std::vector<int> poses;
+  for (int t : block)
+    for (int k : data_.tracks[t]) poses.push_back(data_.data->sightings[k].pose);
+  std::sort(poses.begin(), poses.end());
+  return std::adjacent_find(poses.begin(), poses.end()) != poses.end();
+}
+
 EvaluationPtr LandmarkEvaluator::FullEvaluation(const AssociationState& state,
                                                 const StateEvaluation* from, bool refine) {
   const auto start = std::chrono::steady_clock::now();
   const LandmarkDataset& data = *data_.data;
+  if (!refine)
+    for (const auto& block : state.blocks)
+      if (SharesAScan(block)) {
+        auto invalid = std::make_shared<StateEvaluation>();
+        invalid->state = state;
+        return invalid;  // valid = false: rejected
+      }
   LandmarkSlamResult warm;
   const bool use_warm = from != nullptr;
   if (use_warm) warm = WarmStart(*from);
@@ -224,8 +242,12 @@ EvaluationPtr LandmarkEvaluator::FullEvaluation(const AssociationState& state,
   solution->summary = result.summary;
   solution->evidence = result.evidence;
   evaluation->solution = std::move(solution);
+  if (refine) last_refine_keys_.clear();
   for (const auto& block : state.blocks) {
     const MappedLandmark* l = FindLandmark(result, block.front());
+    if (refine)
+      last_refine_keys_.push_back(l ? result.landmark_position_keys[l - result.landmarks.data()]
+                                    : -1);
     const Eigen::Vector2d p = l ? l->position_m : Eigen::Vector2d::Zero();
     evaluation->locations.push_back(Eigen::Vector3d(p.x(), p.y(), 0));
     std::vector<int> sightings;
@@ -312,6 +334,53 @@ EvaluationPtr LandmarkEvaluator::LocalEvaluation(const AssociationState& state,
   auto evaluation = std::make_shared<StateEvaluation>();
   evaluation->state = state;
   evaluation->solution = reference_->solution;
+  for (const auto& block : state.blocks)
+    if (!reference_blocks_.count(block) && SharesAScan(block)) return evaluation;  // invalid
+  if (options_.mode == LandmarkEvaluationMode::kMarginal &&
+      state.blocks.size() + 1 == reference_->state.blocks.size()) {
+    // One merge of two reference blocks? Then every other block is unchanged.
+    int added = -1, others = 0;
+    for (size_t j = 0; j < state.blocks.size(); ++j)
+      if (!reference_blocks_.count(state.blocks[j])) {
+        added = static_cast<int>(j);
+        ++others;
+      }
+    const int ja = added >= 0 ? reference_->state.BlockOf(state.blocks[added].front()) : -1;
+    const int jb = ja >= 0 && others == 1
+                       ? [&] {
+                           for (int t : state.blocks[added]) {
+                             const int j = reference_->state.BlockOf(t);
+                             if (j != ja) return j;
+                           }
+                           return -1;
+                         }()
+                       : -1;
+    double delta = 0;
+    Eigen::Vector2d mean;
+    if (jb >= 0 &&
+        reference_->state.blocks[ja].size() + reference_->state.blocks[jb].size() ==
+            state.blocks[added].size() &&
+        MergeDelta(ja, jb, &delta, &mean)) {
+      std::vector<int> sightings;
+      for (int t : state.blocks[added])
+        sightings.insert(sightings.end(), data_.tracks[t].begin(), data_.tracks[t].end());
+      for (size_t j = 0; j < state.blocks.size(); ++j) {
+        if (static_cast<int>(j) == added) {
+          evaluation->locations.push_back(Eigen::Vector3d(mean.x(), mean.y(), 0));
+          evaluation->residual2.push_back(
+              SightingResidual2(*data_.data, reference_->solution->trajectory, sightings, mean));
+          continue;
+        }
+        const int r = reference_blocks_.at(state.blocks[j]);
+        evaluation->locations.push_back(reference_->locations[r]);
+        evaluation->residual2.push_back(reference_->residual2[r]);
+      }
+      evaluation->log_target = reference_->log_target + delta;
+      evaluation->valid = true;
+      evaluation->evaluation_time_s = SecondsSince(start);
+      return evaluation;
+    }
+  }
   std::vector<char> kept(reference_->state.blocks.size(), 0);
   double log_target = reference_->log_target;
   for (const auto& block : state.blocks) {
@@ -349,7 +418,7 @@ EvaluationPtr LandmarkEvaluator::Evaluate(const AssociationState& state,
     ++hits_;
     return found->second;
   }
-  if (options_.mode == LandmarkEvaluationMode::kLocal && !reference_) return Refine(state, from);
+  if (options_.mode != LandmarkEvaluationMode::kExact && !reference_) return Refine(state, from);
   EvaluationPtr evaluation = options_.mode == LandmarkEvaluationMode::kExact
                                  ? FullEvaluation(state, from, false)
                                  : LocalEvaluation(state, from);
@@ -360,17 +429,64 @@ EvaluationPtr LandmarkEvaluator::Evaluate(const AssociationState& state,
 EvaluationPtr LandmarkEvaluator::Refine(const AssociationState& state,
                                         const StateEvaluation* from) {
   EvaluationPtr evaluation = FullEvaluation(state, from, true);
-  if (options_.mode == LandmarkEvaluationMode::kLocal && evaluation->valid) {
-    // A new linearisation point: values computed at the old one are stale.
-    reference_ = evaluation;
-    reference_blocks_.clear();
-    for (size_t j = 0; j < state.blocks.size(); ++j)
-      reference_blocks_[state.blocks[j]] = static_cast<int>(j);
-    block_cache_.clear();
-    cache_.clear();
+  if (options_.mode != LandmarkEvaluationMode::kExact && evaluation->valid) {
+    SetReference(evaluation);
+    reference_factorised_ = true;
+    reference_position_keys_ = last_refine_keys_;
   }
   Store(evaluation);
   return evaluation;
+}
+
+bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean) {
+  if (!reference_factorised_) return false;
+  const int ka = reference_position_keys_[ja], kb = reference_position_keys_[jb];
+  if (ka < 0 || kb < 0) return false;
+  std::vector<Eigen::MatrixXd> blocks;
+  std::string why;
+  if (!full_.solver().MarginalCovariances({{ka, kb}}, &blocks, &why) || blocks.size() != 1 ||
+      blocks[0].rows() != 4)
+    return false;
+  ++marginal_merges_;
+  // Laplace evidence ratio of "l_a = l_b = l" (one location prior N(m, s^2 I)
+  // instead of two): with the reference's Gaussian N(mu, Sigma) over
+  // (l_a, l_b) and H = [I; I],
+  //   log int N(H l; mu, Sigma) / N(l; m, s^2 I) dl
+  //   = -1/2 log|Sigma| + 2 log s - 1/2 log|P| + 1/2 b'P^-1 b - 1/2 mu'Lambda mu + |m|^2 / (2 s^2)
+  // with Lambda = Sigma^-1, P = H'Lambda H - I / s^2, b = H'Lambda mu - m / s^2.
+  const Eigen::Matrix4d sigma = blocks[0];
+  Eigen::Vector4d mu;
+  mu << reference_->locations[ja].head<2>(), reference_->locations[jb].head<2>();
+  const Eigen::LLT<Eigen::Matrix4d> sigma_llt(sigma);
+  if (sigma_llt.info() != Eigen::Success) return false;
+  const Eigen::Matrix4d lambda = sigma_llt.solve(Eigen::Matrix4d::Identity());
+  Eigen::Matrix<double, 4, 2> h;
+  h << Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity();
+  const double s2 = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
+  const Eigen::Vector2d m = options_.slam.landmark_prior_mean_m;
+  const Eigen::Matrix2d p = h.transpose() * lambda * h - Eigen::Matrix2d::Identity() / s2;
+  const Eigen::Vector2d b = h.transpose() * lambda * mu - m / s2;
+  const Eigen::LLT<Eigen::Matrix2d> p_llt(p);
+  if (p_llt.info() != Eigen::Success) return false;
+  const Eigen::Vector2d l = p_llt.solve(b);
+  double log_det_sigma = 0, log_det_p = 0;
+  for (int i = 0; i < 4; ++i) log_det_sigma += 2 * std::log(sigma_llt.matrixL()(i, i));
+  for (int i = 0; i < 2; ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
+  *delta = -0.5 * log_det_sigma + std::log(s2) - 0.5 * log_det_p + 0.5 * b.dot(l) -
+           0.5 * mu.dot(lambda * mu) + 0.5 * m.squaredNorm() / s2;
+  *mean = l;
+  return std::isfinite(*delta);
+}
+
+void LandmarkEvaluator::SetReference(const EvaluationPtr& evaluation) {
+  // A new linearisation point: values computed at the old one are stale.
+  reference_ = evaluation;
+  reference_factorised_ = false;
+  reference_blocks_.clear();
+  for (size_t j = 0; j < evaluation->state.blocks.size(); ++j)
+    reference_blocks_[evaluation->state.blocks[j]] = static_cast<int>(j);
+  block_cache_.clear();
+  cache_.clear();
 }
 
 void LandmarkEvaluator::Remember(const EvaluationPtr& evaluation) {
@@ -500,7 +616,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       current = MetropolisStep(current, 1.0, true, *evaluator, model, options.moves,
                                options.hill_climb_moves, rng, &stats);
       if (current != before) ++accepted;
-      if (step % options.refine_every == 0 || step == steps) {
+      const bool resolve =
+          current != before && options.target.mode == LandmarkEvaluationMode::kMarginal;
+      if (resolve || step % options.refine_every == 0 || step == steps) {
         const EvaluationPtr refined = evaluator->Refine(current->state, current.get());
         if (refined->valid) current = refined;
       }

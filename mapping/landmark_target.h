@@ -58,16 +58,26 @@ std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
                                                   const std::vector<Pose2>& trajectory,
                                                   const LandmarkTrackOptions& options);
 
-enum class LandmarkEvaluationMode { kExact, kLocal };
+// kMarginal (for hill climbing): a merge of two landmarks of the reference
+// (the last full solve) is scored in closed form from their joint marginal
+// covariance at the reference, i.e. the exact answer of the linearised
+// problem (one linear system, spec §9.6), pose uncertainty and loop
+// correlations included; other proposals as kLocal. The driver re-solves
+// after each accepted move so the next merge is again against a reference.
+enum class LandmarkEvaluationMode { kExact, kLocal, kMarginal };
 
 struct LandmarkTargetOptions {
+  LandmarkTargetOptions() { slam.landmark_prior_std_m = 100.0; }
   // The full solves (Refine, and exact proposals with fewer iterations).
   // landmark_prior_std_m must be > 0.
   LandmarkSlamOptions slam;
   LandmarkEvaluationMode mode = LandmarkEvaluationMode::kLocal;
   int proposal_iterations = 5;  // exact: LM iterations of a proposal's warm re-solve
   int local_iterations = 10;    // local: LM iterations of one landmark's solve
-  size_t max_cache_entries = 100000;
+  size_t max_cache_entries = 5000;
+  // A scan sees a landmark at most once: a state putting two sightings of
+  // one pose on one landmark is invalid (P = 0), so no such merge is made.
+  bool one_sighting_per_scan = true;
 
   bool Validate(std::string* why) const;
 };
@@ -91,6 +101,7 @@ class LandmarkEvaluator : public StateEvaluator {
   void Remember(const EvaluationPtr& evaluation) override;
   size_t num_solves() const override { return solves_; }
   size_t num_cache_hits() const override { return hits_; }
+  size_t num_marginal_merges() const { return marginal_merges_; }  // marginal: closed-form merges
 
   // The landmark id of every sighting under `state` (a block's id is its
   // earliest track), -1 for sightings in no track.
@@ -121,9 +132,18 @@ class LandmarkEvaluator : public StateEvaluator {
   std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
   // Local mode: the reference (last full solve) and L(b) at its trajectory.
   EvaluationPtr reference_;
+  bool reference_factorised_ = false;         // reference_ is full_'s last solve
+  std::vector<int> reference_position_keys_;  // per reference block
+  std::vector<int> last_refine_keys_;         // per block of full_'s last solve
   std::unordered_map<std::vector<int>, int, BlockHash> reference_blocks_;  // block -> index
   std::unordered_map<std::vector<int>, BlockValue, BlockHash> block_cache_;
-  size_t solves_ = 0, hits_ = 0;
+  void SetReference(const EvaluationPtr& evaluation);
+  // True when two of the block's sightings are from one pose.
+  bool SharesAScan(const std::vector<int>& block) const;
+  // log_target(merged) - log_target(reference) for merging reference blocks
+  // ja and jb, and the merged landmark's mean; false when not computable.
+  bool MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean);
+  size_t solves_ = 0, hits_ = 0, marginal_merges_ = 0;
 };
 
 // Squared whitened range-bearing residuals of the sightings `sightings` of a
