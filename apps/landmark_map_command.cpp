@@ -61,6 +61,7 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.tracks.max_pose_gap = static_cast<int>(arguments.GetInt("track-gap"));
   options.window_poses = static_cast<int>(arguments.GetInt("window"));
   options.free_poses = static_cast<int>(arguments.GetInt("free-poses"));
+  options.targeted_radius_m = arguments.GetDouble("targeted-radius");
   options.hill_climb_steps_per_track = arguments.GetDouble("hill-climb");
   options.final_hill_climb_steps = static_cast<int>(arguments.GetInt("final-steps"));
   options.samples = static_cast<int>(arguments.GetInt("samples"));
@@ -182,6 +183,10 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("merge-distance", "", "M",
                       "unknown association: landmarks closer than this are merge candidates",
                       "3.0");
+  arguments.AddOption("targeted-radius", "", "M",
+                      "unknown association: score each new landmark's merge with every landmark "
+                      "this close first (marginal evaluation; 0: off)",
+                      "0");
   arguments.AddOption("free-poses", "", "POSES",
                       "unknown association: poses free in a window's solves, earlier ones held "
                       "(0: all free)",

@@ -544,9 +544,13 @@ double TrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b) 
 
 bool UnknownAssociationOptions::Validate(std::string* why) const {
   if (!tracks.Validate(why) || !target.Validate(why) || !moves.Validate(why)) return false;
-  if (window_poses < 0 || free_poses < 0 || !(hill_climb_steps_per_track >= 0) ||
-      final_hill_climb_steps < 0 || refine_every < 1 || samples < 0 || num_chains < 1 ||
-      burn_in < 0 || (samples > 0 && burn_in >= samples)) {
+  if (targeted_radius_m > 0 && target.mode != LandmarkEvaluationMode::kMarginal) {
+    if (why) *why = "targeted merges need the marginal evaluation";
+    return false;
+  }
+  if (window_poses < 0 || free_poses < 0 || !(targeted_radius_m >= 0) ||
+      !(hill_climb_steps_per_track >= 0) || final_hill_climb_steps < 0 || refine_every < 1 ||
+      samples < 0 || num_chains < 1 || burn_in < 0 || (samples > 0 && burn_in >= samples)) {
     if (why)
       *why =
           "windows, steps and samples must be >= 0, refine_every and chains >= 1, burn-in "
@@ -627,6 +631,80 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     result.accepted += accepted;
     return accepted;
   };
+  // Targeted merges of the blocks holding tracks >= first_new (see the options).
+  auto targeted = [&](int first_new) {
+    long merges = 0;
+    for (int round = 0; round < 1000; ++round) {
+      const AssociationState& s = current->state;
+      const double base = current->log_target;
+      struct Candidate {
+        double delta;
+        int a, b;
+        EvaluationPtr evaluation;
+      };
+      std::vector<Candidate> best;
+      for (size_t j = 0; j < s.blocks.size(); ++j) {
+        if (s.blocks[j].back() < first_new) continue;  // no new track
+        Candidate c{0, -1, -1, nullptr};
+        for (size_t k = 0; k < s.blocks.size(); ++k) {
+          if (k == j || (s.blocks[k].back() >= first_new && k < j)) continue;  // each pair once
+          if ((current->locations[j] - current->locations[k]).norm() > options.targeted_radius_m)
+            continue;
+          AssociationState merged = s;
+          merged.blocks[j].insert(merged.blocks[j].end(), s.blocks[k].begin(), s.blocks[k].end());
+          std::sort(merged.blocks[j].begin(), merged.blocks[j].end());
+          merged.blocks.erase(merged.blocks.begin() + k);
+          merged.classes.pop_back();
+          merged.Canonicalize();
+          const EvaluationPtr e = evaluator->Evaluate(merged, current.get());
+          ++result.proposals;
+          if (e->valid && e->log_target - base > c.delta)
+            c = {e->log_target - base, static_cast<int>(j), static_cast<int>(k), e};
+        }
+        if (c.evaluation) best.push_back(c);
+      }
+      if (best.empty()) break;
+      std::sort(best.begin(), best.end(),
+                [](const Candidate& x, const Candidate& y) { return x.delta > y.delta; });
+      // All non-conflicting best merges at once.
+      AssociationState merged = s;
+      std::vector<char> used(s.blocks.size(), 0);
+      int made = 0;
+      for (const Candidate& c : best) {
+        if (used[c.a] || used[c.b]) continue;
+        used[c.a] = used[c.b] = 1;
+        merged.blocks[c.a].insert(merged.blocks[c.a].end(), s.blocks[c.b].begin(),
+                                  s.blocks[c.b].end());
+        merged.blocks[c.b].clear();
+        ++made;
+      }
+      merged.blocks.erase(std::remove_if(merged.blocks.begin(), merged.blocks.end(),
+                                         [](const std::vector<int>& b) { return b.empty(); }),
+                          merged.blocks.end());
+      merged.classes.assign(merged.blocks.size(), 0);
+      for (auto& b : merged.blocks) std::sort(b.begin(), b.end());
+      merged.Canonicalize();
+      const EvaluationPtr before = current;
+      EvaluationPtr refined = evaluator->Refine(merged, best.front().evaluation.get());
+      if (!refined->valid || refined->log_target <= base) {
+        if (made == 1) {
+          // The linearised gain did not hold: back to the state before.
+          current = evaluator->Refine(before->state, before.get());
+          break;
+        }
+        refined = evaluator->Refine(best.front().evaluation->state, best.front().evaluation.get());
+        made = 1;
+        if (!refined->valid || refined->log_target <= base) {
+          current = evaluator->Refine(before->state, before.get());
+          break;
+        }
+      }
+      current = refined;
+      merges += made;
+      result.accepted += made;
+    }
+    return merges;
+  };
   for (size_t w = 0; w < ends.size(); ++w) {
     const auto window_start = std::chrono::steady_clock::now();
     const int n = ends[w];
@@ -674,7 +752,8 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     window_dataset = std::move(prefix);
     const long steps =
         std::lround(options.hill_climb_steps_per_track * double(tracks_now - tracks_before));
-    const long accepted = climb(steps);
+    long accepted = options.targeted_radius_m > 0 ? targeted(tracks_before) : 0;
+    accepted += climb(steps);
     state = current->state;
     previous = current;
     say(Format("window %.0f/%.0f: %.0f poses, %.0f tracks, %.0f steps (%.0f accepted) -> "

@@ -186,6 +186,14 @@ struct UnknownAssociationOptions {
   double hill_climb_steps_per_track = 4;  // per window: this times its tracks
   int final_hill_climb_steps = 0;         // global pass after the windows (0: none)
   int refine_every = 50;
+  // Targeted merges before each window's random moves: every landmark with a
+  // track new in the window is scored against every landmark within this
+  // distance (marginal mode's closed form, so tens of metres of drift since
+  // the last visit are fine); the best merge of each landmark is made when it
+  // raises the target, all at once, then the window is re-solved (if the
+  // whole-problem target fell, only the single best is kept); repeated until
+  // nothing improves. 0: off. Needs LandmarkEvaluationMode::kMarginal.
+  double targeted_radius_m = 0;
   int samples = 0;  // MC³ iterations after hill climbing (0: hill climbing only)
   int burn_in = 0;
   int num_chains = 2;
