@@ -172,7 +172,7 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("chains", "", "N", "unknown association: MC3 chains", "2");
   arguments.AddOption("window", "", "POSES",
                       "unknown association: poses added per hill-climbing window (0: one window)",
-                      "500");
+                      "10");
   arguments.AddOption("track-gate", "", "M",
                       "unknown association: a sighting continues a track when its world position "
                       "is this close to the track's last one",
@@ -186,7 +186,7 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("targeted-radius", "", "M",
                       "unknown association: score each new landmark's merge with every landmark "
                       "this close first (marginal evaluation; 0: off)",
-                      "0");
+                      "50");
   arguments.AddOption("free-poses", "", "POSES",
                       "unknown association: poses free in a window's solves, earlier ones held "
                       "(0: all free)",

@@ -686,18 +686,21 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       merged.Canonicalize();
       const EvaluationPtr before = current;
       EvaluationPtr refined = evaluator->Refine(merged, best.front().evaluation.get());
-      if (!refined->valid || refined->log_target <= base) {
-        if (made == 1) {
-          // The linearised gain did not hold: back to the state before.
-          current = evaluator->Refine(before->state, before.get());
-          break;
-        }
+      auto fell = [&] { return !refined->valid || refined->log_target <= base; };
+      if (fell() && made > 1) {  // only the single best merge
         refined = evaluator->Refine(best.front().evaluation->state, best.front().evaluation.get());
         made = 1;
-        if (!refined->valid || refined->log_target <= base) {
-          current = evaluator->Refine(before->state, before.get());
-          break;
-        }
+      }
+      if (fell() && best.front().delta > options.cold_retry_gain) {
+        // A strong loop closure the warm re-solve could not pull in: solve
+        // from dead reckoning (staged), away from the unclosed trajectory.
+        ++result.cold_retries;
+        refined = evaluator->Refine(best.front().evaluation->state, nullptr);
+      }
+      if (fell()) {
+        // The linearised gain did not hold: back to the state before.
+        current = evaluator->Refine(before->state, before.get());
+        break;
       }
       current = refined;
       merges += made;

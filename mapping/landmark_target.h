@@ -71,7 +71,7 @@ struct LandmarkTargetOptions {
   // The full solves (Refine, and exact proposals with fewer iterations).
   // landmark_prior_std_m must be > 0.
   LandmarkSlamOptions slam;
-  LandmarkEvaluationMode mode = LandmarkEvaluationMode::kLocal;
+  LandmarkEvaluationMode mode = LandmarkEvaluationMode::kMarginal;
   int proposal_iterations = 5;  // exact: LM iterations of a proposal's warm re-solve
   int local_iterations = 10;    // local: LM iterations of one landmark's solve
   size_t max_cache_entries = 5000;
@@ -172,6 +172,10 @@ double TrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b);
 // refine_every steps and at its end), a final global hill-climbing pass on
 // all poses, optionally MC³ sampling, and a full solve of the best state.
 struct UnknownAssociationOptions {
+  UnknownAssociationOptions() {
+    moves.merge_distance_m = 3.0;
+    moves.merge_sigma_m = 1.5;
+  }
   LandmarkTrackOptions tracks;
   LandmarkTargetOptions target;
   MoveOptions moves;  // merge_distance_m / merge_sigma_m: how far apart merge candidates are
@@ -193,7 +197,10 @@ struct UnknownAssociationOptions {
   // raises the target, all at once, then the window is re-solved (if the
   // whole-problem target fell, only the single best is kept); repeated until
   // nothing improves. 0: off. Needs LandmarkEvaluationMode::kMarginal.
-  double targeted_radius_m = 0;
+  double targeted_radius_m = 50;
+  // When a targeted merge gaining more than this (linearised) fails its
+  // warm re-solve, it is re-solved once more from dead reckoning.
+  double cold_retry_gain = 10;
   int samples = 0;  // MC³ iterations after hill climbing (0: hill climbing only)
   int burn_in = 0;
   int num_chains = 2;
@@ -209,7 +216,7 @@ struct UnknownAssociationResult {
   std::vector<int> association;  // per sighting (ids = earliest track of the landmark)
   LandmarkSlamResult solution;   // full solve of `state`, landmark covariances
   double log_target = 0;         // of `state`, full evaluation
-  long proposals = 0, accepted = 0, solves = 0, cache_hits = 0;
+  long proposals = 0, accepted = 0, solves = 0, cache_hits = 0, cold_retries = 0;
   double track_time_s = 0, hill_climb_time_s = 0, sampling_time_s = 0, total_time_s = 0;
   double proposal_time_s = 0;  // spent evaluating proposals (hill climbing)
   SamplerSummary sampler;      // when samples > 0

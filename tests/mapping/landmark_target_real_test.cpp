@@ -1,0 +1,50 @@
+// O-SLAM with the landmark ids hidden on the real Victoria Park data
+// (../shared/data/victoria_park/with_ids, issue 10 items 2-3): the recovered
+// association agrees with the file's ids on pairs of sightings, and the
+// trajectory is near the shipped-association solve. Skipped when the shared
+// data is absent. Label: slow (about a minute on 2 cores).
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "mapping/landmark_target.h"
+#include "tests/test_util.h"
+
+namespace oslam {
+namespace {
+
+TEST(LandmarkTargetRealTest, VictoriaParkWithIdsHidden) {
+  const std::string shared = testing::SharedDataDir();
+  const std::string path = shared + "/victoria_park/with_ids/victoria_park.txt";
+  if (shared.empty() || !std::ifstream(path))
+    GTEST_SKIP() << "no " << path << " (../shared/data absent)";
+  LandmarkDataset data = ReadGtsamLandmarks(path);
+  // As `oslam map --unknown-association --odometry-noise-scale 10`: with the
+  // file's odometry covariance the shipped association scores below all
+  // tracks separate on the first 500 poses (docs/benchmarks.md).
+  UnknownAssociationOptions options;
+  for (RelativePoseMeasurement& edge : data.odometry) edge.covariance *= 10.0;
+  const UnknownAssociationResult result = SolveUnknownAssociation(data, options);
+  const std::vector<int> shipped = GivenAssociation(data);
+  const PairwiseAgreement a = ComparePairwise(result.association, shipped);
+  LandmarkSlamOptions known_options = options.target.slam;
+  known_options.compute_landmark_covariances = false;
+  const LandmarkSlamResult known = LandmarkSlam(known_options).Solve(data, shipped);
+  const double rmse = TrajectoryRmse(result.solution.trajectory, known.trajectory);
+  std::printf(
+      "%zu landmarks (151 shipped), agreement %.5f, precision %.4f, recall %.4f, "
+      "trajectory RMSE %.2f m, %.1f s\n",
+      result.solution.landmarks.size(), a.agreement, a.precision, a.recall, rmse,
+      result.total_time_s);
+  // Measured (docs/benchmarks.md): 0.99308, 0.924, 0.616, 48.0 m, 207 landmarks.
+  EXPECT_GE(a.agreement, 0.99);
+  EXPECT_GE(a.precision, 0.90);
+  EXPECT_GE(a.recall, 0.55);
+  EXPECT_LT(rmse, 80.0);
+}
+
+}  // namespace
+}  // namespace oslam
