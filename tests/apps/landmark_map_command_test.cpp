@@ -70,6 +70,31 @@ TEST(LandmarkMapCommand, RawFormatWithAnAssociationFile) {
   EXPECT_EQ(trajectory.num_rows(), 3u);
 }
 
+// --unknown-association: the ids are hidden from the solve and used to score it.
+TEST(LandmarkMapCommand, UnknownAssociationComparesWithTheIds) {
+  testing::TempDir dir;
+  const std::string common = "map --landmarks " + kData +
+                             "gtsam_small.txt --unknown-association -o " + dir.Path("omap.json") +
+                             " --seed 3";
+  const testing::CommandResult run = RunOslam(common);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("tracks: 3 sightings -> "), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("window 1/1: 4 poses"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("pairwise agreement"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("landmarks"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("trajectory vs the shipped-association solve: RMSE"), std::string::npos)
+      << run.out;
+  const OMap map = ReadOMap(dir.Path("omap.json"));
+  EXPECT_GE(map.objects.size(), 2u);  // the two trees are 5 m apart: never one
+  EXPECT_EQ(map.trajectory.size(), 4u);
+  const testing::CommandResult quiet = RunOslam(common + " --quiet");
+  EXPECT_EQ(quiet.exit_code, 0) << quiet.err;
+  EXPECT_EQ(quiet.out, "");
+  EXPECT_EQ(RunOslam(common + " --evaluation fast").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --track-gate 0").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --landmark-prior-std 0").exit_code, 2);
+}
+
 TEST(LandmarkMapCommand, BadInputAndUsage) {
   testing::TempDir dir;
   const testing::CommandResult bad =
