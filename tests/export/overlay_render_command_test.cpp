@@ -97,6 +97,33 @@ TEST(OverlayCommand, AllFramesByDefaultAndAProgressLine) {
   EXPECT_NE(result.out.find("wrote 4 overlays"), std::string::npos) << result.out;
 }
 
+// Overlays are drawn on several threads; the files must not depend on it.
+TEST(OverlayCommand, SameFilesWithOneOrSeveralThreads) {
+  testing::TempDir dir;
+  WriteRun(dir.Path("run"));
+  for (const char* threads : {"1", "3"}) {
+    const CliResult result =
+        Oslam("overlay " + dir.Path("run") + " " + kOMap + " -o " +
+              dir.Path(std::string("out") + threads) + " --threads " + threads + " --quiet");
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+  }
+  const std::vector<std::string> names = FilesIn(dir.Path("out1"));
+  ASSERT_EQ(names.size(), 4u);
+  ASSERT_EQ(FilesIn(dir.Path("out3")), names);
+  for (const std::string& name : names) {
+    const cv::Mat one = cv::imread(dir.Path("out1/" + name));
+    const cv::Mat three = cv::imread(dir.Path("out3/" + name));
+    ASSERT_EQ(one.size(), three.size()) << name;
+    cv::Mat differ;
+    cv::compare(one, three, differ, cv::CMP_NE);
+    EXPECT_EQ(cv::countNonZero(differ.reshape(1)), 0) << name;
+  }
+  EXPECT_EQ(
+      Oslam("overlay " + dir.Path("run") + " " + kOMap + " -o " + dir.Path("bad") + " --threads -1")
+          .exit_code,
+      2);
+}
+
 TEST(RenderCommand, WritesTheFiguresThatReadBack) {
   testing::TempDir dir;
   const CliResult result =
