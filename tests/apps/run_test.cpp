@@ -161,6 +161,17 @@ TEST_F(RunCommand, CorruptFrameIsNamedUnlessSkipped) {
   EXPECT_NE(skipped.err.find("skipping frame 4"), std::string::npos) << skipped.err;
 }
 
+// Frames are decoded and searched on several threads; the detections, in
+// frame order, must not depend on it.
+TEST_F(RunCommand, DetectionsDoNotDependOnTheThreads) {
+  const std::string one = dir_->Path("threads1.csv"), three = dir_->Path("threads3.csv");
+  ASSERT_EQ(Oslam("detect " + Run() + " -o " + one + " --threads 1 --quiet").exit_code, 0);
+  ASSERT_EQ(Oslam("detect " + Run() + " -o " + three + " --threads 3 --quiet").exit_code, 0);
+  const std::string csv = ReadFile(one);
+  EXPECT_GT(std::count(csv.begin(), csv.end(), '\n'), 10);
+  EXPECT_EQ(csv, ReadFile(three));
+}
+
 TEST_F(RunCommand, UsageErrorsExitWithTwo) {
   for (const std::string& arguments : std::vector<std::string>{"run " + Run(), "run " + Run() + " -o x --set nosuch.key=1", "run " + Run() + " -o x --set slam.samples",
         "run " + Run() + " -o x --set slam.method=magic",
