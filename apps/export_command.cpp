@@ -28,6 +28,8 @@ int RunExportCommand(const std::vector<std::string>& args) {
   arguments.AddFlag("ascii-ply", "write ASCII PLY instead of binary");
   arguments.AddFlag("overlays", "also draw the map on the run's frames (overlays/NNNNNN.png)");
   arguments.AddOption("frames", "", "LIST", "overlay only these frames, e.g. 0,10,20-30");
+  arguments.AddOption("detections", "", "FILE", "detections drawn on the overlays",
+                      "RUN_DIR/detections.csv if present");
   arguments.AddOption("threads", "", "N", "overlays drawn and written at once (0 = one per core)",
                       "2");
   arguments.AddFlag("quiet", "print nothing but errors");
@@ -35,8 +37,8 @@ int RunExportCommand(const std::vector<std::string>& args) {
   if (!arguments.Has("output")) throw UsageError("missing -o OUT_DIR");
   if (arguments.Flag("overlays") && !arguments.Has("run"))
     throw UsageError("--overlays needs --run RUN_DIR (frames and camera)");
-  if (arguments.Has("frames") && !arguments.Flag("overlays"))
-    throw UsageError("--frames applies to --overlays only");
+  if ((arguments.Has("frames") || arguments.Has("detections")) && !arguments.Flag("overlays"))
+    throw UsageError("--frames and --detections apply to --overlays only");
 
   ExportOptions options;
   options.min_existence = arguments.GetDouble("min-existence");
@@ -55,7 +57,8 @@ int RunExportCommand(const std::vector<std::string>& args) {
   if (arguments.Has("run")) ReadRunContext(arguments.Get("run"), &scene);
   std::optional<OverlayInput> overlays;
   if (arguments.Flag("overlays"))
-    overlays = PrepareOverlays(scene, arguments.Get("run"), arguments.Get("frames"));
+    overlays = PrepareOverlays(scene, arguments.Get("run"), arguments.Get("frames"),
+                               arguments.Has("detections") ? arguments.Get("detections") : "");
   const std::filesystem::path out = arguments.Get("output");
   CreateOutputFolder(out);
 

@@ -156,7 +156,13 @@ int RunRunCommand(const std::vector<std::string>& args) {
     slam_args.push_back("nn");
   }
   stage("o-slam", 2, RunSlamCommand, slam_args, "slam");
-  stage("export", 3, RunExportCommand, {omap, "--run", run_dir, "-o", out_dir}, "export");
+  // The overlays show this run's detections (the run folder may have none).
+  std::vector<std::string> export_args = {omap, "--run", run_dir, "-o", out_dir};
+  if (config.Get("export", "overlays") == "1") {
+    export_args.push_back("--detections");
+    export_args.push_back(detections);
+  }
+  stage("export", 3, RunExportCommand, export_args, "export");
 
   // ReadOMap checks the file; the raw JSON also carries the sampler's report.
   const OMap map = ReadOMap(omap);

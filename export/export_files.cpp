@@ -93,13 +93,15 @@ std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOpti
 }
 
 OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_dir,
-                             const std::string& frame_list) {
+                             const std::string& frame_list, const std::string& detections_path) {
   OverlayInput input;
   input.frames = std::make_unique<FrameSource>(run_dir);
   input.camera = LoadCamera(RunFolderPaths::Of(run_dir).camera);
-  const std::string detections_path = run_dir + "/detections.csv";
-  if (fs::exists(detections_path))
+  if (!detections_path.empty()) {
     input.detections = ReadDetections(detections_path, scene.classes);
+  } else if (fs::exists(run_dir + "/detections.csv")) {
+    input.detections = ReadDetections(run_dir + "/detections.csv", scene.classes);
+  }
   const long count = static_cast<long>(std::min(input.frames->size(), scene.map.trajectory.size()));
   if (count == 0) throw Error::InFile(run_dir, "no frames with an estimated pose to overlay");
   if (frame_list.empty()) {

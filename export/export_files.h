@@ -46,10 +46,12 @@ struct OverlayInput {
   std::vector<long> chosen;           // frames to draw, in order
 };
 
-// Frames and camera of `run_dir`, its detections if any, and the frames of
-// `frame_list` ("" = every frame with an estimated pose).
+// Frames and camera of `run_dir`, the detections of `detections_path` ("" =
+// `run_dir`/detections.csv if it exists; a path given must exist), and the
+// frames of `frame_list` ("" = every frame with an estimated pose).
 OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_dir,
-                             const std::string& frame_list);
+                             const std::string& frame_list,
+                             const std::string& detections_path = "");
 
 // One PNG per chosen frame: `overlays_dir`/NNNNNN.png (folder created),
 // `threads` frames at a time (0 = one per core); the files do not depend on

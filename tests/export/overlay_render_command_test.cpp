@@ -124,6 +124,36 @@ TEST(OverlayCommand, SameFilesWithOneOrSeveralThreads) {
       2);
 }
 
+// oslam run keeps detections in its output folder and hands them to the
+// export stage with --detections: they are drawn (white outlines).
+TEST(ExportCommand, OverlaysDrawTheDetectionsGiven) {
+  testing::TempDir dir;
+  WriteRun(dir.Path("run"));
+  std::ofstream(dir.Path("detections.csv"))
+      << "frame,class,u_r_px,u_phi_rad,s_r_px,s_phi_rad\n1,green box,100,2.5,40,0.4\n";
+  const std::string plain = dir.Path("plain"), with = dir.Path("with");
+  ASSERT_EQ(Oslam("export " + kOMap + " --run " + dir.Path("run") + " -o " + plain +
+                  " --overlays --quiet")
+                .exit_code,
+            0);
+  const CliResult result =
+      Oslam("export " + kOMap + " --run " + dir.Path("run") + " -o " + with +
+            " --overlays --detections " + dir.Path("detections.csv") + " --quiet");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  auto white = [](const std::string& path) {
+    std::vector<cv::Mat> bgr;
+    cv::split(cv::imread(path), bgr);
+    return cv::countNonZero((bgr[0] > 240) & (bgr[1] > 240) & (bgr[2] > 240));
+  };
+  EXPECT_GT(white(with + "/overlays/000001.png"), white(plain + "/overlays/000001.png") + 50);
+  EXPECT_EQ(white(with + "/overlays/000002.png"), white(plain + "/overlays/000002.png"));
+  const CliResult missing =
+      Oslam("export " + kOMap + " --run " + dir.Path("run") + " -o " + dir.Path("x") +
+            " --overlays --detections " + dir.Path("nothere.csv"));
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("nothere.csv"), std::string::npos) << missing.err;
+}
+
 TEST(RenderCommand, WritesTheFiguresThatReadBack) {
   testing::TempDir dir;
   const CliResult result =
