@@ -887,7 +887,12 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
     for (size_t h = g; h < end; ++h)
       for (int column : columns[h])
         ux[static_cast<size_t>(c++) * impl.n + impl.inverse_permutation[column]] = 1.0;
-    cholmod_dense* x = cholmod_solve(CHOLMOD_A, impl.factor, unit, &impl.cc);
+    // With H = L L' (the permuted matrix is factored in its natural order),
+    // H^-1 = L^-T L^-1, so a block is Y' Y with Y = L^-1 E: a forward solve
+    // only, half the work of solving with H. An LDL' factor solves with H.
+    const bool forward_only = impl.factor->is_ll;
+    cholmod_dense* x =
+        cholmod_solve(forward_only ? CHOLMOD_L : CHOLMOD_A, impl.factor, unit, &impl.cc);
     cholmod_free_dense(&unit, &impl.cc);
     if (!x) {
       if (why) *why = "CHOLMOD solve failed";
@@ -898,12 +903,18 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
     for (size_t h = g; h < end; ++h) {
       const int size = static_cast<int>(columns[h].size());
       Eigen::MatrixXd& block = (*blocks)[h];
-      block.resize(size, size);
-      for (int q = 0; q < size; ++q)
-        for (int r = 0; r < size; ++r)
-          block(r, q) =
-              xx[static_cast<size_t>(c + q) * impl.n + impl.inverse_permutation[columns[h][r]]];
-      block = 0.5 * (block + block.transpose()).eval();
+      if (forward_only) {
+        const Eigen::Map<const Eigen::MatrixXd> y(xx + static_cast<size_t>(c) * impl.n, impl.n,
+                                                  size);
+        block = y.transpose() * y;
+      } else {
+        block.resize(size, size);
+        for (int q = 0; q < size; ++q)
+          for (int r = 0; r < size; ++r)
+            block(r, q) =
+                xx[static_cast<size_t>(c + q) * impl.n + impl.inverse_permutation[columns[h][r]]];
+        block = 0.5 * (block + block.transpose()).eval();
+      }
       c += size;
     }
     cholmod_free_dense(&x, &impl.cc);

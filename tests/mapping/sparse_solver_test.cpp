@@ -161,10 +161,11 @@ DenseReference DenseEvidence(const FactorGraph& graph) {
 }
 
 // A small noisy SLAM graph (few poses, two objects) for dense comparisons.
-FactorGraph SmallSlamGraph(const CameraModel& camera, unsigned seed, int num_poses) {
+FactorGraph SmallSlamGraph(const CameraModel& camera, unsigned seed, int num_poses,
+                           int num_objects = 3) {
   testing::SyntheticSceneOptions options;
   options.num_poses = num_poses;
-  options.num_objects = 3;
+  options.num_objects = num_objects;
   options.loop_length_m = 2.0;
   options.loop_width_m = 1.0;
   options.pixel_std_px = 10.0;
@@ -231,6 +232,38 @@ TEST(EvidenceTest, EqualsDenseBruteForceOnSmallSlamProblems) {
         EXPECT_LT((blocks[g] - expected).cwiseAbs().maxCoeff(), 1e-9 * (1 + expected.norm()));
       }
     }
+  }
+}
+
+// Big enough for CHOLMOD's supernodal LL' factor (many objects seen from
+// every pose), where object covariances come from a forward solve only
+// (Y' Y with Y = L^-1 E): they must equal the dense inverse too.
+TEST(SolverTest, ObjectCovariancesOfASupernodalFactorEqualTheDenseInverse) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  FactorGraph graph = SmallSlamGraph(camera, 4, 120, 14);
+  SolverOptions options;
+  options.apply_final_step = false;
+  SparseSolver solver(options);
+  const SolveResult result = solver.Solve(&graph);
+  ASSERT_TRUE(result.summary.IsUsable()) << result.summary.message;
+  const DenseReference dense = DenseEvidence(graph);
+  EXPECT_NEAR(result.evidence.log_det_information, dense.log_det_information,
+              1e-7 * std::abs(dense.log_det_information));
+  std::vector<std::vector<int>> groups;
+  for (int key = 120; key + 1 < graph.num_variables(); key += 2) groups.push_back({key, key + 1});
+  groups.push_back({5, 60});  // two poses far apart: an off-diagonal block too
+  ASSERT_GE(groups.size(), 14u);
+  std::vector<Eigen::MatrixXd> blocks;
+  ASSERT_TRUE(solver.MarginalCovariances(groups, &blocks));
+  for (size_t g = 0; g < groups.size(); ++g) {
+    std::vector<int> index;
+    for (int key : groups[g])
+      for (int r = 0; r < graph.values().Dim(key); ++r) index.push_back(dense.offset[key] + r);
+    Eigen::MatrixXd expected(index.size(), index.size());
+    for (size_t r = 0; r < index.size(); ++r)
+      for (size_t c = 0; c < index.size(); ++c)
+        expected(r, c) = dense.covariance(index[r], index[c]);
+    EXPECT_LT((blocks[g] - expected).cwiseAbs().maxCoeff(), 1e-8 * (1 + expected.norm())) << g;
   }
 }
 
