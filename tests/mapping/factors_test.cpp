@@ -12,45 +12,13 @@
 #include "core/angles.h"
 #include "core/error.h"
 #include "mapping/observation_model.h"
+#include "tests/mapping/factor_check.h"
 #include "tests/test_util.h"
 
 namespace oslam {
 namespace {
 
-// Compares a factor's Jacobian with central differences of its error over
-// the stacked key values.
-void ExpectJacobianMatchesNumeric(const Factor& factor, const Values& values, double tolerance) {
-  int total = 0;
-  for (int key : factor.keys()) total += values.Dim(key);
-  Eigen::VectorXd stacked(total);
-  int at = 0;
-  for (int key : factor.keys()) {
-    stacked.segment(at, values.Dim(key)) = values.Get(key);
-    at += values.Dim(key);
-  }
-  auto error_at = [&](const Eigen::VectorXd& x) {
-    Values perturbed = values;
-    int offset = 0;
-    for (int key : factor.keys()) {
-      // Set without wrapping so the difference quotient stays continuous.
-      Eigen::Map<Eigen::VectorXd>(perturbed.MutableData(key), values.Dim(key)) =
-          x.segment(offset, values.Dim(key));
-      offset += values.Dim(key);
-    }
-    Eigen::VectorXd error(factor.Dimension());
-    EXPECT_TRUE(factor.Linearize(perturbed, error, nullptr));
-    return error;
-  };
-  Eigen::VectorXd error(factor.Dimension());
-  Eigen::MatrixXd jacobian(factor.Dimension(), total);
-  ASSERT_TRUE(factor.Linearize(values, error, &jacobian));
-  EXPECT_TRUE(error.isApprox(error_at(stacked)));
-  const Eigen::MatrixXd numeric = testing::NumericJacobian(error_at, stacked, 1e-6);
-  const Eigen::MatrixXd difference = jacobian - numeric;
-  EXPECT_LT(difference.lpNorm<Eigen::Infinity>(), tolerance) << factor.Name() << "\nanalytic\n"
-                                                             << jacobian << "\nnumeric\n"
-                                                             << numeric;
-}
+using testing::ExpectJacobianMatchesNumeric;
 
 TEST(OdometryFactorTest, JacobiansMatchCentralDifferences) {
   std::mt19937 rng(7);

@@ -160,6 +160,25 @@ DenseReference DenseEvidence(const FactorGraph& graph) {
   return out;
 }
 
+// The solver's covariance blocks (one per group of keys) against the same
+// blocks of the dense inverse, relative tolerance.
+void ExpectBlocksOfDenseCovariance(const FactorGraph& graph, const DenseReference& dense,
+                                   const std::vector<std::vector<int>>& groups,
+                                   const std::vector<Eigen::MatrixXd>& blocks, double tolerance) {
+  ASSERT_EQ(blocks.size(), groups.size());
+  for (size_t g = 0; g < groups.size(); ++g) {
+    std::vector<int> index;
+    for (int key : groups[g])
+      for (int r = 0; r < graph.values().Dim(key); ++r) index.push_back(dense.offset[key] + r);
+    Eigen::MatrixXd expected(index.size(), index.size());
+    for (size_t r = 0; r < index.size(); ++r)
+      for (size_t c = 0; c < index.size(); ++c)
+        expected(r, c) = dense.covariance(index[r], index[c]);
+    EXPECT_LT((blocks[g] - expected).cwiseAbs().maxCoeff(), tolerance * (1 + expected.norm()))
+        << "group " << g;
+  }
+}
+
 // A small noisy SLAM graph (few poses, two objects) for dense comparisons.
 FactorGraph SmallSlamGraph(const CameraModel& camera, unsigned seed, int num_poses,
                            int num_objects = 3) {
@@ -221,16 +240,7 @@ TEST(EvidenceTest, EqualsDenseBruteForceOnSmallSlamProblems) {
       groups.push_back({graph.num_variables() - 2, graph.num_variables() - 1});
       std::vector<Eigen::MatrixXd> blocks;
       ASSERT_TRUE(solver.MarginalCovariances(groups, &blocks));
-      for (size_t g = 0; g < groups.size(); ++g) {
-        std::vector<int> index;
-        for (int key : groups[g])
-          for (int r = 0; r < graph.values().Dim(key); ++r) index.push_back(dense.offset[key] + r);
-        Eigen::MatrixXd expected(index.size(), index.size());
-        for (size_t r = 0; r < index.size(); ++r)
-          for (size_t c = 0; c < index.size(); ++c)
-            expected(r, c) = dense.covariance(index[r], index[c]);
-        EXPECT_LT((blocks[g] - expected).cwiseAbs().maxCoeff(), 1e-9 * (1 + expected.norm()));
-      }
+      ExpectBlocksOfDenseCovariance(graph, dense, groups, blocks, 1e-9);
     }
   }
 }
@@ -255,16 +265,7 @@ TEST(SolverTest, ObjectCovariancesOfASupernodalFactorEqualTheDenseInverse) {
   ASSERT_GE(groups.size(), 14u);
   std::vector<Eigen::MatrixXd> blocks;
   ASSERT_TRUE(solver.MarginalCovariances(groups, &blocks));
-  for (size_t g = 0; g < groups.size(); ++g) {
-    std::vector<int> index;
-    for (int key : groups[g])
-      for (int r = 0; r < graph.values().Dim(key); ++r) index.push_back(dense.offset[key] + r);
-    Eigen::MatrixXd expected(index.size(), index.size());
-    for (size_t r = 0; r < index.size(); ++r)
-      for (size_t c = 0; c < index.size(); ++c)
-        expected(r, c) = dense.covariance(index[r], index[c]);
-    EXPECT_LT((blocks[g] - expected).cwiseAbs().maxCoeff(), 1e-8 * (1 + expected.norm())) << g;
-  }
+  ExpectBlocksOfDenseCovariance(graph, dense, groups, blocks, 1e-8);
 }
 
 // Every fill-reducing ordering (and the QR path) must give the same
