@@ -70,6 +70,19 @@ void BM_GrowthFromOdometry(benchmark::State& state) {
 }
 BENCHMARK(BM_GrowthFromOdometry)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
 
+// The problem after a split (what an MCMC proposal does): the last
+// detection of object `from` becomes a new object `to` of the same class.
+GeometricSlamProblem SplitLastDetection(const GeometricSlamProblem& problem, int from, int to) {
+  GeometricSlamProblem changed = problem;
+  for (auto it = changed.observations.rbegin(); it != changed.observations.rend(); ++it)
+    if (it->object_id == from) {
+      it->object_id = to;
+      break;
+    }
+  changed.object_class[to] = changed.object_class[from];
+  return changed;
+}
+
 // What the MCMC does per proposal: re-solve after moving one detection to a
 // new object, warm-started from the previous state's solution.
 void BM_LpaWarmResolveAfterSplit(benchmark::State& state) {
@@ -79,13 +92,7 @@ void BM_LpaWarmResolveAfterSplit(benchmark::State& state) {
   options.compute_object_covariances = false;
   GeometricSlam slam(camera, options);
   const GeometricSlamResult base = slam.Solve(scene.problem);
-  GeometricSlamProblem changed = scene.problem;
-  for (auto it = changed.observations.rbegin(); it != changed.observations.rend(); ++it)
-    if (it->object_id == 3) {
-      it->object_id = 99;
-      break;
-    }
-  changed.object_class[99] = changed.object_class[3];
+  const GeometricSlamProblem changed = SplitLastDetection(scene.problem, 3, 99);
   GeometricSlamResult result;
   for (auto _ : state) {
     result = slam.Solve(changed, &base);
@@ -106,13 +113,7 @@ void BM_LpaWarmOneLinearStepAfterSplit(benchmark::State& state) {
   options.compute_object_covariances = false;
   GeometricSlam full(camera, options);
   const GeometricSlamResult base = full.Solve(scene.problem);
-  GeometricSlamProblem changed = scene.problem;
-  for (auto it = changed.observations.rbegin(); it != changed.observations.rend(); ++it)
-    if (it->object_id == 3) {
-      it->object_id = 99;
-      break;
-    }
-  changed.object_class[99] = changed.object_class[3];
+  const GeometricSlamProblem changed = SplitLastDetection(scene.problem, 3, 99);
   GeometricSlamResult warm = base;
   for (const MappedObject& object : base.objects)
     if (object.id == 3) {
