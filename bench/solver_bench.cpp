@@ -70,6 +70,19 @@ void BM_GrowthFromOdometry(benchmark::State& state) {
 }
 BENCHMARK(BM_GrowthFromOdometry)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
 
+// Times re-solves of `problem` by one solver (its symbolic analysis kept
+// between iterations, as in the MCMC), warm-started from `warm`.
+void TimeWarmSolves(benchmark::State& state, const testing::SyntheticScene& scene,
+                    GeometricSlam* slam, const GeometricSlamProblem& problem,
+                    const GeometricSlamResult& warm) {
+  GeometricSlamResult result;
+  for (auto _ : state) {
+    result = slam->Solve(problem, &warm);
+    benchmark::DoNotOptimize(result.evidence.log_evidence);
+  }
+  Report(state, scene, result);
+}
+
 // The problem after a split (what an MCMC proposal does): the last
 // detection of object `from` becomes a new object `to` of the same class.
 GeometricSlamProblem SplitLastDetection(const GeometricSlamProblem& problem, int from, int to) {
@@ -93,12 +106,7 @@ void BM_LpaWarmResolveAfterSplit(benchmark::State& state) {
   GeometricSlam slam(camera, options);
   const GeometricSlamResult base = slam.Solve(scene.problem);
   const GeometricSlamProblem changed = SplitLastDetection(scene.problem, 3, 99);
-  GeometricSlamResult result;
-  for (auto _ : state) {
-    result = slam.Solve(changed, &base);
-    benchmark::DoNotOptimize(result.evidence.log_evidence);
-  }
-  Report(state, scene, result);
+  TimeWarmSolves(state, scene, &slam, changed, base);
 }
 BENCHMARK(BM_LpaWarmResolveAfterSplit)->Unit(benchmark::kMillisecond);
 
@@ -123,12 +131,7 @@ void BM_LpaWarmOneLinearStepAfterSplit(benchmark::State& state) {
     }
   options.solver.max_iterations = 0;
   GeometricSlam step(camera, options);
-  GeometricSlamResult result;
-  for (auto _ : state) {
-    result = step.Solve(changed, &warm);
-    benchmark::DoNotOptimize(result.evidence.log_evidence);
-  }
-  Report(state, scene, result);
+  TimeWarmSolves(state, scene, &step, changed, warm);
 }
 BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)->Unit(benchmark::kMillisecond);
 
@@ -166,12 +169,7 @@ void BM_LpaWarmResolveSameAssociation(benchmark::State& state) {
   options.compute_object_covariances = false;
   GeometricSlam slam(camera, options);
   const GeometricSlamResult base = slam.Solve(scene.problem);
-  GeometricSlamResult result;
-  for (auto _ : state) {
-    result = slam.Solve(scene.problem, &base);
-    benchmark::DoNotOptimize(result.evidence.log_evidence);
-  }
-  Report(state, scene, result);
+  TimeWarmSolves(state, scene, &slam, scene.problem, base);
 }
 BENCHMARK(BM_LpaWarmResolveSameAssociation)->Unit(benchmark::kMillisecond);
 
