@@ -6,27 +6,17 @@
 // (poses held, the merged landmark solved alone) and exact (warm re-solve of
 // the whole problem, 5 LM iterations). Every iteration is a different
 // proposal (no cache hits). Skips with a message when ../shared/data is absent.
-#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "bench/victoria_park_data.h"
 #include "mapping/landmark_target.h"
 
 namespace oslam {
 namespace {
-
-const LandmarkDataset* VictoriaPark() {
-  static const LandmarkDataset* data = []() -> const LandmarkDataset* {
-    const std::filesystem::path path = std::filesystem::path(OSLAM_SOURCE_DIR).parent_path() /
-                                       "shared/data/victoria_park/with_ids/victoria_park.txt";
-    if (!std::filesystem::exists(path)) return nullptr;
-    return new LandmarkDataset(ReadGtsamLandmarks(path.string()));
-  }();
-  return data;
-}
 
 constexpr int kProposals = 30;
 

@@ -5,27 +5,17 @@
 // after one sighting is moved to a new landmark: the shape of one MCMC
 // proposal evaluated by a full solve). Skips with a message when
 // ../shared/data is absent.
-#include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "bench/victoria_park_data.h"
 #include "mapping/landmark_slam.h"
 
 namespace oslam {
 namespace {
-
-const LandmarkDataset* VictoriaPark() {
-  static const LandmarkDataset* data = []() -> const LandmarkDataset* {
-    const std::filesystem::path path = std::filesystem::path(OSLAM_SOURCE_DIR).parent_path() /
-                                       "shared/data/victoria_park/with_ids/victoria_park.txt";
-    if (!std::filesystem::exists(path)) return nullptr;
-    return new LandmarkDataset(ReadGtsamLandmarks(path.string()));
-  }();
-  return data;
-}
 
 void Report(benchmark::State& state, const LandmarkDataset& data,
             const LandmarkSlamResult& result) {
