@@ -135,7 +135,7 @@ struct SparseSolver::Impl {
   OrderingType analysed_ordering = OrderingType::kAutomatic;  // the request the cache was made for
   std::vector<int> factor_row;  // first row of each factor in J
   std::vector<std::vector<int>> scratch_rows;  // SetUp's block pattern, reused
-  std::vector<int> scratch_free;
+  std::vector<int> scratch_indices;  // SetUp: a factor's free variables, then its key columns
   int m = 0;
   Eigen::VectorXd gradient, diagonal;
   cholmod_dense* rhs = nullptr;
@@ -201,7 +201,7 @@ struct SparseSolver::Impl {
     const auto& factors = graph.factors();
     m = 0;
     factor_row.resize(factors.size());
-    std::vector<int>& free = scratch_free;
+    std::vector<int>& free = scratch_indices;
     for (size_t f = 0; f < factors.size(); ++f) {
       factor_row[f] = m;
       m += factors[f]->Dimension();
@@ -258,7 +258,7 @@ struct SparseSolver::Impl {
       pair_begin[f] = static_cast<int>(pairs.size());
       const auto& keys = factors[f]->keys();
       int total = 0;
-      std::vector<int>& columns = scratch_free;
+      std::vector<int>& columns = scratch_indices;
       columns.clear();
       for (int key : keys) {
         columns.push_back(total);
