@@ -75,11 +75,22 @@ BoundingSliceFactor::BoundingSliceFactor(const CameraModel* camera, int pose_key
     throw Error("the pixel noise E must be positive");
   if (!(measured.u_r_px > 0.0) || !std::isfinite(measured.u_r_px))
     throw Error("a bounding slice needs a positive radius u_r");
-  // sigma of (u_r, u_phi, s_r, s_phi): R = diag(E^2, (E/u_r)^2), W = 2R.
-  const double e = pixel_std_px, sqrt2 = std::sqrt(2.0);
-  const Eigen::Vector4d sigma(e, e / measured.u_r_px, sqrt2 * e, sqrt2 * e / measured.u_r_px);
+  const Eigen::Vector4d sigma = NoiseSigma(measured, pixel_std_px);
   inverse_sigma_ = sigma.cwiseInverse();
   log_det_ = 2.0 * sigma.array().log().sum();
+}
+
+Eigen::Vector4d BoundingSliceFactor::NoiseSigma(const BoundingSlice& measured,
+                                                double pixel_std_px) {
+  // sigma of (u_r, u_phi, s_r, s_phi): R = diag(E^2, (E/u_r)^2), W = 2R.
+  const double e = pixel_std_px, sqrt2 = std::sqrt(2.0);
+  return {e, e / measured.u_r_px, sqrt2 * e, sqrt2 * e / measured.u_r_px};
+}
+
+Eigen::Vector4d BoundingSliceFactor::Residual(const BoundingSlice& predicted,
+                                              const BoundingSlice& measured) {
+  return {predicted.u_r_px - measured.u_r_px, WrapAngle(predicted.u_phi_rad - measured.u_phi_rad),
+          predicted.s_r_px - measured.s_r_px, predicted.s_phi_rad - measured.s_phi_rad};
 }
 
 bool BoundingSliceFactor::Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd> error,
@@ -93,10 +104,7 @@ bool BoundingSliceFactor::Linearize(const Values& values, Eigen::Ref<Eigen::Vect
   SliceJacobians jacobians;
   if (!PredictSlice(*camera_, pose, object, &predicted, jacobian ? &jacobians : nullptr))
     return false;
-  error << predicted.u_r_px - measured_.u_r_px,
-      WrapAngle(predicted.u_phi_rad - measured_.u_phi_rad), predicted.s_r_px - measured_.s_r_px,
-      predicted.s_phi_rad - measured_.s_phi_rad;
-  error.array() *= inverse_sigma_.array();
+  error = inverse_sigma_.cwiseProduct(Residual(predicted, measured_));
   if (!jacobian) return true;
   jacobian->leftCols<3>() = inverse_sigma_.asDiagonal() * jacobians.wrt_pose;
   jacobian->middleCols<3>(3) = inverse_sigma_.asDiagonal() * jacobians.wrt_base;

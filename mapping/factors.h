@@ -61,6 +61,12 @@ class BoundingSliceFactor final : public Factor {
 
   const BoundingSlice& measured() const { return measured_; }
 
+  // The model's pieces, for code that fits one object outside a graph
+  // (object initialisation): the noise sigmas (E, E/u_r, sqrt(2)E,
+  // sqrt(2)E/u_r) and the unwhitened residual, u_phi wrapped.
+  static Eigen::Vector4d NoiseSigma(const BoundingSlice& measured, double pixel_std_px);
+  static Eigen::Vector4d Residual(const BoundingSlice& predicted, const BoundingSlice& measured);
+
  private:
   const CameraModel* camera_;
   BoundingSlice measured_;

@@ -107,14 +107,10 @@ bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pos
       if (!PredictSlice(camera, poses[detection->frame], candidate, &predicted,
                         gradient ? &jacobians : nullptr))
         return false;
-      const double sqrt2 = std::sqrt(2.0);
       const Eigen::Vector4d inverse_sigma =
-          Eigen::Vector4d(1.0, z.u_r_px, 1.0 / sqrt2, z.u_r_px / sqrt2) / pixel_std_px;
+          BoundingSliceFactor::NoiseSigma(z, pixel_std_px).cwiseInverse();
       const Eigen::Vector4d error =
-          inverse_sigma.cwiseProduct(Eigen::Vector4d(predicted.u_r_px - z.u_r_px,
-                                                     WrapAngle(predicted.u_phi_rad - z.u_phi_rad),
-                                                     predicted.s_r_px - z.s_r_px,
-                                                     predicted.s_phi_rad - z.s_phi_rad));
+          inverse_sigma.cwiseProduct(BoundingSliceFactor::Residual(predicted, z));
       sum += error.squaredNorm();
       if (gradient) {
         Eigen::Matrix<double, 4, 5> j;
@@ -126,7 +122,8 @@ bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pos
     }
     const Eigen::Vector3d location_error =
         location_weight.cwiseProduct(theta.head<3>() - prior.location_mean_m);
-    const Eigen::Vector2d size_error = size_weight.cwiseProduct(theta.tail<2>() - prior.size_mean_m);
+    const Eigen::Vector2d size_error =
+        size_weight.cwiseProduct(theta.tail<2>() - prior.size_mean_m);
     sum += location_error.squaredNorm() + size_error.squaredNorm();
     if (gradient) {
       gradient->head<3>() += location_weight.cwiseProduct(location_error);
