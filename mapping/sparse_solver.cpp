@@ -9,6 +9,7 @@
 #include <cstdlib>
 
 #include <cholmod.h>
+#include <omp.h>
 #include <SuiteSparseQR.hpp>
 
 namespace oslam {
@@ -46,6 +47,25 @@ double LogDetOfFactor(const cholmod_factor* factor) {
   }
   return log_det;
 }
+
+// CHOLMOD's supernodal code opens OpenMP regions of a fixed four threads for
+// its copies and clears. At our sizes a region costs more in thread hand-offs
+// than its work, and O-SLAM's chains already occupy every core (long_loop:
+// 2.5 M futex calls, a third of the run). Inside the solver, OpenMP regions
+// run on the calling thread; the setting is per thread (OpenMP 5 data
+// environment) and restored on exit, so nothing outside the solver changes.
+class SerialOpenMpScope {
+ public:
+  SerialOpenMpScope() : saved_levels_(omp_get_max_active_levels()) {
+    omp_set_max_active_levels(0);
+  }
+  ~SerialOpenMpScope() { omp_set_max_active_levels(saved_levels_); }
+  SerialOpenMpScope(const SerialOpenMpScope&) = delete;
+  SerialOpenMpScope& operator=(const SerialOpenMpScope&) = delete;
+
+ private:
+  int saved_levels_;
+};
 
 }  // namespace
 
@@ -648,6 +668,7 @@ void SparseSolver::ClearCache() {
 
 SolveResult SparseSolver::Solve(FactorGraph* graph) {
   const auto start = Clock::now();
+  const SerialOpenMpScope serial_openmp;
   SolveResult result;
   SolverSummary& summary = result.summary;
   Impl& impl = *impl_;
@@ -847,6 +868,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
 
 bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_groups,
                                        std::vector<Eigen::MatrixXd>* blocks, std::string* why) {
+  const SerialOpenMpScope serial_openmp;
   Impl& impl = *impl_;
   if (!impl.factor_is_final) {
     if (why) *why = "no valid final factorisation (call Solve first)";
