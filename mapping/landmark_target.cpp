@@ -7,6 +7,7 @@
 #include <limits>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 
 #include "core/angles.h"
 #include "core/error.h"
@@ -32,6 +33,46 @@ std::string Format(const char* format, double a, double b = 0, double c = 0, dou
   char line[256];
   std::snprintf(line, sizeof(line), format, a, b, c, d, e, f, g);
   return line;
+}
+
+// A rigid planar transform x -> R(angle) x + t.
+struct Rigid2 {
+  double angle = 0;
+  Eigen::Vector2d t = Eigen::Vector2d::Zero();
+  Eigen::Vector2d operator()(const Eigen::Vector2d& x) const {
+    return Eigen::Rotation2Dd(angle) * x + t;
+  }
+};
+
+// The least-squares rigid transform taking from[i] onto to[i].
+Rigid2 FitRigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
+  Eigen::Vector2d cf = Eigen::Vector2d::Zero(), ct = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < from.size(); ++i) {
+    cf += from[i];
+    ct += to[i];
+  }
+  cf /= double(from.size());
+  ct /= double(to.size());
+  double dot = 0, cross = 0;
+  for (size_t i = 0; i < from.size(); ++i) {
+    const Eigen::Vector2d a = from[i] - cf, b = to[i] - ct;
+    dot += a.dot(b);
+    cross += a.x() * b.y() - a.y() * b.x();
+  }
+  Rigid2 rigid;
+  rigid.angle = std::atan2(cross, dot);
+  rigid.t = ct - Eigen::Rotation2Dd(rigid.angle) * cf;
+  return rigid;
+}
+
+// The part `fraction` of `rigid` about `pivot`: at 0 the identity, at 1
+// `rigid` itself, rotating by fraction * angle about pivot in between.
+Rigid2 PartOf(const Rigid2& rigid, const Eigen::Vector2d& pivot, double fraction) {
+  Rigid2 part;
+  part.angle = fraction * rigid.angle;
+  const Eigen::Vector2d shift = rigid(pivot) - pivot;
+  part.t = pivot + fraction * shift - Eigen::Rotation2Dd(part.angle) * pivot;
+  return part;
 }
 
 }  // namespace
@@ -156,7 +197,11 @@ LandmarkSlamOptions StepOptions(const LandmarkTargetOptions& options) {
 
 LandmarkEvaluator::LandmarkEvaluator(const LandmarkTargetData& data,
                                      const LandmarkTargetOptions& options)
-    : data_(data), options_(options), full_(FullOptions(options)), step_(StepOptions(options)) {
+    : data_(data),
+      options_(options),
+      full_(FullOptions(options)),
+      step_(StepOptions(options)),
+      trial_(FullOptions(options)) {
   std::string why;
   if (!options.Validate(&why)) throw Error("landmark O-SLAM target options: " + why);
   if (!data.data) throw Error("landmark O-SLAM target: no data set");
@@ -215,10 +260,11 @@ bool LandmarkEvaluator::SharesAScan(const std::vector<int>& block) const {
 }
 
 EvaluationPtr LandmarkEvaluator::FullEvaluation(const AssociationState& state,
-                                                const StateEvaluation* from, bool refine) {
+                                                const StateEvaluation* from, Solver solver) {
   const auto start = std::chrono::steady_clock::now();
+  const bool refine = solver == Solver::kRefine;
   const LandmarkDataset& data = *data_.data;
-  if (!refine)
+  if (solver == Solver::kStep)
     for (const auto& block : state.blocks)
       if (SharesAScan(block)) {
         auto invalid = std::make_shared<StateEvaluation>();
@@ -228,7 +274,7 @@ EvaluationPtr LandmarkEvaluator::FullEvaluation(const AssociationState& state,
   LandmarkSlamResult warm;
   const bool use_warm = from != nullptr;
   if (use_warm) warm = WarmStart(*from);
-  LandmarkSlam& slam = refine ? full_ : step_;
+  LandmarkSlam& slam = refine ? full_ : solver == Solver::kStep ? step_ : trial_;
   const LandmarkSlamResult result =
       slam.Solve(data, Association(state), use_warm ? &warm : nullptr);
   ++solves_;
@@ -420,7 +466,7 @@ EvaluationPtr LandmarkEvaluator::Evaluate(const AssociationState& state,
   }
   if (options_.mode != LandmarkEvaluationMode::kExact && !reference_) return Refine(state, from);
   EvaluationPtr evaluation = options_.mode == LandmarkEvaluationMode::kExact
-                                 ? FullEvaluation(state, from, false)
+                                 ? FullEvaluation(state, from, Solver::kStep)
                                  : LocalEvaluation(state, from);
   Store(evaluation);
   return evaluation;
@@ -428,7 +474,7 @@ EvaluationPtr LandmarkEvaluator::Evaluate(const AssociationState& state,
 
 EvaluationPtr LandmarkEvaluator::Refine(const AssociationState& state,
                                         const StateEvaluation* from) {
-  EvaluationPtr evaluation = FullEvaluation(state, from, true);
+  EvaluationPtr evaluation = FullEvaluation(state, from, Solver::kRefine);
   if (options_.mode != LandmarkEvaluationMode::kExact && evaluation->valid) {
     SetReference(evaluation);
     reference_factorised_ = true;
@@ -436,6 +482,16 @@ EvaluationPtr LandmarkEvaluator::Refine(const AssociationState& state,
   }
   Store(evaluation);
   return evaluation;
+}
+
+EvaluationPtr LandmarkEvaluator::Trial(const AssociationState& state, const StateEvaluation* from) {
+  for (const auto& block : state.blocks)
+    if (!reference_blocks_.count(block) && SharesAScan(block)) {
+      auto invalid = std::make_shared<StateEvaluation>();
+      invalid->state = state;
+      return invalid;  // valid = false
+    }
+  return FullEvaluation(state, from, Solver::kTrial);
 }
 
 bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean) {
@@ -708,6 +764,263 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     }
     return merges;
   };
+  // Joint re-entry merges (see the options).
+  std::vector<int> last_pose(num_tracks);
+  for (int t = 0; t < num_tracks; ++t) last_pose[t] = data.sightings[result.tracks[t].back()].pose;
+  int last_ransac = std::numeric_limits<int>::min() / 2;
+  int joint_needed = options.joint_min_inliers, last_failure = 0;
+  auto joint = [&](int n) -> long {
+    if (options.joint_min_inliers <= 0 || n - last_ransac < options.joint_every_poses) return 0;
+    last_ransac = n;
+    const auto joint_start = std::chrono::steady_clock::now();
+    struct AddTime {
+      std::chrono::steady_clock::time_point start;
+      double* total;
+      ~AddTime() { *total += SecondsSince(start); }
+    } add_time{joint_start, &result.joint_time_s};
+    if (n - last_failure > options.joint_recent_poses) joint_needed = options.joint_min_inliers;
+    const int recent_from = n - options.joint_recent_poses;
+    if (recent_from <= 0) return 0;
+    const EvaluationPtr before = current;
+    const AssociationState& s = before->state;
+    const std::vector<Pose2>& trajectory = before->solution->trajectory;
+    // Where the sightings of `tracks` (in the window) put their landmark.
+    auto placed = [&](const std::vector<int>& tracks, const std::vector<Pose2>& poses) {
+      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+      int count = 0;
+      for (int t : tracks)
+        for (int k : result.tracks[t]) {
+          const LandmarkSighting& z = data.sightings[k];
+          if (z.pose >= n) break;
+          sum += LandmarkFromRangeBearing(poses[z.pose], z.range_m, z.bearing_rad,
+                                          data.sensor_offset_m);
+          ++count;
+        }
+      return Eigen::Vector2d(count > 0 ? Eigen::Vector2d(sum / count) : sum);
+    };
+    // The units aligned: the recent part of each landmark (its tracks first
+    // seen since recent_from, placed by their own sightings: a merge made
+    // under the drift may be wrong) and the old part (tracks last seen
+    // before recent_from, at the landmark's position).
+    struct Unit {
+      std::vector<int> tracks;
+      Eigen::Vector2d position_m;
+    };
+    std::vector<Unit> recent, old;
+    for (size_t j = 0; j < s.blocks.size(); ++j) {
+      Unit r, o;
+      for (int t : s.blocks[j]) {
+        if (first_pose[t] >= recent_from) r.tracks.push_back(t);
+        if (last_pose[t] < recent_from) o.tracks.push_back(t);
+      }
+      if (!r.tracks.empty()) {
+        r.position_m = placed(r.tracks, trajectory);
+        recent.push_back(r);
+      }
+      if (!o.tracks.empty()) {
+        o.position_m = before->locations[j].head<2>();
+        old.push_back(o);
+      }
+    }
+    if (static_cast<int>(recent.size()) < joint_needed) return 0;
+    const double inlier_m = options.joint_inlier_m, inlier2 = inlier_m * inlier_m;
+    const double reach = options.joint_search_m + inlier_m;
+    std::vector<std::vector<int>> near(recent.size());  // old units within reach
+    int with_candidates = 0;
+    for (size_t i = 0; i < recent.size(); ++i) {
+      for (size_t o = 0; o < old.size(); ++o)
+        if ((old[o].position_m - recent[i].position_m).squaredNorm() <= reach * reach)
+          near[i].push_back(static_cast<int>(o));
+      with_candidates += !near[i].empty();
+    }
+    if (with_candidates < joint_needed) return 0;
+    // Inliers of an alignment: mutually nearest (recent, old) pairs within
+    // joint_inlier_m of each other once the recent unit is moved.
+    auto inliers = [&](const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) {
+      std::map<int, std::pair<double, int>> by_old;  // old unit -> (distance², recent unit)
+      for (size_t i = 0; i < recent.size(); ++i) {
+        const Eigen::Vector2d p = rigid(recent[i].position_m);
+        int nearest = -1;
+        double best = inlier2;
+        for (int o : near[i]) {
+          const double d2 = (old[o].position_m - p).squaredNorm();
+          if (d2 <= best) {
+            best = d2;
+            nearest = o;
+          }
+        }
+        if (nearest < 0) continue;
+        const auto it = by_old.find(nearest);
+        if (it == by_old.end() || best < it->second.first)
+          by_old[nearest] = {best, static_cast<int>(i)};
+      }
+      if (pairs) {
+        pairs->clear();
+        for (const auto& [o, value] : by_old) pairs->push_back({value.second, o});
+      }
+      return static_cast<int>(by_old.size());
+    };
+    std::uniform_int_distribution<size_t> pick(0, recent.size() - 1);
+    Rigid2 best_rigid;
+    int best_count = 0;
+    for (int sample = 0; sample < options.joint_ransac_iterations; ++sample) {
+      const size_t a = pick(rng), b = pick(rng);
+      if (a == b || near[a].empty() || near[b].empty()) continue;
+      const Eigen::Vector2d ra = recent[a].position_m, rb = recent[b].position_m;
+      const double d = (rb - ra).norm();
+      if (d < 2 * inlier_m) continue;
+      const double heading = std::atan2(rb.y() - ra.y(), rb.x() - ra.x());
+      for (int oa : near[a])
+        for (int ob : near[b]) {
+          if (oa == ob) continue;
+          const Eigen::Vector2d v = old[ob].position_m - old[oa].position_m;
+          if (std::abs(v.norm() - d) > inlier_m) continue;
+          const double angle = WrapAngle(std::atan2(v.y(), v.x()) - heading);
+          if (std::abs(angle) > options.joint_max_rotation_rad) continue;
+          Rigid2 rigid;
+          rigid.angle = angle;
+          rigid.t = 0.5 * (old[oa].position_m + old[ob].position_m) -
+                    Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
+          const int count = inliers(rigid, nullptr);
+          if (count > best_count) {
+            best_count = count;
+            best_rigid = rigid;
+          }
+        }
+    }
+    if (best_count < joint_needed) return 0;
+    std::vector<std::pair<int, int>> pairs;
+    for (int refit = 0; refit < 2; ++refit) {
+      inliers(best_rigid, &pairs);
+      std::vector<Eigen::Vector2d> from, to;
+      for (const auto& [r, o] : pairs) {
+        from.push_back(recent[r].position_m);
+        to.push_back(old[o].position_m);
+      }
+      const Rigid2 fitted = FitRigid(from, to);
+      if (inliers(fitted, nullptr) < static_cast<int>(pairs.size())) break;
+      best_rigid = fitted;
+    }
+    inliers(best_rigid, &pairs);
+    if (static_cast<int>(pairs.size()) < joint_needed ||
+        std::abs(best_rigid.angle) > options.joint_max_rotation_rad)
+      return 0;
+    // Nothing for a joint merge when the alignment hardly moves the recent
+    // landmarks (the single merges can make the pairs) or the pairs are
+    // already merged.
+    Eigen::Vector2d pivot = Eigen::Vector2d::Zero();
+    double largest_move = 0;
+    int unmerged = 0;
+    for (const auto& [r, o] : pairs) {
+      pivot += recent[r].position_m / double(pairs.size());
+      largest_move =
+          std::max(largest_move, (best_rigid(recent[r].position_m) - recent[r].position_m).norm());
+      unmerged += s.BlockOf(recent[r].tracks.front()) != s.BlockOf(old[o].tracks.front());
+    }
+    if (largest_move < inlier_m || unmerged == 0) return 0;
+    // Per anchor pose: the merges made since it are undone (they were made
+    // under the drift), every pair merged, and the state solved from the
+    // trajectory with the correction spread along the drive since the anchor.
+    std::vector<double> driven(trajectory.size(), 0.0);
+    for (size_t i = 1; i < trajectory.size(); ++i)
+      driven[i] = driven[i - 1] + std::hypot(trajectory[i].x - trajectory[i - 1].x,
+                                             trajectory[i].y - trajectory[i - 1].y);
+    const double base = before->log_target;
+    EvaluationPtr best;
+    int best_anchor = 0;
+    for (int k = 0, previous_anchor = -1; k < options.joint_anchors; ++k) {
+      const int anchor = std::max(0, n - 1 - (options.joint_recent_poses << k));
+      if (anchor == previous_anchor) break;
+      previous_anchor = anchor;
+      const double span = driven.back() - driven[anchor];
+      if (!(span > 0)) continue;
+      auto fraction = [&](int pose) {
+        return pose <= anchor ? 0.0 : (driven[pose] - driven[anchor]) / span;
+      };
+      std::vector<std::vector<int>> blocks;
+      std::vector<int> where(num_tracks, -1);
+      for (const auto& block : s.blocks)
+        for (int part = 0; part < 2; ++part) {
+          std::vector<int> tracks;
+          for (int t : block)
+            if ((first_pose[t] > anchor) == (part == 1)) tracks.push_back(t);
+          if (tracks.empty()) continue;
+          for (int t : tracks) where[t] = static_cast<int>(blocks.size());
+          blocks.push_back(tracks);
+        }
+      for (const auto& [r, o] : pairs) {
+        const int to = where[old[o].tracks.front()];
+        for (int t : recent[r].tracks) {
+          auto& from = blocks[where[t]];
+          from.erase(std::find(from.begin(), from.end(), t));
+          blocks[to].push_back(t);
+          where[t] = to;
+        }
+      }
+      AssociationState merged;
+      for (auto& b : blocks)
+        if (!b.empty()) {
+          std::sort(b.begin(), b.end());
+          merged.blocks.push_back(b);
+        }
+      merged.classes.assign(merged.blocks.size(), 0);
+      merged.Canonicalize();
+      StateEvaluation seed;
+      seed.state = merged;
+      auto moved = std::make_shared<GeometricSlamResult>();
+      moved->trajectory = trajectory;
+      for (size_t i = anchor + 1; i < trajectory.size(); ++i) {
+        const Rigid2 part = PartOf(best_rigid, pivot, fraction(static_cast<int>(i)));
+        Pose2& p = moved->trajectory[i];
+        const Eigen::Vector2d q = part(Eigen::Vector2d(p.x, p.y));
+        p = {q.x(), q.y(), WrapAngle(p.theta + part.angle)};
+      }
+      for (const auto& block : merged.blocks) {
+        // Where the block's earliest track was, when it is from before the
+        // anchor; else where the moved trajectory puts its sightings.
+        seed.locations.push_back(Eigen::Vector3d::Zero());
+        seed.locations.back().head<2>() =
+            first_pose[block.front()] <= anchor
+                ? Eigen::Vector2d(before->locations[s.BlockOf(block.front())].head<2>())
+                : placed(block, moved->trajectory);
+      }
+      seed.solution = std::move(moved);
+      const EvaluationPtr e = evaluator->Trial(merged, &seed);
+      ++result.joint_tries;
+      say(Format("joint merge at %.0f poses: %.0f of %.0f recent landmarks onto old ones "
+                 "(rotation %.3f rad, shift %.1f m),",
+                 double(n), double(pairs.size()), double(recent.size()), best_rigid.angle,
+                 (best_rigid(pivot) - pivot).norm()) +
+          Format(" correction from pose %.0f: log target %.1f -> %.1f", double(anchor), base,
+                 e->valid ? e->log_target : -std::numeric_limits<double>::infinity()));
+      if (e->valid && (!best || e->log_target > best->log_target)) {
+        best = e;
+        best_anchor = anchor;
+      }
+    }
+    if (best) {
+      // The merges undone since the anchor may be redone (right this time)
+      // by the targeted merges: the try is judged after them.
+      current = evaluator->Refine(best->state, best.get());
+      if (current->valid && current->log_target <= base && options.targeted_radius_m > 0) {
+        const int first_released = static_cast<int>(
+            std::upper_bound(first_pose.begin(), first_pose.begin() + num_tracks, best_anchor) -
+            first_pose.begin());
+        targeted(first_released);
+        say(Format("joint merge at %.0f poses: after the targeted merges %.1f (before %.1f)",
+                   double(n), current->log_target, base));
+      }
+      if (current->valid && current->log_target > base) {
+        joint_needed = options.joint_min_inliers;
+        result.joint_merges += static_cast<long>(pairs.size());
+        return static_cast<long>(pairs.size());
+      }
+      current = evaluator->Refine(before->state, before.get());  // back to before
+    }
+    joint_needed = static_cast<int>(pairs.size()) + options.joint_retry_inliers;
+    last_failure = n;
+    return 0;
+  };
   for (size_t w = 0; w < ends.size(); ++w) {
     const auto window_start = std::chrono::steady_clock::now();
     const int n = ends[w];
@@ -756,6 +1069,15 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     const long steps =
         std::lround(options.hill_climb_steps_per_track * double(tracks_now - tracks_before));
     long accepted = options.targeted_radius_m > 0 ? targeted(tracks_before) : 0;
+    if (const long joined = joint(n); joined > 0) {
+      accepted += joined;
+      // The rest of the re-entry: the recent tracks against everything.
+      const int recent_from = n - options.joint_recent_poses;
+      const int first_recent = static_cast<int>(
+          std::lower_bound(first_pose.begin(), first_pose.begin() + tracks_now, recent_from) -
+          first_pose.begin());
+      if (options.targeted_radius_m > 0) accepted += targeted(first_recent);
+    }
     accepted += climb(steps);
     state = current->state;
     previous = current;

@@ -106,6 +106,10 @@ class LandmarkEvaluator : public StateEvaluator {
   // The landmark id of every sighting under `state` (a block's id is its
   // earliest track), -1 for sightings in no track.
   std::vector<int> Association(const AssociationState& state) const;
+  // A full solve of `state` (the refine iterations) from `from` that leaves
+  // the reference (and so the marginal merges) alone: for trying a state far
+  // from the current one, e.g. a joint re-entry merge, before Refine-ing it.
+  EvaluationPtr Trial(const AssociationState& state, const StateEvaluation* from);
   // The full solution of `state` with landmark covariances, warm-started
   // from `from` when given (for the output map).
   LandmarkSlamResult Solve(const AssociationState& state, const StateEvaluation* from);
@@ -118,8 +122,9 @@ class LandmarkEvaluator : public StateEvaluator {
   struct BlockHash {
     size_t operator()(const std::vector<int>& block) const;
   };
+  enum class Solver { kStep, kRefine, kTrial };
   EvaluationPtr FullEvaluation(const AssociationState& state, const StateEvaluation* from,
-                               bool refine);
+                               Solver solver);
   EvaluationPtr LocalEvaluation(const AssociationState& state, const StateEvaluation* from);
   const BlockValue& LocalBlock(const std::vector<int>& block, const StateEvaluation* from);
   LandmarkSlamResult WarmStart(const StateEvaluation& from) const;
@@ -127,7 +132,7 @@ class LandmarkEvaluator : public StateEvaluator {
 
   const LandmarkTargetData& data_;
   LandmarkTargetOptions options_;
-  LandmarkSlam full_, step_;
+  LandmarkSlam full_, step_, trial_;
   SparseSolver local_solver_;
   std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
   // Local mode: the reference (last full solve) and L(b) at its trajectory.
@@ -204,7 +209,31 @@ struct UnknownAssociationOptions {
   // When a targeted merge gaining more than this (linearised) fails its
   // warm re-solve, it is re-solved once more from dead reckoning.
   double cold_retry_gain = 10;
-  int samples = 0;  // MC³ iterations after hill climbing (0: hill climbing only)
+  // Joint re-entry merge (a loop closure that no single merge pays for:
+  // after a long drive the drift bends the whole stretch, so one sighting
+  // cannot, but many together can). After each window's targeted merges the
+  // recent landmarks (every track first seen in the last joint_recent_poses
+  // poses) are aligned rigidly onto the old ones (none of their sightings
+  // that recent) by RANSAC: 2-landmark samples, rotation within
+  // joint_max_rotation_rad, candidates within joint_search_m, inliers the
+  // mutually nearest pairs within joint_inlier_m. An alignment with at least
+  // joint_min_inliers inliers (a dense park offers random ones of 4-7) is
+  // applied as one state, every inlier pair merged, and solved in full from
+  // a trajectory whose rigid correction is spread along the drive since an
+  // anchor pose (linearly in the distance driven; anchors joint_recent_poses
+  // times 1, 2, 4, ... back); kept when the whole-problem evidence rises.
+  // After a rejected try the next one needs joint_retry_inliers more
+  // inliers. joint_min_inliers 0: off.
+  int joint_min_inliers = 8;
+  int joint_recent_poses = 300;
+  double joint_search_m = 60;
+  double joint_inlier_m = 2.5;
+  double joint_max_rotation_rad = 0.5;
+  int joint_ransac_iterations = 300;
+  int joint_anchors = 2;
+  int joint_retry_inliers = 2;
+  int joint_every_poses = 50;  // RANSAC at most once per this many poses
+  int samples = 0;             // MC³ iterations after hill climbing (0: hill climbing only)
   int burn_in = 0;
   int num_chains = 2;
   unsigned long seed = 1;
@@ -220,8 +249,10 @@ struct UnknownAssociationResult {
   LandmarkSlamResult solution;   // full solve of `state`, landmark covariances
   double log_target = 0;         // of `state`, full evaluation
   long proposals = 0, accepted = 0, solves = 0, cache_hits = 0, cold_retries = 0;
+  long joint_tries = 0, joint_merges = 0;  // joint re-entry merges: solves tried, pairs kept
   double track_time_s = 0, hill_climb_time_s = 0, sampling_time_s = 0, total_time_s = 0;
   double proposal_time_s = 0;  // spent evaluating proposals (hill climbing)
+  double joint_time_s = 0;     // spent on joint re-entry merges (RANSAC, solves, re-merges)
   SamplerSummary sampler;      // when samples > 0
 };
 
