@@ -179,6 +179,8 @@ RunConfig::RunConfig() {
        "spurious sigmoid t0, m^2: (0.4 m)^2 (spec §7.2, §9.8)"},
       {"slam", "spurious_tau_m2", "", "--spurious-tau", Kind::kNumber,
        "spurious sigmoid tau, m^2: (0.2 m)^2 (spec §7.2, §9.8)"},
+      {"slam", "delayed_acceptance", "1", "--no-delayed-acceptance", Kind::kFlag,
+       "1: MC3 proposals screened before they are solved, same posterior (docs/oslam.md)", true},
       {"slam", "identity_merge", "1", "--no-identity-merge", Kind::kFlag,
        "1: combine sample identities of one object (beyond the thesis, docs/oslam.md 6a)", true},
       {"slam", "identity_distance_m", "", "--identity-distance", Kind::kNumber,

@@ -90,11 +90,11 @@ void PrintMoves(const char* phase, const std::array<MoveStatistics, 3>& stats) {
   for (int m = 0; m < 3; ++m) {
     const MoveStatistics& s = stats[m];
     std::printf(
-        "  %s %-6s proposed %5ld  self %5ld  cached %5ld  accepted %5ld (%.1f%% of proposed)  "
-        "%.2f ms/solve\n",
+        "  %s %-6s proposed %5ld  self %5ld  cached %5ld  screened out %5ld  accepted %5ld "
+        "(%.1f%% of proposed)  %.2f ms/proposal\n",
         phase, MoveName(static_cast<MoveType>(m)), s.proposed, s.self_transitions, s.cache_hits,
-        s.accepted, s.proposed ? 100.0 * s.accepted / s.proposed : 0.0,
-        s.solves() > 0 ? 1e3 * s.time_s / s.solves() : 0.0);
+        s.screened_out, s.accepted, s.proposed ? 100.0 * s.accepted / s.proposed : 0.0,
+        s.evaluated() > 0 ? 1e3 * s.time_s / s.evaluated() : 0.0);
   }
 }
 

@@ -157,6 +157,9 @@ void AddSlamOptions(Arguments* a) {
                Number(d.target.slam.solver.step_tolerance));
   a->AddFlag("known-classes", "assume perfect classes: no switch moves, P_merge = P_split = 0.5");
   a->AddFlag("sequential", "step the chains one after another (same result as threads)");
+  a->AddFlag("no-delayed-acceptance",
+             "solve every MC3 proposal (thesis) instead of screening it first with the changed "
+             "objects solved alone");
 }
 
 SlamSettings SlamSettingsFrom(const Arguments& arguments) {
@@ -218,6 +221,7 @@ SlamSettings SlamSettingsFrom(const Arguments& arguments) {
   sampler.num_chains = integer("chains");
   sampler.delta_temperature = number("delta-t");
   sampler.parallel_chains = !arguments.Flag("sequential");
+  sampler.delayed_acceptance = !arguments.Flag("no-delayed-acceptance");
   MoveOptions& m = sampler.moves;
   m.class_mismatch_penalty = GetDoubleOrInfinity(arguments, "mismatch-penalty");
   m.merge_distance_m = number("merge-distance");

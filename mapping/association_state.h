@@ -91,6 +91,14 @@ class StateEvaluator {
   // marginal covariances, for the spurious-object model) filled in. Proposals
   // skip it because most are rejected; the default returns the input.
   virtual EvaluationPtr Complete(const EvaluationPtr& evaluation) { return evaluation; }
+  // A cheap approximation of `to`'s evaluation made from `from` (its log
+  // target and the objects' locations and residuals the moves use), for the
+  // sampler's delayed acceptance: any function of (from, to) keeps the sampler
+  // exact, a close one spares most solves. Null when there is none.
+  virtual EvaluationPtr Approximate(const AssociationState& to, const StateEvaluation& from) {
+    (void)to, (void)from;
+    return nullptr;
+  }
   virtual size_t num_solves() const = 0;
   virtual size_t num_cache_hits() const = 0;
 };

@@ -84,10 +84,25 @@ bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
   return true;
 }
 
-bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pose2>& poses,
-                                const std::vector<const SliceObservation*>& detections,
-                                const ClassPrior& prior, double pixel_std_px,
-                                CylinderGeometry* object) {
+namespace {
+
+// Levenberg-Marquardt on one object's 5 parameters (base, diameter, height)
+// over its detections and class priors, the poses held. `object` holds the
+// start and receives the result when a step lowered the cost.
+struct ObjectFit {
+  bool improved = false;
+  bool information_valid = false;  // `information` is J'J at the result
+  double cost = 0;  // 1/2 sum of squared whitened errors at the result
+  double prior_squared = 0;  // the class priors' share of 2 cost
+  Eigen::Matrix<double, 5, 5> information;  // J'J at the result
+  double log_det_noise = 0;                 // sum of log|covariance| of the factors
+  int num_rows = 0;
+};
+
+bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>& poses,
+                            const std::vector<const SliceObservation*>& detections,
+                            const ClassPrior& prior, double pixel_std_px, int max_iterations,
+                            CylinderGeometry* object, ObjectFit* fit) {
   using Vector5d = Eigen::Matrix<double, 5, 1>;
   using Matrix5d = Eigen::Matrix<double, 5, 5>;
   const Eigen::Vector3d location_weight = prior.location_std_m.cwiseInverse();
@@ -140,9 +155,10 @@ bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pos
   Vector5d gradient;
   Matrix5d hessian;
   if (!evaluate(theta, &cost, &gradient, &hessian)) return false;
+  fit->information_valid = true;
   double lambda = 1e-3;
   bool improved = false;
-  for (int iteration = 0; iteration < 20; ++iteration) {
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
     Matrix5d damped = hessian;
     damped.diagonal() *= 1.0 + lambda;
     const Vector5d step = damped.ldlt().solve(-gradient);
@@ -156,7 +172,11 @@ bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pos
       cost = new_cost;
       improved = true;
       lambda = std::max(lambda / 10.0, 1e-9);
-      if (small || !evaluate(theta, &cost, &gradient, &hessian)) break;
+      if (!evaluate(theta, &cost, &gradient, &hessian)) {
+        fit->information_valid = false;
+        break;
+      }
+      if (small) break;
     } else {
       lambda *= 10.0;
       if (lambda > 1e8) break;
@@ -167,7 +187,52 @@ bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pos
     object->diameter_m = theta[3];
     object->height_m = theta[4];
   }
-  return improved;
+  fit->improved = improved;
+  fit->cost = cost;
+  fit->prior_squared =
+      location_weight.cwiseProduct(theta.head<3>() - prior.location_mean_m).squaredNorm() +
+      size_weight.cwiseProduct(theta.tail<2>() - prior.size_mean_m).squaredNorm();
+  fit->information = hessian;
+  fit->num_rows = 4 * static_cast<int>(detections.size()) + 5;
+  fit->log_det_noise = 2.0 * (prior.location_std_m.array().log().sum() +
+                               prior.size_std_m.array().log().sum());
+  for (const SliceObservation* detection : detections)
+    fit->log_det_noise +=
+        2.0 * BoundingSliceFactor::NoiseSigma(detection->slice, pixel_std_px).array().log().sum();
+  return true;
+}
+
+}  // namespace
+
+bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pose2>& poses,
+                                const std::vector<const SliceObservation*>& detections,
+                                const ClassPrior& prior, double pixel_std_px,
+                                CylinderGeometry* object) {
+  ObjectFit fit;
+  return FitObjectWithPosesHeld(camera, poses, detections, prior, pixel_std_px, 20, object,
+                                &fit) &&
+         fit.improved;
+}
+
+bool ObjectLogEvidenceWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>& poses,
+                                    const std::vector<const SliceObservation*>& detections,
+                                    const ClassPrior& prior, double pixel_std_px,
+                                    CylinderGeometry* object, double* log_evidence,
+                                    double* detections_squared_residual) {
+  constexpr double kLog2Pi = 1.8378770664093454836;
+  ObjectFit fit;
+  if (!FitObjectWithPosesHeld(camera, poses, detections, prior, pixel_std_px, 20, object, &fit) ||
+      !fit.information_valid)
+    return false;
+  const Eigen::LLT<Eigen::Matrix<double, 5, 5>> cholesky(fit.information);
+  if (cholesky.info() != Eigen::Success) return false;
+  const double log_det_information =
+      2.0 * cholesky.matrixL().toDenseMatrix().diagonal().array().log().sum();
+  *log_evidence = -fit.cost - 0.5 * fit.log_det_noise - 0.5 * log_det_information +
+                  0.5 * (5 - fit.num_rows) * kLog2Pi;
+  if (detections_squared_residual)
+    *detections_squared_residual = std::max(0.0, 2.0 * fit.cost - fit.prior_squared);
+  return std::isfinite(*log_evidence);
 }
 
 GeometricSlam::GeometricSlam(const CameraModel& camera, const GeometricSlamOptions& options)

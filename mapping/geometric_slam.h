@@ -105,6 +105,21 @@ bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pos
                                 const ClassPrior& prior, double pixel_std_px,
                                 CylinderGeometry* object);
 
+// The Laplace log-evidence (spec §8.2) of one object's detections and class
+// priors with the poses held at `poses`: the object's 5 parameters are solved
+// by Levenberg-Marquardt from `object` (which receives the result), then
+//   -1/2 ||r||^2 - 1/2 log|noise| - 1/2 log det(J'J) + 1/2 (5 - m) log 2 pi.
+// Summed over the objects a proposal changes, it approximates the change of
+// the whole problem's evidence without solving it (the poses' share is
+// missing). `detections_squared_residual` (may be null) receives the
+// detections' share of ||r||^2 (r^2(j) of eq. 5.2). False when a detection
+// cannot be predicted or J'J is singular.
+bool ObjectLogEvidenceWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>& poses,
+                                    const std::vector<const SliceObservation*>& detections,
+                                    const ClassPrior& prior, double pixel_std_px,
+                                    CylinderGeometry* object, double* log_evidence,
+                                    double* detections_squared_residual = nullptr);
+
 class GeometricSlam {
  public:
   // The camera must outlive this object.

@@ -306,4 +306,25 @@ double LogReverseProbability(const Proposal& p, const StateEvaluation& proposed,
   return kNegInf;
 }
 
+double LogForwardProbability(const Proposal& p, const StateEvaluation& from,
+                             const ClassConfusionModel& model, const MoveOptions& options,
+                             const MoveProbabilities& probabilities) {
+  const AssociationState& s = from.state;
+  const AssociationState& to = p.state;
+  auto new_class = [&to](int track) { return to.classes[to.BlockOf(track)]; };
+  switch (p.type) {
+    case MoveType::kMerge:
+      return LogMergeProbability(from, s.BlockOf(p.part_a.front()), s.BlockOf(p.part_b.front()),
+                                 new_class(p.part_a.front()), model, options, probabilities);
+    case MoveType::kSplit:  // part_a holds the earliest track (Algorithm 6 step 4)
+      return LogSplitProbability(from, s.BlockOf(p.part_a.front()), p.part_a, p.part_b,
+                                 new_class(p.part_a.front()), new_class(p.part_b.front()), model,
+                                 options, probabilities);
+    case MoveType::kSwitch:
+      return LogSwitchProbability(from, s.BlockOf(p.track), new_class(p.track), model, options,
+                                  probabilities);
+  }
+  return kNegInf;
+}
+
 }  // namespace oslam

@@ -67,6 +67,13 @@ double LogReverseProbability(const Proposal& proposal, const StateEvaluation& pr
                              const ClassConfusionModel& model, const MoveOptions& options,
                              const MoveProbabilities& probabilities);
 
+// log q(current -> proposed) evaluated on `from`, an evaluation of the state
+// the proposal started from (proposal.log_q_forward when it is that state's
+// own evaluation; delayed acceptance passes an approximate one).
+double LogForwardProbability(const Proposal& proposal, const StateEvaluation& from,
+                             const ClassConfusionModel& model, const MoveOptions& options,
+                             const MoveProbabilities& probabilities);
+
 // The move probabilities themselves (log q, including P_move), exposed for tests.
 double LogMergeProbability(const StateEvaluation& s, int block_a, int block_b, int merged_class,
                            const ClassConfusionModel& model, const MoveOptions& options,

@@ -24,10 +24,12 @@ Json MoveJson(const std::array<MoveStatistics, 3>& stats) {
         {"accepted", s.accepted},
         {"self_transitions", s.self_transitions},
         {"cache_hits", s.cache_hits},
+        {"screened_out", s.screened_out},
         {"acceptance_rate", Number(s.proposed ? double(s.accepted) / s.proposed : NAN)},
         {"evaluation_time_s", s.time_s},
-        // per proposal that needed a solve (self-transitions and cache hits cost ~nothing)
-        {"time_per_proposal_s", Number(s.solves() > 0 ? s.time_s / s.solves() : NAN)}};
+        {"solves", s.solves()},
+        // per proposal other than a self-transition (screened, cached or solved)
+        {"time_per_proposal_s", Number(s.evaluated() > 0 ? s.time_s / s.evaluated() : NAN)}};
   }
   return moves;
 }

@@ -51,22 +51,47 @@ bool SamplerOptions::Validate(std::string* why) const {
 EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool greedy,
                              StateEvaluator& evaluator, const ClassConfusionModel& model,
                              const MoveOptions& options, const MoveProbabilities& probabilities,
-                             Rng& rng, std::array<MoveStatistics, 3>* stats) {
+                             Rng& rng, std::array<MoveStatistics, 3>* stats,
+                             bool delayed_acceptance) {
   const Proposal proposal = ProposeMove(*current, model, options, probabilities, rng);
   MoveStatistics& stat = (*stats)[static_cast<int>(proposal.type)];
   ++stat.proposed;
-  // The uniform is drawn for every proposal so the stream does not depend on outcomes.
-  const double log_u = std::log(std::uniform_real_distribution<double>(0.0, 1.0)(rng));
+  // The uniforms are drawn for every proposal so the stream does not depend on outcomes.
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double log_u = std::log(uniform(rng));
+  const bool screen = delayed_acceptance && !greedy;
+  const double log_u_screen = screen ? std::log(uniform(rng)) : 0.0;
   if (proposal.self_transition) {
     ++stat.self_transitions;
     return current;
   }
   const auto start = std::chrono::steady_clock::now();
+  // Delayed acceptance (Christen & Fox 2005). Stage 1 accepts x -> y with
+  //   alpha1(x, y) = min(1, pi~(y)^beta q(x | y~) / (pi(x)^beta q(y | x))),
+  // y~ = the evaluator's approximation of y made from x; 1 where it has none.
+  double log_screen_forward = 0.0;
+  if (screen) {
+    const EvaluationPtr approximate = evaluator.Approximate(proposal.state, *current);
+    if (approximate && approximate->valid) {
+      const double log_reverse =
+          LogReverseProbability(proposal, *approximate, model, options, probabilities);
+      const double log_alpha = beta * (approximate->log_target - current->log_target) +
+                               log_reverse - proposal.log_q_forward;
+      if (!std::isnan(log_alpha)) log_screen_forward = std::min(0.0, log_alpha);
+    }
+    if (log_u_screen >= log_screen_forward) {
+      ++stat.screened_out;
+      stat.time_s += Seconds(start);
+      return current;
+    }
+  }
   const size_t hits_before = evaluator.num_cache_hits();
   EvaluationPtr proposed = evaluator.Evaluate(proposal.state, current.get());
-  stat.time_s += Seconds(start);
   stat.cache_hits += static_cast<long>(evaluator.num_cache_hits() - hits_before);
-  if (!proposed || !proposed->valid) return current;
+  if (!proposed || !proposed->valid) {
+    stat.time_s += Seconds(start);
+    return current;
+  }
   const double delta = proposed->log_target - current->log_target;
   bool accept;
   if (greedy) {
@@ -74,9 +99,23 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool gre
   } else {
     const double log_reverse =
         LogReverseProbability(proposal, *proposed, model, options, probabilities);
-    const double log_alpha = beta * delta + log_reverse - proposal.log_q_forward;
+    double log_alpha = beta * delta + log_reverse - proposal.log_q_forward;
+    if (screen) {
+      // Stage 2: times alpha1(y, x) / alpha1(x, y), the reverse move's
+      // screen as the sampler would compute it standing at y.
+      double log_screen_reverse = 0.0;
+      const EvaluationPtr approximate = evaluator.Approximate(current->state, *proposed);
+      if (approximate && approximate->valid) {
+        const double log_alpha1 =
+            beta * (approximate->log_target - proposed->log_target) - log_reverse +
+            LogForwardProbability(proposal, *approximate, model, options, probabilities);
+        if (!std::isnan(log_alpha1)) log_screen_reverse = std::min(0.0, log_alpha1);
+      }
+      log_alpha += log_screen_reverse - log_screen_forward;
+    }
     accept = std::isfinite(log_reverse) && log_u < std::min(0.0, log_alpha);
   }
+  stat.time_s += Seconds(start);
   if (!accept) return current;
   ++stat.accepted;
   return proposed;
@@ -173,7 +212,8 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
   for (int t = 1; t <= options_.num_iterations; ++t) {
     auto step_chain = [&](int i) {
       states[i] = MetropolisStep(states[i], beta[i], false, *evaluators[i], model_, options_.moves,
-                                 options_.sampling_moves, rngs[i], &stats[i]);
+                                 options_.sampling_moves, rngs[i], &stats[i],
+                                 options_.delayed_acceptance);
     };
     if (options_.parallel_chains && chains > 1) {
       std::vector<std::thread> threads;

@@ -36,6 +36,13 @@ struct SamplerOptions {
   int burn_in = 70;
   unsigned long seed = 1;
   bool parallel_chains = true;
+  // MC³ proposals pass a cheap screen before they are solved (delayed
+  // acceptance, Christen & Fox 2005): the first stage accepts with
+  // min(1, exp(beta a(x, y))), a = the evaluator's approximate log ratio, the
+  // second corrects with the exact target, so the chain keeps the same
+  // stationary distribution; proposals the screen rejects cost no solve.
+  // Hill climbing never screens. Off: plain Metropolis-Hastings (thesis).
+  bool delayed_acceptance = true;
 
   bool Validate(std::string* why) const;
 };
@@ -43,9 +50,12 @@ struct SamplerOptions {
 struct MoveStatistics {
   long proposed = 0, accepted = 0, self_transitions = 0;
   long cache_hits = 0;  // proposed states found in the evaluator's cache (no solve)
-  double time_s = 0;    // spent evaluating proposals of this type
+  long screened_out = 0;  // rejected by delayed acceptance's first stage (no solve)
+  double time_s = 0;    // spent evaluating proposals of this type (screen included)
   // Proposals that needed a solve.
-  long solves() const { return proposed - self_transitions - cache_hits; }
+  long solves() const { return proposed - self_transitions - cache_hits - screened_out; }
+  // Proposals that were screened, looked up or solved (all but self-transitions).
+  long evaluated() const { return proposed - self_transitions; }
 };
 
 struct SamplerSummary {
@@ -87,11 +97,13 @@ class Sampler {
 // One Metropolis-Hastings step at inverse temperature beta: proposes from
 // `current` and returns the next state (the current one when rejected).
 // Counts into `stats` (indexed by MoveType). With `greedy`, accept only
-// increases of the target (hill climbing).
+// increases of the target (hill climbing). With `delayed_acceptance` (and not
+// greedy), screen the proposal first (SamplerOptions::delayed_acceptance).
 EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool greedy,
                              StateEvaluator& evaluator, const ClassConfusionModel& model,
                              const MoveOptions& options, const MoveProbabilities& probabilities,
-                             Rng& rng, std::array<MoveStatistics, 3>* stats);
+                             Rng& rng, std::array<MoveStatistics, 3>* stats,
+                             bool delayed_acceptance = false);
 
 // Integrated-autocorrelation effective sample size (initial positive sequence).
 double EffectiveSampleSize(const std::vector<double>& series);

@@ -130,6 +130,72 @@ EvaluationPtr SlamEvaluator::Solve(const AssociationState& state, const StateEva
   return evaluation;
 }
 
+bool SlamEvaluator::LocalObjectLogTarget(const std::vector<int>& block, int class_index,
+                                         const std::vector<Pose2>& poses, CylinderGeometry* object,
+                                         double* log_target, double* squared_residual) const {
+  std::vector<SliceObservation> observations;
+  for (int t : block)
+    for (int d : data_.tracks[t].detections)
+      observations.push_back({data_.detections[d].frame, block.front(), data_.detections[d].slice});
+  std::vector<const SliceObservation*> detections;
+  for (const SliceObservation& observation : observations) detections.push_back(&observation);
+  double log_evidence;
+  if (!ObjectLogEvidenceWithPosesHeld(*data_.camera, poses, detections, data_.classes[class_index],
+                                      options_.slam.pixel_std_px, object, &log_evidence,
+                                      squared_residual))
+    return false;
+  *log_target = log_evidence + model_.BlockLogLikelihood(block, class_index);
+  if (options_.class_prior_per_object) *log_target -= std::log(double(model_.num_classes()));
+  return true;
+}
+
+EvaluationPtr SlamEvaluator::Approximate(const AssociationState& to, const StateEvaluation& from) {
+  if (!from.solution || !from.valid) return nullptr;
+  const std::vector<Pose2>& poses = from.solution->trajectory;
+  // from's objects by (tracks, class); the ones `to` keeps cancel.
+  std::map<std::vector<int>, size_t> from_index;
+  for (size_t j = 0; j < from.state.blocks.size(); ++j) from_index[from.state.blocks[j]] = j;
+  auto approximate = std::make_shared<StateEvaluation>();
+  approximate->state = to;
+  std::vector<char> kept(from.state.blocks.size(), 0);
+  double log_target = from.log_target;
+  for (size_t j = 0; j < to.blocks.size(); ++j) {
+    const auto found = from_index.find(to.blocks[j]);
+    if (found != from_index.end() && from.state.classes[found->second] == to.classes[j]) {
+      kept[found->second] = 1;
+      approximate->locations.push_back(from.locations[found->second]);
+      approximate->residual2.push_back(from.residual2[found->second]);
+      continue;
+    }
+    // Started where a solve's warm start would put it (spec §9.6).
+    const int old_block = from.state.BlockOf(to.blocks[j].front());
+    const MappedObject* start =
+        old_block < 0 ? nullptr : FindObject(*from.solution, from.state.blocks[old_block].front());
+    if (!start) return nullptr;
+    CylinderGeometry object = start->geometry;
+    double value, residual2;
+    if (!LocalObjectLogTarget(to.blocks[j], to.classes[j], poses, &object, &value, &residual2))
+      return nullptr;
+    log_target += value;
+    approximate->locations.push_back(object.base_world);
+    approximate->residual2.push_back(residual2);
+  }
+  for (size_t j = 0; j < from.state.blocks.size(); ++j) {
+    if (kept[j]) continue;
+    const MappedObject* start = FindObject(*from.solution, from.state.blocks[j].front());
+    if (!start) return nullptr;
+    CylinderGeometry object = start->geometry;
+    double value, residual2;
+    if (!LocalObjectLogTarget(from.state.blocks[j], from.state.classes[j], poses, &object, &value,
+                              &residual2))
+      return nullptr;
+    log_target -= value;
+  }
+  approximate->log_target = log_target;
+  approximate->valid = std::isfinite(log_target);
+  return approximate;
+}
+
 void SlamEvaluator::Store(const EvaluationPtr& evaluation) {
   if (cache_.size() >= options_.max_cache_entries) cache_.clear();
   cache_[evaluation->state] = evaluation;

@@ -52,6 +52,10 @@ class SlamEvaluator : public StateEvaluator {
   EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override;
   void Remember(const EvaluationPtr& evaluation) override;
   EvaluationPtr Complete(const EvaluationPtr& evaluation) override;
+  // The objects that differ between the states, each solved alone with the
+  // poses held at from's trajectory (ObjectLogEvidenceWithPosesHeld), change
+  // from's log target; objects both states share keep from's values.
+  EvaluationPtr Approximate(const AssociationState& to, const StateEvaluation& from) override;
   size_t num_solves() const override { return solves_; }
   size_t num_cache_hits() const override { return hits_; }
 
@@ -60,6 +64,12 @@ class SlamEvaluator : public StateEvaluator {
  private:
   EvaluationPtr Solve(const AssociationState& state, const StateEvaluation* from, bool full);
   GeometricSlamResult WarmStart(const AssociationState& state, const StateEvaluation& from) const;
+  // An object's log-evidence with the poses held plus its class terms, solved
+  // from `start` (which receives the result), and r^2 of its detections;
+  // false when it cannot be evaluated.
+  bool LocalObjectLogTarget(const std::vector<int>& block, int class_index,
+                            const std::vector<Pose2>& poses, CylinderGeometry* object,
+                            double* log_target, double* squared_residual) const;
   void Store(const EvaluationPtr& evaluation);
 
   const SlamTargetData& data_;

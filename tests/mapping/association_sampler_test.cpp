@@ -67,6 +67,26 @@ class TestEvaluator : public StateEvaluator {
   EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override {
     return Evaluate(state, from);
   }
+  // For delayed acceptance: the exact evaluation of `to` with its target and
+  // locations perturbed by a deterministic function of (from, to), and none at
+  // all for some pairs, so that both screening paths are exercised.
+  EvaluationPtr Approximate(const AssociationState& to, const StateEvaluation& from) override {
+    if (!approximate_) return nullptr;
+    const size_t key = AssociationStateHash()(to) * 31 + AssociationStateHash()(from.state);
+    if (key % 7 == 0) return nullptr;
+    std::mt19937_64 rng(key);
+    std::uniform_real_distribution<double> noise(-approximation_error_, approximation_error_);
+    const EvaluationPtr exact = Evaluate(to, &from);
+    auto approximate = std::make_shared<StateEvaluation>(*exact);
+    approximate->log_target += noise(rng);
+    for (auto& location : approximate->locations) location.x() += 0.1 * noise(rng);
+    --solves_;  // an approximation, not a solve
+    return approximate;
+  }
+  void EnableApproximation(double error) {
+    approximate_ = true;
+    approximation_error_ = error;
+  }
   void Remember(const EvaluationPtr& e) override { cache_[e->state] = e; }
   size_t num_solves() const override { return solves_; }
   size_t num_cache_hits() const override { return hits_; }
@@ -75,6 +95,8 @@ class TestEvaluator : public StateEvaluator {
   const ClassConfusionModel& model_;
   std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
   size_t solves_ = 0, hits_ = 0;
+  bool approximate_ = false;
+  double approximation_error_ = 0;
 };
 
 // All set partitions of n elements (restricted growth strings) x classes.
@@ -136,9 +158,17 @@ SamplerOptions TestOptions(int chains, int iterations) {
   return options;
 }
 
-SamplerResult RunTest(const SamplerOptions& options, const ClassConfusionModel& model) {
+// approximation_error > 0: the evaluators offer approximations (delayed acceptance).
+SamplerResult RunTest(const SamplerOptions& options, const ClassConfusionModel& model,
+                      double approximation_error = 0) {
   Sampler sampler(
-      model, [&model] { return std::make_unique<TestEvaluator>(model); }, options);
+      model,
+      [&model, approximation_error] {
+        auto evaluator = std::make_unique<TestEvaluator>(model);
+        if (approximation_error > 0) evaluator->EnableApproximation(approximation_error);
+        return evaluator;
+      },
+      options);
   return sampler.Run(SeparateTracksState(kTrackClass));
 }
 
@@ -175,6 +205,33 @@ TEST(DetailedBalanceTest, MetropolisHastingsMatchesEnumeratedPosterior) {
   std::printf("MH: %zu samples, total variation %.4f\n", result.samples.size(), tv);
   EXPECT_LT(tv, 0.03);
   for (int m = 0; m < 3; ++m) EXPECT_GT(result.summary.sampling[m].accepted, 0) << m;
+}
+
+// Delayed acceptance with a deliberately poor screen (target off by up to
+// +-2, locations moved, no approximation for 1 pair in 7) must leave the
+// posterior unchanged: same tolerance as plain MH.
+TEST(DetailedBalanceTest, DelayedAcceptanceKeepsTheEnumeratedPosterior) {
+  const ClassConfusionModel model = TestModel();
+  SamplerOptions options = TestOptions(1, 200000);
+  options.delayed_acceptance = true;
+  const SamplerResult result = RunTest(options, model, 2.0);
+  const double tv = TotalVariation(result, model);
+  long screened = 0;
+  for (const MoveStatistics& m : result.summary.sampling) screened += m.screened_out;
+  std::printf("MH with delayed acceptance: total variation %.4f, %ld screened out\n", tv, screened);
+  EXPECT_LT(tv, 0.03);
+  EXPECT_GT(screened, 10000);
+  for (int m = 0; m < 3; ++m) EXPECT_GT(result.summary.sampling[m].accepted, 0) << m;
+}
+
+TEST(DetailedBalanceTest, MetropolisCoupledWithDelayedAcceptance) {
+  const ClassConfusionModel model = TestModel();
+  SamplerOptions options = TestOptions(3, 100000);
+  options.parallel_chains = false;
+  options.delayed_acceptance = true;
+  const double tv = TotalVariation(RunTest(options, model, 1.0), model);
+  std::printf("MC3 with delayed acceptance: total variation %.4f\n", tv);
+  EXPECT_LT(tv, 0.03);
 }
 
 TEST(DetailedBalanceTest, ThesisSplitSamplerWithItsTrueProbability) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include <gtest/gtest.h>
 
@@ -11,6 +12,8 @@
 
 #include "calib/hyperbolic_camera.h"
 #include "core/error.h"
+#include "mapping/factors.h"
+#include "mapping/sparse_solver.h"
 #include "tests/mapping/synthetic_scene.h"
 
 namespace oslam {
@@ -195,6 +198,52 @@ TEST(GeometricSlamTest, RefinementFromFirstDetectionsImprovesTheObjectStart) {
   const GeometricSlamResult result = slam.Solve(scene.problem);
   EXPECT_EQ(result.summary.termination, TerminationType::kConverged);
   EXPECT_LE(result.summary.iterations, 10);
+}
+
+// The object-alone evidence (delayed acceptance's screen) is the sparse
+// solver's Laplace evidence of the same factors with every pose fixed.
+TEST(GeometricSlamTest, ObjectEvidenceWithPosesHeldEqualsTheSolversOnFixedPoses) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  testing::SyntheticSceneOptions scene_options;
+  scene_options.pixel_std_px = 30.0;
+  scene_options.odometry_noise = true;
+  const testing::SyntheticScene scene = testing::MakeSyntheticScene(camera, scene_options);
+  const std::vector<Pose2> poses =
+      ComposeOdometry(scene.problem.first_pose, scene.problem.increments);
+  std::map<int, std::vector<const SliceObservation*>> by_object;
+  for (const auto& observation : scene.problem.observations)
+    by_object[observation.object_id].push_back(&observation);
+  int checked = 0;
+  for (const auto& [id, list] : by_object) {
+    const ClassPrior& prior = scene.problem.classes[scene.problem.object_class.at(id)];
+    CylinderGeometry object = scene.true_objects[id];
+    object.base_world += Eigen::Vector3d(0.2, -0.1, 0.05);  // a start off the optimum
+    double log_evidence = 0, detections_r2 = 0;
+    ASSERT_TRUE(ObjectLogEvidenceWithPosesHeld(camera, poses, list, prior, 30.0, &object,
+                                               &log_evidence, &detections_r2));
+
+    FactorGraph graph;
+    std::vector<int> pose_keys;
+    for (const Pose2& pose : poses) pose_keys.push_back(graph.AddPose(pose.x, pose.y, pose.theta, true));
+    const int base = graph.AddVariable(scene.true_objects[id].base_world);
+    const int size = graph.AddVariable(
+        Eigen::Vector2d(scene.true_objects[id].diameter_m, scene.true_objects[id].height_m));
+    graph.Add(MakeLocationPrior(base, prior.location_mean_m, prior.location_std_m));
+    graph.Add(MakeSizePrior(size, prior.size_mean_m, prior.size_std_m));
+    for (const SliceObservation* observation : list)
+      graph.Emplace<BoundingSliceFactor>(&camera, pose_keys[observation->frame], base, size,
+                                         observation->slice, 30.0);
+    SparseSolver solver;
+    const SolveResult solved = solver.Solve(&graph);
+    ASSERT_TRUE(solved.evidence.valid);
+    EXPECT_NEAR(log_evidence, solved.evidence.log_evidence, 1e-3) << "object " << id;
+    EXPECT_LT((object.base_world - graph.values().Get(base)).norm(), 1e-3) << "object " << id;
+    double solver_r2 = 0;
+    for (size_t f = 2; f < solved.squared_errors.size(); ++f) solver_r2 += solved.squared_errors[f];
+    EXPECT_NEAR(detections_r2, solver_r2, 1e-3 * (1 + solver_r2)) << "object " << id;
+    ++checked;
+  }
+  EXPECT_GE(checked, 5);
 }
 
 TEST(GeometricSlamTest, WarmStartAfterAnAssociationChangeConvergesFasterToTheSameAnswer) {
