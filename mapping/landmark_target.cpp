@@ -613,6 +613,17 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
           "below the samples";
     return false;
   }
+  if (joint_min_inliers < 0 ||
+      (joint_min_inliers > 0 &&
+       (joint_min_inliers < 3 || joint_recent_poses < 1 || !(joint_search_m > 0) ||
+        !(joint_inlier_m > 0) || !(joint_max_rotation_rad >= 0) || joint_ransac_iterations < 1 ||
+        joint_anchors < 1 || joint_retry_inliers < 0 || joint_every_poses < 1))) {
+    if (why)
+      *why =
+          "joint merges need >= 3 inliers (0: off), recent poses, RANSAC samples, anchors "
+          "and a pose spacing >= 1, distances > 0";
+    return false;
+  }
   return true;
 }
 
