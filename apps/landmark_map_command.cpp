@@ -62,6 +62,7 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.window_poses = static_cast<int>(arguments.GetInt("window"));
   options.free_poses = static_cast<int>(arguments.GetInt("free-poses"));
   options.targeted_radius_m = arguments.GetDouble("targeted-radius");
+  options.joint_min_inliers = static_cast<int>(arguments.GetInt("joint-inliers"));
   options.hill_climb_steps_per_track = arguments.GetDouble("hill-climb");
   options.final_hill_climb_steps = static_cast<int>(arguments.GetInt("final-steps"));
   options.samples = static_cast<int>(arguments.GetInt("samples"));
@@ -103,10 +104,11 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
 
   std::printf(
       "%zu landmarks from %zu tracks of %d sightings; %ld proposals evaluated (%ld accepted); "
-      "hill climbing %.2f s, MC3 %.2f s, total %.2f s\n",
+      "hill climbing %.2f s (joint re-entry merges: %ld solves, %ld pairs kept, %.2f s), MC3 "
+      "%.2f s, total %.2f s\n",
       solution.landmarks.size(), result.tracks.size(), solution.num_sightings_used,
-      result.proposals, result.accepted, result.hill_climb_time_s, result.sampling_time_s,
-      result.total_time_s);
+      result.proposals, result.accepted, result.hill_climb_time_s, result.joint_tries,
+      result.joint_merges, result.joint_time_s, result.sampling_time_s, result.total_time_s);
   if (data.has_landmark_ids) {
     const std::vector<int> shipped = GivenAssociation(data);
     const PairwiseAgreement a = ComparePairwise(result.association, shipped);
@@ -171,7 +173,7 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("chains", "", "N", "unknown association: MC3 chains", "2");
   arguments.AddOption("window", "", "POSES",
                       "unknown association: poses added per hill-climbing window (0: one window)",
-                      "10");
+                      "20");
   arguments.AddOption("track-gate", "", "M",
                       "unknown association: a sighting continues a track when its world position "
                       "is this close to the track's last one",
@@ -186,6 +188,10 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                       "unknown association: score each new landmark's merge with every landmark "
                       "this close first (marginal evaluation; 0: off)",
                       "50");
+  arguments.AddOption("joint-inliers", "", "N",
+                      "unknown association: joint re-entry merges (RANSAC alignment of the recent "
+                      "landmarks onto old ones) need this many aligned pairs (0: off)",
+                      "8");
   arguments.AddOption("free-poses", "", "POSES",
                       "unknown association: poses free in a window's solves, earlier ones held "
                       "(0: all free)",
