@@ -14,11 +14,6 @@ OSLAM_PACKAGES=(
   libeigen3-dev libopencv-dev libsuitesparse-dev
   libtinygltf-dev libstb-dev nlohmann-json3-dev libpcl-dev libvtk9-dev
   libgtest-dev libbenchmark-dev
-  # BLAS for CHOLMOD's dense supernodes: OpenBLAS picks kernels for the CPU at
-  # run time (Debian's ATLAS is a generic build); the serial variant keeps a
-  # second thread pool off the cores O-SLAM's chains use. It becomes the
-  # libblas.so.3 alternative on install (priority above ATLAS and reference).
-  libopenblas0-serial
 )
 
 oslam_log() { printf '[oslam] %s\n' "$*" >&2; }
