@@ -157,6 +157,14 @@ void AddSlamOptions(Arguments* a) {
                Number(d.target.slam.solver.step_tolerance));
   a->AddFlag("known-classes", "assume perfect classes: no switch moves, P_merge = P_split = 0.5");
   a->AddFlag("sequential", "step the chains one after another (same result as threads)");
+  a->AddOption("swap-every", "", "N",
+               "MC3: adjacent chains may swap after every N iterations (1 = Algorithm 8); the "
+               "chains step independently in between",
+               std::to_string(d.sampler.swap_every));
+  a->AddOption("hill-climb-screen", "", "NATS",
+               "hill climbing: skip the solve when the approximate gain is below -NATS (inf = "
+               "solve every proposal)",
+               Number(d.sampler.hill_climb_screen_nats));
   a->AddFlag("no-delayed-acceptance",
              "solve every MC3 proposal (thesis) instead of screening it first with the changed "
              "objects solved alone");
@@ -222,6 +230,8 @@ SlamSettings SlamSettingsFrom(const Arguments& arguments) {
   sampler.delta_temperature = number("delta-t");
   sampler.parallel_chains = !arguments.Flag("sequential");
   sampler.delayed_acceptance = !arguments.Flag("no-delayed-acceptance");
+  sampler.swap_every = integer("swap-every");
+  sampler.hill_climb_screen_nats = GetDoubleOrInfinity(arguments, "hill-climb-screen");
   MoveOptions& m = sampler.moves;
   m.class_mismatch_penalty = GetDoubleOrInfinity(arguments, "mismatch-penalty");
   m.merge_distance_m = number("merge-distance");

@@ -37,9 +37,12 @@ bool SamplerOptions::Validate(std::string* why) const {
   if (hill_climb_max_steps < hill_climb_steps)
     return fail("hill_climb_max_steps must be >= hill_climb_steps");
   if (refine_every < 1) return fail("the refinement interval K_NL must be >= 1");
+  if (!(hill_climb_screen_nats >= 0))
+    return fail("the hill-climbing screen margin must be >= 0 nats (inf: solve every proposal)");
   if (!ValidProbabilities(hill_climb_moves) || !ValidProbabilities(sampling_moves))
     return fail("move probabilities must be >= 0 and sum to 1");
   if (num_chains < 1) return fail("at least one chain is needed");
+  if (swap_every < 1) return fail("chains swap every >= 1 iterations");
   if (!(delta_temperature >= 0) || std::isinf(delta_temperature))
     return fail("the temperature step dT must be >= 0");
   if (num_iterations < 1) return fail("at least one iteration is needed");
@@ -52,7 +55,7 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool gre
                              StateEvaluator& evaluator, const ClassConfusionModel& model,
                              const MoveOptions& options, const MoveProbabilities& probabilities,
                              Rng& rng, std::array<MoveStatistics, 3>* stats,
-                             bool delayed_acceptance) {
+                             bool delayed_acceptance, double greedy_screen_nats) {
   const Proposal proposal = ProposeMove(*current, model, options, probabilities, rng);
   MoveStatistics& stat = (*stats)[static_cast<int>(proposal.type)];
   ++stat.proposed;
@@ -66,6 +69,15 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool gre
     return current;
   }
   const auto start = std::chrono::steady_clock::now();
+  if (greedy && std::isfinite(greedy_screen_nats)) {
+    const EvaluationPtr approximate = evaluator.Approximate(proposal.state, *current);
+    if (approximate && approximate->valid &&
+        approximate->log_target - current->log_target < -greedy_screen_nats) {
+      ++stat.screened_out;
+      stat.time_s += Seconds(start);
+      return current;
+    }
+  }
   // Delayed acceptance (Christen & Fox 2005). Stage 1 accepts x -> y with
   //   alpha1(x, y) = min(1, pi~(y)^beta q(x | y~) / (pi(x)^beta q(y | x))),
   // y~ = the evaluator's approximation of y made from x; 1 where it has none.
@@ -185,7 +197,8 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
     ++step;
     const EvaluationPtr before = current;
     current = MetropolisStep(current, 1.0, true, *evaluators[0], model_, options_.moves,
-                             options_.hill_climb_moves, rngs[0], &summary.hill_climb);
+                             options_.hill_climb_moves, rngs[0], &summary.hill_climb,
+                             /*delayed_acceptance=*/false, options_.hill_climb_screen_nats);
     if (current != before) last_accepted = step;
     const bool last = !go_on();
     if (step % options_.refine_every == 0 || last) refine();
@@ -209,20 +222,37 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
   }
   std::vector<std::array<MoveStatistics, 3>> stats(chains);
   result.best = current;
-  for (int t = 1; t <= options_.num_iterations; ++t) {
-    auto step_chain = [&](int i) {
-      states[i] = MetropolisStep(states[i], beta[i], false, *evaluators[i], model_, options_.moves,
-                                 options_.sampling_moves, rngs[i], &stats[i],
-                                 options_.delayed_acceptance);
+  // The cold chain's state after iteration t: traced, and recorded after the burn-in.
+  auto record = [&](int t, const EvaluationPtr& cold) {
+    summary.cold_trace.push_back(cold->log_target);
+    if (cold->log_target > result.best->log_target) result.best = cold;
+    if (t <= options_.burn_in) return cold;
+    EvaluationPtr completed = evaluators[0]->Complete(cold);
+    result.samples.push_back(completed);
+    return completed;
+  };
+  // Chains step independently for swap_every iterations (in parallel
+  // threads), then adjacent chains may swap.
+  for (int first = 1; first <= options_.num_iterations; first += options_.swap_every) {
+    const int last = std::min(options_.num_iterations, first + options_.swap_every - 1);
+    std::vector<EvaluationPtr> cold_states(last - first + 1);
+    auto run_chain = [&](int i) {
+      for (int t = first; t <= last; ++t) {
+        states[i] = MetropolisStep(states[i], beta[i], false, *evaluators[i], model_,
+                                   options_.moves, options_.sampling_moves, rngs[i], &stats[i],
+                                   options_.delayed_acceptance);
+        if (i == 0) cold_states[t - first] = states[0];
+      }
     };
     if (options_.parallel_chains && chains > 1) {
       std::vector<std::thread> threads;
-      for (int i = 1; i < chains; ++i) threads.emplace_back(step_chain, i);
-      step_chain(0);
+      for (int i = 1; i < chains; ++i) threads.emplace_back(run_chain, i);
+      run_chain(0);
       for (auto& thread : threads) thread.join();
     } else {
-      for (int i = 0; i < chains; ++i) step_chain(i);
+      for (int i = 0; i < chains; ++i) run_chain(i);
     }
+    for (int t = first; t < last; ++t) record(t, cold_states[t - first]);
     // Swaps of adjacent chains, hottest pair first (5.3); whole states move,
     // and each evaluator learns the state it receives.
     for (int i = chains - 1; i >= 1; --i) {
@@ -237,13 +267,8 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
         ++summary.swaps_accepted;
       }
     }
-    summary.cold_trace.push_back(states[0]->log_target);
-    if (states[0]->log_target > result.best->log_target) result.best = states[0];
-    if (t > options_.burn_in) {
-      states[0] = evaluators[0]->Complete(states[0]);
-      result.samples.push_back(states[0]);
-    }
-    if (progress) progress("MC3", t, options_.num_iterations);
+    states[0] = record(last, states[0]);
+    if (progress) progress("MC3", last, options_.num_iterations);
   }
   summary.sampling = stats[0];
   summary.sampling_time_s = Seconds(clock);

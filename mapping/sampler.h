@@ -8,6 +8,7 @@
 
 #include <array>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -24,12 +25,21 @@ struct SamplerOptions {
   // suits lab's ~40 tracks leaves long_loop's ~180 tracks half merged.
   int hill_climb_patience = 50;
   int hill_climb_max_steps = 2000;
+  // Hill climbing skips the solve of a proposal whose approximate gain (the
+  // delayed-acceptance approximation) is below -hill_climb_screen_nats: it
+  // would not raise the target. long_loop: -10 skips 60 % of the solves and
+  // none that the solve would have accepted. Infinity: solve every proposal.
+  double hill_climb_screen_nats = 10.0;
   int refine_every = 50;       // K_NL: full optimisation of the current state
   MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
   MoveProbabilities sampling_moves{0.4, 0.4, 0.2};  // 0.5/0.5/0 with known classes
   MoveOptions moves;
   int num_chains = 3;               // N_c; 1 = plain Metropolis-Hastings
   double delta_temperature = 3.33;  // beta_i = 1 / (1 + dT (i - 1))
+  // Adjacent chains may swap after every `swap_every` iterations (1: after
+  // each, Algorithm 8). In between the chains step independently, which
+  // keeps both cores busy: a chain that solves waits for no other.
+  int swap_every = 1;
   // Iterations t = 1..num_iterations; the cold chain's state is recorded when
   // t > burn_in (Algorithm 8), so num_iterations counts the burn-in (#21).
   int num_iterations = 667;
@@ -99,11 +109,14 @@ class Sampler {
 // Counts into `stats` (indexed by MoveType). With `greedy`, accept only
 // increases of the target (hill climbing). With `delayed_acceptance` (and not
 // greedy), screen the proposal first (SamplerOptions::delayed_acceptance).
+// With `greedy`, a proposal whose approximate gain is below
+// -greedy_screen_nats is rejected without a solve.
 EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool greedy,
                              StateEvaluator& evaluator, const ClassConfusionModel& model,
                              const MoveOptions& options, const MoveProbabilities& probabilities,
                              Rng& rng, std::array<MoveStatistics, 3>* stats,
-                             bool delayed_acceptance = false);
+                             bool delayed_acceptance = false,
+                             double greedy_screen_nats = std::numeric_limits<double>::infinity());
 
 // Integrated-autocorrelation effective sample size (initial positive sequence).
 double EffectiveSampleSize(const std::vector<double>& series);
