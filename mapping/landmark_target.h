@@ -213,19 +213,26 @@ struct UnknownAssociationOptions {
   double cold_retry_gain = 10;
   // Joint re-entry merge (a loop closure that no single merge pays for:
   // after a long drive the drift bends the whole stretch, so one sighting
-  // cannot, but many together can). After each window's targeted merges the
-  // recent landmarks (every track first seen in the last joint_recent_poses
-  // poses) are aligned rigidly onto the old ones (none of their sightings
-  // that recent) by RANSAC: 2-landmark samples, rotation within
-  // joint_max_rotation_rad, candidates within joint_search_m, inliers the
-  // mutually nearest pairs within joint_inlier_m. An alignment with at least
-  // joint_min_inliers inliers (a dense park offers random ones of 4-7) is
-  // applied as one state, every inlier pair merged, and solved in full from
-  // a trajectory whose rigid correction is spread along the drive since an
-  // anchor pose (linearly in the distance driven; anchors joint_recent_poses
-  // times 1, 2, 4, ... back); kept when the whole-problem evidence rises.
-  // After a rejected try the next one needs joint_retry_inliers more
-  // inliers. joint_min_inliers 0: off.
+  // cannot, but many together can; docs/benchmarks.md). At most every
+  // joint_every_poses poses, after the window's targeted merges, the recent
+  // parts of the landmarks (their tracks first seen in the last
+  // joint_recent_poses poses, placed by their own sightings: a merge made
+  // under the drift may be wrong) are aligned rigidly onto the old parts
+  // (tracks last seen before that) by RANSAC: joint_ransac_iterations
+  // samples of two recent parts, every old pair within joint_search_m that
+  // matches, rotation within joint_max_rotation_rad; inliers the mutually
+  // nearest pairs within joint_inlier_m. An alignment with at least
+  // joint_min_inliers inliers (a dense park offers random ones of 4-7) that
+  // moves something by more than joint_inlier_m and merges something new is
+  // tried: per anchor pose (joint_recent_poses times 1, 2, 4, ... back,
+  // joint_anchors of them) the tracks first seen after the anchor are
+  // released from their landmarks, every inlier pair merged, and the whole
+  // problem solved from the trajectory with the correction spread along the
+  // drive since the anchor (linearly in the distance driven). The best
+  // anchor's state is kept when the whole-problem evidence rises, after
+  // redoing the targeted merges of the released tracks if needed; else the
+  // state before is restored and the next try needs joint_retry_inliers
+  // more inliers. joint_min_inliers 0: off.
   int joint_min_inliers = 8;
   int joint_recent_poses = 300;
   double joint_search_m = 60;
