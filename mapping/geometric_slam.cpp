@@ -346,15 +346,21 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
   for (long i = 1; i < num_poses; ++i)
     graph.Emplace<OdometryFactor>(pose_keys[i - 1], pose_keys[i], problem.increments[i],
                                   options_.motion);
+  // Detections first and the priors last: the factors of two similar
+  // problems (an O-SLAM proposal and its parent) then have the same sizes at
+  // the same positions, so the solver's per-factor buffers are not
+  // reallocated.
   for (auto& object : objects) {
-    const ClassPrior& prior = problem.classes[object.class_index];
-    graph.Add(MakeLocationPrior(object.base, prior.location_mean_m, prior.location_std_m));
-    graph.Add(MakeSizePrior(object.size, prior.size_mean_m, prior.size_std_m));
     object.first_factor = graph.factors().size();
     for (const SliceObservation* observation : by_object[object.id])
       graph.Emplace<BoundingSliceFactor>(&camera_, pose_keys[observation->frame], object.base,
                                          object.size, observation->slice, options_.pixel_std_px);
     object.end_factor = graph.factors().size();
+  }
+  for (const auto& object : objects) {
+    const ClassPrior& prior = problem.classes[object.class_index];
+    graph.Add(MakeLocationPrior(object.base, prior.location_mean_m, prior.location_std_m));
+    graph.Add(MakeSizePrior(object.size, prior.size_mean_m, prior.size_std_m));
   }
 
   // ---- solve and read out ----

@@ -20,6 +20,9 @@ constexpr double kLog2Pi = 1.8378770664093454836;
 // METIS is tried as an ordering from this many variables on (below it, its
 // cost exceeds what it can save).
 constexpr int kMetisMinBlocks = 2000;
+// Problems whose variable counts differ by at most this many are "similar"
+// for the choice of ordering kind.
+constexpr int kSimilarProblemBlocks = 8;
 
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
@@ -153,6 +156,10 @@ struct SparseSolver::Impl {
   OrderingType requested_ordering = OrderingType::kAutomatic;
   OrderingType ordering_used = OrderingType::kAmd;
   OrderingType analysed_ordering = OrderingType::kAutomatic;  // the request the cache was made for
+  // The last automatic comparison of orderings: its problem's variable count
+  // and the winner (reused for similar problems, see Analyze).
+  int compared_num_blocks = -1;
+  OrderingType compared_choice = OrderingType::kAmd;
   std::vector<int> factor_row;  // first row of each factor in J
   std::vector<std::vector<int>> scratch_rows;  // SetUp's block pattern, reused
   std::vector<int> scratch_indices;  // SetUp: a factor's free variables, then its key columns
@@ -382,7 +389,15 @@ struct SparseSolver::Impl {
 
     std::vector<std::pair<OrderingType, std::vector<int>>> candidates;
     std::vector<int> permutation(num_free);
-    const OrderingType wanted = requested_ordering;
+    OrderingType wanted = requested_ordering;
+    // A small association change (an O-SLAM proposal: one object more or
+    // less) keeps the problem's character, so the kind that won the last
+    // automatic comparison is used again without comparing; a problem that
+    // has drifted further from the compared one is compared afresh.
+    const bool compare = wanted == OrderingType::kAutomatic &&
+                         (compared_num_blocks < 0 ||
+                          std::abs(num_free - compared_num_blocks) > kSimilarProblemBlocks);
+    if (wanted == OrderingType::kAutomatic && !compare) wanted = compared_choice;
     auto want = [wanted](OrderingType type) {
       return wanted == OrderingType::kAutomatic || wanted == type;
     };
@@ -435,6 +450,10 @@ struct SparseSolver::Impl {
     }
     cc.supernodal = supernodal;
     cholmod_free_sparse(&blocks, &cc);
+    if (compare && !best_blocks.empty()) {
+      compared_num_blocks = num_free;
+      compared_choice = ordering_used;
+    }
     if (best_blocks.empty()) {  // the natural block order as the fallback
       best_blocks.resize(num_free);
       std::iota(best_blocks.begin(), best_blocks.end(), 0);
@@ -664,6 +683,7 @@ SparseSolver::~SparseSolver() = default;
 
 void SparseSolver::ClearCache() {
   impl_->FreeStructure();
+  impl_->compared_num_blocks = -1;
 }
 
 SolveResult SparseSolver::Solve(FactorGraph* graph) {
