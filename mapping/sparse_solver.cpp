@@ -776,7 +776,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
     if (trace) {
       Eigen::Index where = 0;
       if (solved) delta.cwiseAbs().maxCoeff(&where);
-      std::fprintf(stderr, "it %d lambda %.3g cost %.6g -> %.6g rho %.3f |d| %.3g at %ld/%d %s\n",
+      std::fprintf(stderr, "it %d lambda %.3g cost %.10g -> %.10g rho %.3f |d| %.3g at %ld/%d %s\n",
                    summary.iterations, lambda, cost, new_cost, rho,
                    solved ? delta.lpNorm<Eigen::Infinity>() : -1.0, long(where), impl.n,
                    accepted ? "ok" : "REJ");
