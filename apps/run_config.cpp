@@ -179,6 +179,8 @@ RunConfig::RunConfig() {
        "spurious sigmoid t0, m^2: (0.4 m)^2 (spec §7.2, §9.8)"},
       {"slam", "spurious_tau_m2", "", "--spurious-tau", Kind::kNumber,
        "spurious sigmoid tau, m^2: (0.2 m)^2 (spec §7.2, §9.8)"},
+      {"slam", "class_likelihood_per_detection", "0", "--class-likelihood-per-detection",
+       Kind::kFlag, "1: log P(a | c) once per detection (eq. 4.32), 0: once per track"},
       {"slam", "swap_every", "", "--swap-every", Kind::kInteger,
        "MC3: chains may swap after every this many iterations (1 = thesis)"},
       {"slam", "hill_climb_screen_nats", "", "--hill-climb-screen", Kind::kNumberOrInf,

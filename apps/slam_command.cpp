@@ -140,10 +140,12 @@ int RunSlamCommand(const std::vector<std::string>& args) {
 
   const Input input = Load(arguments, settings);
   if (input.tracks.tracks.empty()) throw Error("no tracks: no detections survived pre-association");
+  // The class decisions each track counts for (SlamSettings::class_likelihood_per_detection).
   std::vector<int> track_class, track_size;
   for (const Track& t : input.tracks.tracks) {
     track_class.push_back(t.class_index);
-    track_size.push_back(static_cast<int>(t.detections.size()));
+    track_size.push_back(
+        settings.class_likelihood_per_detection ? static_cast<int>(t.detections.size()) : 1);
   }
   const int num_classes = static_cast<int>(input.class_names.size());
   const ClassConfusionModel model =

@@ -165,6 +165,8 @@ void AddSlamOptions(Arguments* a) {
                "hill climbing: skip the solve when the approximate gain is below -NATS (inf = "
                "solve every proposal)",
                Number(d.sampler.hill_climb_screen_nats));
+  a->AddFlag("class-likelihood-per-detection",
+             "count log P(a | c) once per detection (eq. 4.32 as printed), not once per track");
   a->AddFlag("no-delayed-acceptance",
              "solve every MC3 proposal (thesis) instead of screening it first with the changed "
              "objects solved alone");
@@ -176,6 +178,7 @@ SlamSettings SlamSettingsFrom(const Arguments& arguments) {
   SlamSettings s;
   if (arguments.GetInt("seed") < 0) throw UsageError("--seed must be >= 0");
   s.known_classes = arguments.Flag("known-classes");
+  s.class_likelihood_per_detection = arguments.Flag("class-likelihood-per-detection");
 
   TrackOptions& t = s.tracks;
   t.min_length = integer("min-track-length");

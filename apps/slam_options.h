@@ -23,6 +23,13 @@ struct SlamSettings {
   double confusion_floor = 1e-3;                            // smallest P(a | c) (spec §13 #12)
   double location_std_xy_m = 10.0, location_std_z_m = 2.0;  // Gamma(c) (spec §13 #7)
   bool known_classes = false;
+  // log P(a | c) counted once per track (default) or once per detection
+  // (eq. 4.32 as printed). A track's detections are one object seen frame
+  // after frame in the same light, so the detector's class decisions within
+  // it are not independent draws; counting each one made the class term
+  // outweigh the size prior and the geometry (long_loop: classes 8/11 ->
+  // 10/11 per track; lab: 6/7 -> 7/7 and the door no longer mapped twice).
+  bool class_likelihood_per_detection = false;
 };
 
 // Declares every O-SLAM parameter (not RUN_DIR, -o, --detections, --quiet).

@@ -40,7 +40,9 @@ AssociationState SeparateTracksState(const std::vector<int>& track_classes);
 class ClassConfusionModel {
  public:
   // confusion[c][a] = P(a | c); entries are floored at `floor` (spec §7.1,
-  // so that no class is impossible) and rows renormalised.
+  // so that no class is impossible) and rows renormalised. track_size[t] is
+  // the number of detector class decisions track t counts for: its detection
+  // count (eq. 4.32 as printed) or 1 (one decision per track).
   ClassConfusionModel(const std::vector<std::vector<double>>& confusion, double floor,
                       std::vector<int> track_class, std::vector<int> track_size);
   // Identity confusion (known classes, spec §11.4): P(a | c) = 1 if a == c, else `floor`.
@@ -51,7 +53,7 @@ class ClassConfusionModel {
   int num_tracks() const { return static_cast<int>(track_class_.size()); }
   int track_class(int track) const { return track_class_[track]; }
   int track_size(int track) const { return track_size_[track]; }
-  // sum over the block's detections of log P(a_ik | c) (the penalty of eq. 4.32).
+  // sum over the block's tracks of track_size * log P(a_t | c) (the penalty of eq. 4.32).
   double BlockLogLikelihood(const std::vector<int>& block, int c) const;
   // log q(c | Psi) for every c: q ∝ prod P(a | c) (Algorithms 5-7).
   std::vector<double> ClassLogProposal(const std::vector<int>& block) const;
