@@ -90,7 +90,8 @@ bool SolverOptions::Validate(std::string* why) const {
     return false;
   };
   if (max_iterations < 0) return fail("max_iterations must be >= 0");
-  if (!(step_tolerance >= 0) || !(function_tolerance >= 0) || !(gradient_tolerance >= 0))
+  if (!(step_tolerance >= 0) || !(function_tolerance >= 0) || !(gradient_tolerance >= 0) ||
+      !(absolute_function_tolerance >= 0))
     return fail("tolerances must be >= 0");
   if (!(initial_damping > 0) || !(max_damping >= initial_damping))
     return fail("need 0 < initial_damping <= max_damping");
@@ -819,7 +820,8 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
       message = "step tolerance reached";
       break;
     }
-    if (old_cost - cost <= options_.function_tolerance * old_cost) {
+    if (old_cost - cost <=
+        std::max(options_.function_tolerance * old_cost, options_.absolute_function_tolerance)) {
       termination = TerminationType::kConverged;
       message = "function tolerance reached";
       break;
