@@ -684,7 +684,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     long accepted = 0;
     for (long step = 1; step <= steps; ++step) {
       const EvaluationPtr before = current;
-      current = MetropolisStep(current, 1.0, true, *evaluator, model, options.moves,
+      StepRule climb;
+      climb.greedy = true;
+      current = MetropolisStep(current, climb, *evaluator, model, options.moves,
                                options.hill_climb_moves, rng, &stats);
       if (current != before) ++accepted;
       const bool resolve =

@@ -51,28 +51,29 @@ bool SamplerOptions::Validate(std::string* why) const {
   return moves.Validate(why);
 }
 
-EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool greedy,
+EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
                              StateEvaluator& evaluator, const ClassConfusionModel& model,
                              const MoveOptions& options, const MoveProbabilities& probabilities,
-                             Rng& rng, std::array<MoveStatistics, 3>* stats,
-                             bool delayed_acceptance, double greedy_screen_nats) {
+                             Rng& rng, std::array<MoveStatistics, 3>* stats) {
+  const double beta = rule.beta;
+  const bool greedy = rule.greedy;
   const Proposal proposal = ProposeMove(*current, model, options, probabilities, rng);
   MoveStatistics& stat = (*stats)[static_cast<int>(proposal.type)];
   ++stat.proposed;
   // The uniforms are drawn for every proposal so the stream does not depend on outcomes.
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   const double log_u = std::log(uniform(rng));
-  const bool screen = delayed_acceptance && !greedy;
+  const bool screen = rule.delayed_acceptance && !greedy;
   const double log_u_screen = screen ? std::log(uniform(rng)) : 0.0;
   if (proposal.self_transition) {
     ++stat.self_transitions;
     return current;
   }
   const auto start = std::chrono::steady_clock::now();
-  if (greedy && std::isfinite(greedy_screen_nats)) {
+  if (greedy && std::isfinite(rule.greedy_screen_nats)) {
     const EvaluationPtr approximate = evaluator.Approximate(proposal.state, *current);
     if (approximate && approximate->valid &&
-        approximate->log_target - current->log_target < -greedy_screen_nats) {
+        approximate->log_target - current->log_target < -rule.greedy_screen_nats) {
       ++stat.screened_out;
       stat.time_s += Seconds(start);
       return current;
@@ -196,9 +197,11 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
   while (go_on()) {
     ++step;
     const EvaluationPtr before = current;
-    current = MetropolisStep(current, 1.0, true, *evaluators[0], model_, options_.moves,
-                             options_.hill_climb_moves, rngs[0], &summary.hill_climb,
-                             /*delayed_acceptance=*/false, options_.hill_climb_screen_nats);
+    StepRule climb;
+    climb.greedy = true;
+    climb.greedy_screen_nats = options_.hill_climb_screen_nats;
+    current = MetropolisStep(current, climb, *evaluators[0], model_, options_.moves,
+                             options_.hill_climb_moves, rngs[0], &summary.hill_climb);
     if (current != before) last_accepted = step;
     const bool last = !go_on();
     if (step % options_.refine_every == 0 || last) refine();
@@ -238,9 +241,11 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
     std::vector<EvaluationPtr> cold_states(last - first + 1);
     auto run_chain = [&](int i) {
       for (int t = first; t <= last; ++t) {
-        states[i] = MetropolisStep(states[i], beta[i], false, *evaluators[i], model_,
-                                   options_.moves, options_.sampling_moves, rngs[i], &stats[i],
-                                   options_.delayed_acceptance);
+        StepRule sample;
+        sample.beta = beta[i];
+        sample.delayed_acceptance = options_.delayed_acceptance;
+        states[i] = MetropolisStep(states[i], sample, *evaluators[i], model_, options_.moves,
+                                   options_.sampling_moves, rngs[i], &stats[i]);
         if (i == 0) cold_states[t - first] = states[0];
       }
     };

@@ -104,19 +104,24 @@ class Sampler {
   SamplerOptions options_;
 };
 
-// One Metropolis-Hastings step at inverse temperature beta: proposes from
-// `current` and returns the next state (the current one when rejected).
-// Counts into `stats` (indexed by MoveType). With `greedy`, accept only
-// increases of the target (hill climbing). With `delayed_acceptance` (and not
-// greedy), screen the proposal first (SamplerOptions::delayed_acceptance).
-// With `greedy`, a proposal whose approximate gain is below
-// -greedy_screen_nats is rejected without a solve.
-EvaluationPtr MetropolisStep(const EvaluationPtr& current, double beta, bool greedy,
+// How a Metropolis-Hastings step decides; the sampler's phases differ only here.
+struct StepRule {
+  double beta = 1.0;    // inverse temperature of the target
+  bool greedy = false;  // accept only increases of the target (hill climbing)
+  // Not greedy: screen the proposal first (SamplerOptions::delayed_acceptance).
+  bool delayed_acceptance = false;
+  // Greedy: reject without a solve when the approximate gain is below
+  // -greedy_screen_nats (SamplerOptions::hill_climb_screen_nats).
+  double greedy_screen_nats = std::numeric_limits<double>::infinity();
+};
+
+// One Metropolis-Hastings step: proposes from `current` and returns the next
+// state (the current one when rejected). Counts into `stats` (indexed by
+// MoveType).
+EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
                              StateEvaluator& evaluator, const ClassConfusionModel& model,
                              const MoveOptions& options, const MoveProbabilities& probabilities,
-                             Rng& rng, std::array<MoveStatistics, 3>* stats,
-                             bool delayed_acceptance = false,
-                             double greedy_screen_nats = std::numeric_limits<double>::infinity());
+                             Rng& rng, std::array<MoveStatistics, 3>* stats);
 
 // Integrated-autocorrelation effective sample size (initial positive sequence).
 double EffectiveSampleSize(const std::vector<double>& series);

@@ -5,6 +5,7 @@
 // (locations, residuals) are fixed functions of the state, as exact MH needs.
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <random>
 #include <unordered_map>
@@ -71,16 +72,17 @@ class TestEvaluator : public StateEvaluator {
   // locations perturbed by a deterministic function of (from, to), and none at
   // all for some pairs, so that both screening paths are exercised.
   EvaluationPtr Approximate(const AssociationState& to, const StateEvaluation& from) override {
-    if (!approximate_) return nullptr;
+    if (!approximate_) return nullptr;  // EnableApproximation(0): exact values
     const size_t key = AssociationStateHash()(to) * 31 + AssociationStateHash()(from.state);
     if (key % 7 == 0) return nullptr;
     std::mt19937_64 rng(key);
     std::uniform_real_distribution<double> noise(-approximation_error_, approximation_error_);
+    const size_t solves = solves_, hits = hits_;
     const EvaluationPtr exact = Evaluate(to, &from);
+    solves_ = solves, hits_ = hits;  // an approximation is neither a solve nor a cache hit
     auto approximate = std::make_shared<StateEvaluation>(*exact);
     approximate->log_target += noise(rng);
     for (auto& location : approximate->locations) location.x() += 0.1 * noise(rng);
-    --solves_;  // an approximation, not a solve
     return approximate;
   }
   void EnableApproximation(double error) {
@@ -285,6 +287,34 @@ TEST(SamplerTest, HillClimbingNeverDecreasesTheTarget) {
     previous = v;
   }
   EXPECT_GT(result.summary.hill_climbed_log_target, result.summary.initial_log_target);
+}
+
+// With an exact approximation and a 0-nat margin, the hill-climbing screen
+// skips exactly the proposals the solve would reject: same climb, fewer solves.
+TEST(SamplerTest, HillClimbingScreenSkipsOnlyWhatWouldBeRejected) {
+  const ClassConfusionModel model = TestModel();
+  SamplerOptions options = TestOptions(1, 2);
+  options.burn_in = 0;
+  options.hill_climb_steps = 200;
+  options.hill_climb_patience = 0;
+  std::vector<SamplerResult> results;
+  for (double margin : {std::numeric_limits<double>::infinity(), 0.0}) {
+    options.hill_climb_screen_nats = margin;
+    Sampler sampler(
+        model,
+        [&model] {
+          auto evaluator = std::make_unique<TestEvaluator>(model);
+          evaluator->EnableApproximation(0.0);
+          return evaluator;
+        },
+        options);
+    results.push_back(sampler.Run(SeparateTracksState(kTrackClass)));
+  }
+  EXPECT_EQ(results[0].summary.hill_climb_trace, results[1].summary.hill_climb_trace);
+  long screened = 0;
+  for (const MoveStatistics& m : results[1].summary.hill_climb) screened += m.screened_out;
+  EXPECT_GT(screened, 20);
+  for (const MoveStatistics& m : results[0].summary.hill_climb) EXPECT_EQ(m.screened_out, 0);
 }
 
 // Climbing stops exactly `patience` steps after the last accepted move once
