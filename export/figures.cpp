@@ -1,5 +1,7 @@
 #include "export/figures.h"
 
+#include <cstdio>
+
 #include <algorithm>
 #include <cmath>
 
@@ -45,22 +47,40 @@ cv::Point Rounded(const cv::Point2d& p) {
   return {cvRound(p.x), cvRound(p.y)};
 }
 
-// Grid every 1 m (0.5 m when a metre is wider than 150 px).
+// Grid spacing: 1 m (0.5 m when a metre is wider than 150 px) for room-sized
+// maps; for larger ones the smallest of 1, 2, 5 x 10^k m that leaves a cell
+// at least 40 px wide (a park 300 m across would otherwise be solid grid).
+double GridStep(double pixels_per_metre) {
+  constexpr double kMinCellPx = 40.0;
+  if (pixels_per_metre >= kMinCellPx) return pixels_per_metre > 150.0 ? 0.5 : 1.0;
+  for (double decade = 1.0;; decade *= 10.0)
+    for (double mantissa : {1.0, 2.0, 5.0})
+      if (mantissa * decade * pixels_per_metre >= kMinCellPx) return mantissa * decade;
+}
+
+std::string MetresText(double metres) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g m", metres);
+  return text;
+}
+
 void DrawFloorGrid(cv::Mat* image, const FloorToImage& to_image, const Eigen::Vector4d& extent) {
-  const double step = to_image.scale() > 150.0 ? 0.5 : 1.0;
+  const double step = GridStep(to_image.scale());
   for (double x = std::ceil(extent[0] / step) * step; x <= extent[2]; x += step)
     cv::line(*image, Rounded(to_image(x, extent[1])), Rounded(to_image(x, extent[3])), kGrid, 1);
   for (double y = std::ceil(extent[1] / step) * step; y <= extent[3]; y += step)
     cv::line(*image, Rounded(to_image(extent[0], y)), Rounded(to_image(extent[2], y)), kGrid, 1);
 }
 
+// A bar one metre long, or one grid cell when a metre is shorter than a cell.
 void DrawScaleBar(cv::Mat* image, double pixels_per_metre) {
-  const int length = cvRound(pixels_per_metre);
+  const double metres = std::max(1.0, GridStep(pixels_per_metre));
+  const int length = cvRound(metres * pixels_per_metre);
   const cv::Point left(10, image->rows - 12), right(10 + length, image->rows - 12);
   cv::line(*image, left, right, kBlack, 2);
   cv::line(*image, left - cv::Point(0, 4), left + cv::Point(0, 4), kBlack, 1);
   cv::line(*image, right - cv::Point(0, 4), right + cv::Point(0, 4), kBlack, 1);
-  DrawLabel(image, "1 m", left + cv::Point(length / 2 - 8, -6), kBlack, 0.35);
+  DrawLabel(image, MetresText(metres), left + cv::Point(length / 2 - 8, -6), kBlack, 0.35);
 }
 
 void DrawTrajectory(cv::Mat* image, const FloorToImage& to_image,
@@ -233,8 +253,11 @@ cv::Mat RenderBirdsEye(const ExportScene& scene, const FigureOptions& options) {
               object->existence_probability);
     DrawCentreMarker(&image, centre);
   }
-  // Labels last so no disc covers them.
+  // Labels last so no disc covers them; beyond kMaxLabels objects (a park
+  // of trees) they would only cover each other.
+  constexpr size_t kMaxLabels = 60;
   for (const OMapObject* object : objects) {
+    if (objects.size() > kMaxLabels) break;
     const cv::Point2d centre = to_image(object->base_world.x(), object->base_world.y());
     const int radius = cvRound(0.5 * object->diameter_m * to_image.scale());
     DrawLabel(&image, ObjectLabel(*object) + " " + FormatProbability(object->existence_probability),
