@@ -83,12 +83,12 @@ void DrawScaleBar(cv::Mat* image, double pixels_per_metre) {
   DrawLabel(image, MetresText(metres), left + cv::Point(length / 2 - 8, -6), kBlack, 0.35);
 }
 
-void DrawTrajectory(cv::Mat* image, const FloorToImage& to_image,
-                    const NamedTrajectory& trajectory) {
-  std::vector<cv::Point2d> points;
-  for (const Pose2& pose : trajectory.poses) points.push_back(to_image(pose.x, pose.y));
+// In the bird's-eye view the estimate is drawn dotted, as in the thesis, and
+// references as lines; its legend uses the same style.
+void DrawTrajectoryLine(cv::Mat* image, const std::vector<cv::Point2d>& points,
+                        const NamedTrajectory& trajectory) {
   if (trajectory.name == "estimated") {
-    DrawDotted(image, points, Bgr(trajectory.rgb), 5.0, 1);  // black dotted as in the thesis
+    DrawDotted(image, points, Bgr(trajectory.rgb), 5.0, 1);
     return;
   }
   std::vector<cv::Point> line;
@@ -96,10 +96,22 @@ void DrawTrajectory(cv::Mat* image, const FloorToImage& to_image,
   cv::polylines(*image, line, false, Bgr(trajectory.rgb), 1, cv::LINE_AA);
 }
 
-void DrawLegend(cv::Mat* image, const std::vector<NamedTrajectory>& trajectories) {
+void DrawTrajectory(cv::Mat* image, const FloorToImage& to_image,
+                    const NamedTrajectory& trajectory) {
+  std::vector<cv::Point2d> points;
+  for (const Pose2& pose : trajectory.poses) points.push_back(to_image(pose.x, pose.y));
+  DrawTrajectoryLine(image, points, trajectory);
+}
+
+// `dotted_estimate`: the figure draws the estimate dotted (bird's-eye view).
+void DrawLegend(cv::Mat* image, const std::vector<NamedTrajectory>& trajectories,
+                bool dotted_estimate) {
   int y = 14;
   for (const NamedTrajectory& trajectory : trajectories) {
-    cv::line(*image, {8, y - 4}, {26, y - 4}, Bgr(trajectory.rgb), 2, cv::LINE_AA);
+    if (dotted_estimate)
+      DrawTrajectoryLine(image, {{8, y - 4.0}, {28, y - 4.0}}, trajectory);
+    else
+      cv::line(*image, {8, y - 4}, {26, y - 4}, Bgr(trajectory.rgb), 2, cv::LINE_AA);
     DrawLabel(image, trajectory.name, {30, y}, kBlack, 0.35);
     y += 14;
   }
@@ -263,7 +275,7 @@ cv::Mat RenderBirdsEye(const ExportScene& scene, const FigureOptions& options) {
     DrawLabel(&image, ObjectLabel(*object) + " " + FormatProbability(object->existence_probability),
               Rounded(centre) + cv::Point(radius / 2 + 4, -radius / 2 - 2), kBlack, 0.35);
   }
-  DrawLegend(&image, trajectories);
+  DrawLegend(&image, trajectories, /*dotted_estimate=*/true);
   DrawScaleBar(&image, to_image.scale());
   return image;
 }
@@ -315,7 +327,7 @@ cv::Mat RenderPerspective(const ExportScene& scene, const FigureOptions& options
     DrawLabel(&reduced, object->class_name,
               Rounded(tip * (1.0 / kSupersample)) + cv::Point(-10, -6), kBlack, 0.35);
   }
-  DrawLegend(&reduced, SceneTrajectories(scene));
+  DrawLegend(&reduced, SceneTrajectories(scene), /*dotted_estimate=*/false);
   return reduced;
 }
 
