@@ -259,9 +259,13 @@ struct SparseSolver::Impl {
                            rows[v].end());
     *reused = fits;
     if (!fits) {
+      // The scratch takes the old pattern's vectors (and their capacity) for
+      // the next set-up.
+      std::vector<std::vector<int>> previous = std::move(pattern_rows);
       FreeStructure();
       pattern_dims = dims;
       pattern_rows = std::move(rows);
+      rows = std::move(previous);
       BuildHessianStructure();
       const auto start = Clock::now();
       factor = Analyze();
@@ -303,8 +307,10 @@ struct SparseSolver::Impl {
           int a = free_index[keys[i]], b = free_index[keys[j]];
           if (a < 0 || b < 0 || a > b || (a == b && i > j)) continue;
           const auto& col_rows = pattern_rows[b];
+          // A column's rows are sorted and end with its own variable.
           const size_t position =
-              std::lower_bound(col_rows.begin(), col_rows.end(), a) - col_rows.begin();
+              a == b ? col_rows.size() - 1
+                     : std::lower_bound(col_rows.begin(), col_rows.end(), a) - col_rows.begin();
           pairs.push_back({columns[i], pattern_dims[a], offsets[a], columns[j], pattern_dims[b],
                            offsets[b], pattern_prefix[b][position], a == b});
         }
