@@ -67,13 +67,24 @@ GeometricSlamProblem SlamEvaluator::BuildProblem(const AssociationState& state) 
   problem.first_pose = data_.first_pose;
   problem.classes = data_.classes;
   for (size_t j = 0; j < state.blocks.size(); ++j) {
-    const int id = state.blocks[j].front();
-    problem.object_class[id] = state.classes[j];
-    for (int t : state.blocks[j])
-      for (int d : data_.tracks[t].detections)
-        problem.observations.push_back({data_.detections[d].frame, id, data_.detections[d].slice});
+    problem.object_class[state.blocks[j].front()] = state.classes[j];
+    AddObservations(state.blocks[j], &problem.observations);
   }
   return problem;
+}
+
+void SlamEvaluator::AddObservations(const std::vector<int>& block,
+                                    std::vector<SliceObservation>* observations) const {
+  const int id = block.front();
+  for (int t : block)
+    for (int d : data_.tracks[t].detections)
+      observations->push_back({data_.detections[d].frame, id, data_.detections[d].slice});
+}
+
+double SlamEvaluator::ClassTerm(const std::vector<int>& block, int class_index) const {
+  double term = model_.BlockLogLikelihood(block, class_index);
+  if (options_.class_prior_per_object) term -= std::log(double(model_.num_classes()));
+  return term;
 }
 
 // The linearisation point of a proposed state (spec §9.6): the current
@@ -114,8 +125,7 @@ EvaluationPtr SlamEvaluator::Solve(const AssociationState& state, const StateEva
                       std::isfinite(solution->evidence.log_evidence);
   double log_target = solution->evidence.log_evidence;
   for (size_t j = 0; j < state.blocks.size(); ++j) {
-    log_target += model_.BlockLogLikelihood(state.blocks[j], state.classes[j]);
-    if (options_.class_prior_per_object) log_target -= std::log(double(model_.num_classes()));
+    log_target += ClassTerm(state.blocks[j], state.classes[j]);
     const MappedObject* object = FindObject(*solution, state.blocks[j].front());
     evaluation->locations.push_back(object ? object->geometry.base_world : Eigen::Vector3d::Zero());
   }
@@ -134,9 +144,7 @@ bool SlamEvaluator::LocalObjectLogTarget(const std::vector<int>& block, int clas
                                          const std::vector<Pose2>& poses, CylinderGeometry* object,
                                          double* log_target, double* squared_residual) const {
   std::vector<SliceObservation> observations;
-  for (int t : block)
-    for (int d : data_.tracks[t].detections)
-      observations.push_back({data_.detections[d].frame, block.front(), data_.detections[d].slice});
+  AddObservations(block, &observations);
   std::vector<const SliceObservation*> detections;
   for (const SliceObservation& observation : observations) detections.push_back(&observation);
   double log_evidence;
@@ -144,8 +152,7 @@ bool SlamEvaluator::LocalObjectLogTarget(const std::vector<int>& block, int clas
                                       options_.slam.pixel_std_px, object, &log_evidence,
                                       squared_residual))
     return false;
-  *log_target = log_evidence + model_.BlockLogLikelihood(block, class_index);
-  if (options_.class_prior_per_object) *log_target -= std::log(double(model_.num_classes()));
+  *log_target = log_evidence + ClassTerm(block, class_index);
   return true;
 }
 

@@ -64,6 +64,11 @@ class SlamEvaluator : public StateEvaluator {
  private:
   EvaluationPtr Solve(const AssociationState& state, const StateEvaluation* from, bool full);
   GeometricSlamResult WarmStart(const AssociationState& state, const StateEvaluation& from) const;
+  // The detections of a block's tracks, as observations of object block.front().
+  void AddObservations(const std::vector<int>& block,
+                       std::vector<SliceObservation>* observations) const;
+  // An object's class terms: log P(a | c) of its tracks and its share of log P(C, J).
+  double ClassTerm(const std::vector<int>& block, int class_index) const;
   // An object's log-evidence with the poses held plus its class terms, solved
   // from `start` (which receives the result), and r^2 of its detections;
   // false when it cannot be evaluated.
