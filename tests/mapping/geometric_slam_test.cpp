@@ -164,20 +164,36 @@ TEST(GeometricSlamTest, AnObjectSeenOnceIsSolvedWithItsPriors) {
   EXPECT_GT(position_covariance.trace(), 1e-3);
 }
 
+// The LPA synthetic scene at the thesis's noise, its dead-reckoned poses and
+// its detections per object (shared by the object-alone tests).
+struct NoisyScene {
+  HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  testing::SyntheticScene scene;
+  std::vector<Pose2> poses;
+  std::map<int, std::vector<const SliceObservation*>> by_object;
+
+  NoisyScene() {
+    testing::SyntheticSceneOptions options;
+    options.pixel_std_px = 30.0;
+    options.odometry_noise = true;
+    scene = testing::MakeSyntheticScene(camera, options);
+    poses = ComposeOdometry(scene.problem.first_pose, scene.problem.increments);
+    for (const auto& observation : scene.problem.observations)
+      by_object[observation.object_id].push_back(&observation);
+  }
+  NoisyScene(const NoisyScene&) = delete;  // by_object points into scene
+  NoisyScene& operator=(const NoisyScene&) = delete;
+};
+
 // The initial refinement (poses held at odometry) moves objects from their
 // single-detection start towards the truth, and the cold solve then needs
 // few iterations.
 TEST(GeometricSlamTest, RefinementFromFirstDetectionsImprovesTheObjectStart) {
-  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
-  testing::SyntheticSceneOptions scene_options;
-  scene_options.pixel_std_px = 30.0;
-  scene_options.odometry_noise = true;
-  const testing::SyntheticScene scene = testing::MakeSyntheticScene(camera, scene_options);
-  const std::vector<Pose2> poses =
-      ComposeOdometry(scene.problem.first_pose, scene.problem.increments);
-  std::map<int, std::vector<const SliceObservation*>> by_object;
-  for (const auto& observation : scene.problem.observations)
-    by_object[observation.object_id].push_back(&observation);
+  const NoisyScene noisy;
+  const HyperbolicCamera& camera = noisy.camera;
+  const testing::SyntheticScene& scene = noisy.scene;
+  const std::vector<Pose2>& poses = noisy.poses;
+  const auto& by_object = noisy.by_object;
   double before = 0.0, after = 0.0;
   for (const auto& [id, list] : by_object) {
     const ClassPrior& prior = scene.problem.classes[scene.problem.object_class.at(id)];
@@ -203,16 +219,11 @@ TEST(GeometricSlamTest, RefinementFromFirstDetectionsImprovesTheObjectStart) {
 // The object-alone evidence (delayed acceptance's screen) is the sparse
 // solver's Laplace evidence of the same factors with every pose fixed.
 TEST(GeometricSlamTest, ObjectEvidenceWithPosesHeldEqualsTheSolversOnFixedPoses) {
-  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
-  testing::SyntheticSceneOptions scene_options;
-  scene_options.pixel_std_px = 30.0;
-  scene_options.odometry_noise = true;
-  const testing::SyntheticScene scene = testing::MakeSyntheticScene(camera, scene_options);
-  const std::vector<Pose2> poses =
-      ComposeOdometry(scene.problem.first_pose, scene.problem.increments);
-  std::map<int, std::vector<const SliceObservation*>> by_object;
-  for (const auto& observation : scene.problem.observations)
-    by_object[observation.object_id].push_back(&observation);
+  const NoisyScene noisy;
+  const HyperbolicCamera& camera = noisy.camera;
+  const testing::SyntheticScene& scene = noisy.scene;
+  const std::vector<Pose2>& poses = noisy.poses;
+  const auto& by_object = noisy.by_object;
   int checked = 0;
   for (const auto& [id, list] : by_object) {
     const ClassPrior& prior = scene.problem.classes[scene.problem.object_class.at(id)];
