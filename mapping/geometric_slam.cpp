@@ -107,6 +107,13 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
   using Matrix5d = Eigen::Matrix<double, 5, 5>;
   const Eigen::Vector3d location_weight = prior.location_std_m.cwiseInverse();
   const Eigen::Vector2d size_weight = prior.size_std_m.cwiseInverse();
+  // Whitened errors of the class priors: location (3), then size (2).
+  auto prior_error = [&](const Vector5d& theta) {
+    Vector5d error;
+    error << location_weight.cwiseProduct(theta.head<3>() - prior.location_mean_m),
+        size_weight.cwiseProduct(theta.tail<2>() - prior.size_mean_m);
+    return error;
+  };
   // Cost, gradient and Gauss-Newton matrix of the object's own factors.
   auto evaluate = [&](const Vector5d& theta, double* cost, Vector5d* gradient, Matrix5d* hessian) {
     CylinderGeometry candidate;
@@ -135,14 +142,11 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
         *hessian += j.transpose() * j;
       }
     }
-    const Eigen::Vector3d location_error =
-        location_weight.cwiseProduct(theta.head<3>() - prior.location_mean_m);
-    const Eigen::Vector2d size_error =
-        size_weight.cwiseProduct(theta.tail<2>() - prior.size_mean_m);
-    sum += location_error.squaredNorm() + size_error.squaredNorm();
+    const Vector5d priors = prior_error(theta);
+    sum += priors.squaredNorm();
     if (gradient) {
-      gradient->head<3>() += location_weight.cwiseProduct(location_error);
-      gradient->tail<2>() += size_weight.cwiseProduct(size_error);
+      gradient->head<3>() += location_weight.cwiseProduct(priors.head<3>());
+      gradient->tail<2>() += size_weight.cwiseProduct(priors.tail<2>());
       hessian->diagonal().head<3>() += location_weight.cwiseAbs2();
       hessian->diagonal().tail<2>() += size_weight.cwiseAbs2();
     }
@@ -189,9 +193,7 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
   }
   fit->improved = improved;
   fit->cost = cost;
-  fit->prior_squared =
-      location_weight.cwiseProduct(theta.head<3>() - prior.location_mean_m).squaredNorm() +
-      size_weight.cwiseProduct(theta.tail<2>() - prior.size_mean_m).squaredNorm();
+  fit->prior_squared = prior_error(theta).squaredNorm();
   fit->information = hessian;
   fit->num_rows = 4 * static_cast<int>(detections.size()) + 5;
   fit->log_det_noise = 2.0 * (prior.location_std_m.array().log().sum() +
@@ -226,8 +228,7 @@ bool ObjectLogEvidenceWithPosesHeld(const CameraModel& camera, const std::vector
     return false;
   const Eigen::LLT<Eigen::Matrix<double, 5, 5>> cholesky(fit.information);
   if (cholesky.info() != Eigen::Success) return false;
-  const double log_det_information =
-      2.0 * cholesky.matrixL().toDenseMatrix().diagonal().array().log().sum();
+  const double log_det_information = 2.0 * cholesky.matrixLLT().diagonal().array().log().sum();
   *log_evidence = -fit.cost - 0.5 * fit.log_det_noise - 0.5 * log_det_information +
                   0.5 * (5 - fit.num_rows) * kLog2Pi;
   if (detections_squared_residual)
