@@ -155,6 +155,7 @@ struct SparseSolver::Impl {
   Eigen::VectorXd local_gradient;  // scratch: J_f^T e_f
   std::vector<int> factor_columns;  // per factor: its Jacobian's column count
   OrderingType requested_ordering = OrderingType::kAutomatic;
+  bool independent_of_history = false;  // SolverOptions::independent_of_history
   OrderingType ordering_used = OrderingType::kAmd;
   OrderingType analysed_ordering = OrderingType::kAutomatic;  // the request the cache was made for
   // The last automatic comparison of orderings: its problem's variable count
@@ -254,9 +255,13 @@ struct SparseSolver::Impl {
 
     bool fits = allow_reuse && hessian && factor && dims == pattern_dims &&
                 analysed_ordering == requested_ordering;
+    // A strictly larger cached pattern factorises the same matrix with
+    // other fill, so other rounding: only the identical one keeps a solve
+    // independent of the solves before it.
     for (int v = 0; fits && v < num_free; ++v)
-      fits = std::includes(pattern_rows[v].begin(), pattern_rows[v].end(), rows[v].begin(),
-                           rows[v].end());
+      fits = independent_of_history ? pattern_rows[v] == rows[v]
+                                    : std::includes(pattern_rows[v].begin(), pattern_rows[v].end(),
+                                                    rows[v].begin(), rows[v].end());
     *reused = fits;
     if (!fits) {
       // The scratch takes the old pattern's vectors (and their capacity) for
@@ -402,7 +407,7 @@ struct SparseSolver::Impl {
     // automatic comparison is used again without comparing; a problem that
     // has drifted further from the compared one is compared afresh.
     const bool compare = wanted == OrderingType::kAutomatic &&
-                         (compared_num_blocks < 0 ||
+                         (independent_of_history || compared_num_blocks < 0 ||
                           std::abs(num_free - compared_num_blocks) > kSimilarProblemBlocks);
     if (wanted == OrderingType::kAutomatic && !compare) wanted = compared_choice;
     auto want = [wanted](OrderingType type) {
@@ -712,6 +717,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
 
   double analyze_s = 0.0;
   impl.requested_ordering = options_.ordering;
+  impl.independent_of_history = options_.independent_of_history;
   if (!impl.SetUp(*graph, options_.reuse_symbolic_analysis, &summary.reused_symbolic_analysis,
                   &analyze_s, &why))
     return finish(TerminationType::kFailure, why);

@@ -59,6 +59,12 @@ struct SolverOptions {
   OrderingType ordering = OrderingType::kAutomatic;
   // Reuse the cached symbolic analysis when the new block pattern fits in it.
   bool reuse_symbolic_analysis = true;
+  // Results depend only on this solve's graph and start values, never on the
+  // solves before it: the cached analysis is reused only for the identical
+  // pattern, and the automatic ordering is compared afresh at every analysis
+  // (long_loop: +3 % instructions). For solves that may be undone and done
+  // again in another order (speculative MC3 chains).
+  bool independent_of_history = false;
   bool compute_evidence = true;
   // Algorithm 1 steps 4-5: end with the undamped Gauss-Newton step of the
   // final linear system (the one the evidence comes from), if it does not
