@@ -183,6 +183,8 @@ RunConfig::RunConfig() {
        Kind::kFlag, "1: log P(a | c) once per detection (eq. 4.32), 0: once per track"},
       {"slam", "swap_every", "", "--swap-every", Kind::kInteger,
        "MC3: chains may swap after every this many iterations (1 = thesis)"},
+      {"slam", "speculation_depth", "", "--speculation-depth", Kind::kInteger,
+       "MC3 on threads: swap intervals a chain may run ahead (0 = lock-step; same result)"},
       {"slam", "hill_climb_screen_nats", "", "--hill-climb-screen", Kind::kNumberOrInf,
        "hill climbing: no solve when the approximate gain is below -this, inf = always solve"},
       {"slam", "delayed_acceptance", "1", "--no-delayed-acceptance", Kind::kFlag,

@@ -111,8 +111,9 @@ void PrintReport(const SamplerResult& result) {
   for (const auto* phase : {&s.hill_climb, &s.sampling})
     for (const MoveStatistics& m : *phase) proposals += m.proposed;
   std::printf(
-      "solves %zu, cache hits %zu; best log target %.2f; %.0f cold-chain proposals/s\n",
-      s.num_solves, s.num_cache_hits, result.best->log_target,
+      "solves %zu (and %zu run ahead, then undone), cache hits %zu; best log target %.2f; %.0f "
+      "cold-chain proposals/s\n",
+      s.num_solves, s.speculative_solves_undone, s.num_cache_hits, result.best->log_target,
       proposals / std::max(1e-9, s.hill_climb_time_s + s.sampling_time_s));
   const size_t n = s.cold_trace.size();
   std::printf("cold-chain log target trace:");
@@ -188,7 +189,8 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
-  const FusionResult fused = FuseSamples(result.samples, input.data.classes, track_size, fusion_options);
+  const FusionResult fused =
+      FuseSamples(result.samples, input.data.classes, track_size, fusion_options);
   WriteSampledOMap(arguments.Get("output"), fused, source,
                    arguments.Has("baseline") ? nullptr : &result.summary);
   if (quiet) return 0;

@@ -161,6 +161,10 @@ void AddSlamOptions(Arguments* a) {
                "MC3: adjacent chains may swap after every N iterations (1 = Algorithm 8); the "
                "chains step independently in between",
                std::to_string(d.sampler.swap_every));
+  a->AddOption("speculation-depth", "", "N",
+               "MC3 on threads: a chain may run up to N swap intervals ahead of the swap "
+               "decisions and goes back when a swap reaches it (0 = lock-step; same result)",
+               std::to_string(d.sampler.speculation_depth));
   a->AddOption("hill-climb-screen", "", "NATS",
                "hill climbing: skip the solve when the approximate gain is below -NATS (inf = "
                "solve every proposal)",
@@ -234,6 +238,7 @@ SlamSettings SlamSettingsFrom(const Arguments& arguments) {
   sampler.parallel_chains = !arguments.Flag("sequential");
   sampler.delayed_acceptance = !arguments.Flag("no-delayed-acceptance");
   sampler.swap_every = integer("swap-every");
+  sampler.speculation_depth = integer("speculation-depth");
   sampler.hill_climb_screen_nats = GetDoubleOrInfinity(arguments, "hill-climb-screen");
   MoveOptions& m = sampler.moves;
   m.class_mismatch_penalty = GetDoubleOrInfinity(arguments, "mismatch-penalty");

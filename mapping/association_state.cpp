@@ -119,4 +119,67 @@ std::vector<double> ClassConfusionModel::ClassLogProposal(const std::vector<int>
   return log_q;
 }
 
+EvaluationPtr EvaluationCache::Find(const AssociationState& state) {
+  const auto found = entries_.find(state);
+  if (found == entries_.end()) return nullptr;
+  ++hits_;
+  return found->second;
+}
+
+void EvaluationCache::Store(const EvaluationPtr& evaluation) {
+  if (entries_.size() >= max_entries_) {
+    if (journaling_) {
+      Change change;
+      change.cleared = std::make_unique<Map>(std::move(entries_));
+      journal_.push_back(std::move(change));
+    }
+    entries_ = Map();
+  }
+  EvaluationPtr& entry = entries_[evaluation->state];
+  if (journaling_) {
+    Change change;
+    change.key = evaluation->state;
+    change.previous = entry;
+    journal_.push_back(std::move(change));
+  }
+  entry = evaluation;
+}
+
+size_t EvaluationCache::Mark() {
+  journaling_ = true;
+  Change change;
+  change.is_mark = true;
+  change.solves = solves_;
+  change.hits = hits_;
+  journal_.push_back(std::move(change));
+  return journal_begin_ + journal_.size() - 1;
+}
+
+void EvaluationCache::RollBack(size_t mark) {
+  if (mark < journal_begin_ || mark >= journal_begin_ + journal_.size() ||
+      !journal_[mark - journal_begin_].is_mark)
+    throw Error("evaluation cache: roll-back to a mark that was released or never made");
+  while (journal_begin_ + journal_.size() > mark + 1) {
+    Change& change = journal_.back();
+    if (change.cleared) {
+      entries_ = std::move(*change.cleared);
+    } else if (!change.is_mark) {
+      if (change.previous)
+        entries_[change.key] = std::move(change.previous);
+      else
+        entries_.erase(change.key);
+    }
+    journal_.pop_back();
+  }
+  solves_ = journal_.back().solves;
+  hits_ = journal_.back().hits;
+}
+
+void EvaluationCache::Release(size_t mark) {
+  while (!journal_.empty() && journal_begin_ < mark) {
+    journal_.pop_front();
+    ++journal_begin_;
+  }
+}
+
 }  // namespace oslam

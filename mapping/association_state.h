@@ -6,8 +6,10 @@
 #pragma once
 
 #include <cstddef>
+#include <deque>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Core>
@@ -78,6 +80,42 @@ struct StateEvaluation {
 
 using EvaluationPtr = std::shared_ptr<const StateEvaluation>;
 
+// Evaluations by state, with the evaluator's solve and hit counters, for
+// StateEvaluator implementations. After the first Mark() every change is
+// journalled, so RollBack(mark) restores entries and counters exactly as they
+// were at the mark; Release(mark) drops the journal before it.
+class EvaluationCache {
+ public:
+  explicit EvaluationCache(size_t max_entries) : max_entries_(max_entries) {}
+  EvaluationPtr Find(const AssociationState& state);  // counts a hit when found
+  // Inserts or replaces; the whole cache is cleared first when it is full.
+  void Store(const EvaluationPtr& evaluation);
+  void CountSolve() { ++solves_; }
+  size_t solves() const { return solves_; }
+  size_t hits() const { return hits_; }
+  size_t size() const { return entries_.size(); }
+
+  size_t Mark();
+  void RollBack(size_t mark);
+  void Release(size_t mark);
+
+ private:
+  using Map = std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash>;
+  struct Change {
+    bool is_mark = false;  // a mark: the counters then
+    size_t solves = 0, hits = 0;
+    AssociationState key;  // a store: the key and what it replaced (null: absent)
+    EvaluationPtr previous;
+    std::unique_ptr<Map> cleared;  // a clear: the entries it removed
+  };
+  size_t max_entries_;
+  Map entries_;
+  size_t solves_ = 0, hits_ = 0;
+  bool journaling_ = false;
+  std::deque<Change> journal_;
+  size_t journal_begin_ = 0;  // the mark number of journal_.front()
+};
+
 // Computes (and caches) evaluations. One instance per chain: not thread-safe.
 class StateEvaluator {
  public:
@@ -103,6 +141,19 @@ class StateEvaluator {
   }
   virtual size_t num_solves() const = 0;
   virtual size_t num_cache_hits() const = 0;
+
+  // Speculative MC3: a chain steps ahead of the swap decisions and goes back
+  // when a swap at an earlier iteration is accepted. Mark() names the
+  // evaluator's state now; RollBack(mark) returns to it (cache and counters),
+  // after which every call gives what it would have given had nothing
+  // happened since the mark; Release(mark) forgets what going back to a mark
+  // before `mark` would need. An evaluator whose results depend on work it
+  // cannot undo (a solver's cached analysis, say) leaves SupportsRollBack()
+  // false, and the sampler then steps the chains in lock-step.
+  virtual bool SupportsRollBack() const { return false; }
+  virtual size_t Mark() { return 0; }
+  virtual void RollBack(size_t mark) { (void)mark; }
+  virtual void Release(size_t mark) { (void)mark; }
 };
 
 }  // namespace oslam

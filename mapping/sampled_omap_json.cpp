@@ -38,10 +38,10 @@ Json MoveJson(const std::array<MoveStatistics, 3>& stats) {
 Json MembersJson(const FusedIdentity& identity) {
   Json members = Json::array();
   for (size_t m = 0; m < identity.members.size(); ++m)
-    members.push_back({{"tracks", identity.members[m]},
-                       {"num_samples", m < identity.member_samples.size()
-                                           ? identity.member_samples[m]
-                                           : identity.num_samples}});
+    members.push_back(
+        {{"tracks", identity.members[m]},
+         {"num_samples",
+          m < identity.member_samples.size() ? identity.member_samples[m] : identity.num_samples}});
   return members;
 }
 
@@ -62,6 +62,7 @@ Json SummaryJson(const SamplerSummary& s) {
           {"effective_sample_size", Number(s.effective_sample_size)},
           {"num_solves", s.num_solves},
           {"num_cache_hits", s.num_cache_hits},
+          {"speculative_solves_undone", s.speculative_solves_undone},
           {"hill_climb_steps", s.hill_climb_steps},
           {"hill_climb_time_s", s.hill_climb_time_s},
           {"sampling_time_s", s.sampling_time_s},

@@ -2,7 +2,12 @@
 
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <mutex>
 #include <thread>
+#include <unordered_map>
 
 #include "core/error.h"
 
@@ -25,6 +30,24 @@ Rng ChainRng(unsigned long seed, int chain) {
   return Rng(sequence);
 }
 
+// One MC3 chain: its state, temperature, random stream, statistics and evaluator.
+struct Chain {
+  EvaluationPtr state;
+  double beta = 1.0;
+  Rng rng;
+  std::array<MoveStatistics, 3> stats{};
+  StateEvaluator* evaluator = nullptr;
+};
+
+// A chain after a block of iterations: what going back to it needs.
+struct ChainCheckpoint {
+  EvaluationPtr state;
+  Rng rng;
+  std::array<MoveStatistics, 3> stats{};
+  size_t mark = 0;                         // the evaluator's
+  std::vector<EvaluationPtr> cold_states;  // chain 0: its state after each iteration
+};
+
 }  // namespace
 
 bool SamplerOptions::Validate(std::string* why) const {
@@ -43,6 +66,7 @@ bool SamplerOptions::Validate(std::string* why) const {
     return fail("move probabilities must be >= 0 and sum to 1");
   if (num_chains < 1) return fail("at least one chain is needed");
   if (swap_every < 1) return fail("chains swap every >= 1 iterations");
+  if (speculation_depth < 0) return fail("the speculation depth must be >= 0 swap intervals");
   if (!(delta_temperature >= 0) || std::isinf(delta_temperature))
     return fail("the temperature step dT must be >= 0");
   if (num_iterations < 1) return fail("at least one iteration is needed");
@@ -217,66 +241,211 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
 
   // Algorithm 8: every chain starts from the hill-climbed state.
   clock = std::chrono::steady_clock::now();
-  std::vector<EvaluationPtr> states(chains, current);
-  std::vector<double> beta(chains);
+  std::vector<Chain> chain(chains);
+  bool all_roll_back = true;
   for (int i = 0; i < chains; ++i) {
-    beta[i] = 1.0 / (1.0 + options_.delta_temperature * i);
-    evaluators[i]->Remember(current);
+    chain[i].state = current;
+    chain[i].beta = 1.0 / (1.0 + options_.delta_temperature * i);
+    chain[i].rng = rngs[i];
+    chain[i].evaluator = evaluators[i].get();
+    chain[i].evaluator->Remember(current);
+    all_roll_back = all_roll_back && chain[i].evaluator->SupportsRollBack();
   }
-  std::vector<std::array<MoveStatistics, 3>> stats(chains);
   result.best = current;
-  // The cold chain's state after iteration t: traced, and recorded after the burn-in.
+  // Recorded samples get their covariances from an evaluator of their own,
+  // so that the chains never wait for it; a state is completed once.
+  std::unique_ptr<StateEvaluator> completer;
+  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> completed;
   auto record = [&](int t, const EvaluationPtr& cold) {
     summary.cold_trace.push_back(cold->log_target);
     if (cold->log_target > result.best->log_target) result.best = cold;
-    if (t <= options_.burn_in) return cold;
-    EvaluationPtr completed = evaluators[0]->Complete(cold);
-    result.samples.push_back(completed);
-    return completed;
+    if (t <= options_.burn_in) return;
+    EvaluationPtr& done = completed[cold->state];
+    if (!done) {
+      if (!completer) completer = factory_();
+      done = completer->Complete(cold);
+    }
+    result.samples.push_back(done);
   };
-  // Chains step independently for swap_every iterations (in parallel
-  // threads), then adjacent chains may swap.
-  for (int first = 1; first <= options_.num_iterations; first += options_.swap_every) {
-    const int last = std::min(options_.num_iterations, first + options_.swap_every - 1);
-    std::vector<EvaluationPtr> cold_states(last - first + 1);
-    auto run_chain = [&](int i) {
-      for (int t = first; t <= last; ++t) {
-        StepRule sample;
-        sample.beta = beta[i];
-        sample.delayed_acceptance = options_.delayed_acceptance;
-        states[i] = MetropolisStep(states[i], sample, *evaluators[i], model_, options_.moves,
-                                   options_.sampling_moves, rngs[i], &stats[i]);
-        if (i == 0) cold_states[t - first] = states[0];
-      }
-    };
-    if (options_.parallel_chains && chains > 1) {
-      std::vector<std::thread> threads;
-      for (int i = 1; i < chains; ++i) threads.emplace_back(run_chain, i);
-      run_chain(0);
-      for (auto& thread : threads) thread.join();
-    } else {
-      for (int i = 0; i < chains; ++i) run_chain(i);
+  const int swap_every = options_.swap_every;
+  const int num_blocks = (options_.num_iterations + swap_every - 1) / swap_every;
+  auto run_block = [&](int i, int block) {
+    const int first = 1 + block * swap_every;
+    const int last = std::min(options_.num_iterations, first + swap_every - 1);
+    Chain& c = chain[i];
+    ChainCheckpoint done;
+    for (int t = first; t <= last; ++t) {
+      StepRule sample;
+      sample.beta = c.beta;
+      sample.delayed_acceptance = options_.delayed_acceptance;
+      c.state = MetropolisStep(c.state, sample, *c.evaluator, model_, options_.moves,
+                               options_.sampling_moves, c.rng, &c.stats);
+      if (i == 0) done.cold_states.push_back(c.state);
     }
-    for (int t = first; t < last; ++t) record(t, cold_states[t - first]);
-    // Swaps of adjacent chains, hottest pair first (5.3); whole states move,
-    // and each evaluator learns the state it receives.
-    for (int i = chains - 1; i >= 1; --i) {
-      ++summary.swaps_proposed;
-      const double log_alpha =
-          (beta[i - 1] - beta[i]) * (states[i]->log_target - states[i - 1]->log_target);
-      const double u = std::uniform_real_distribution<double>(0.0, 1.0)(swap_rng);
-      if (std::log(u) < std::min(0.0, log_alpha)) {
-        std::swap(states[i], states[i - 1]);
-        evaluators[i]->Remember(states[i]);
-        evaluators[i - 1]->Remember(states[i - 1]);
-        ++summary.swaps_accepted;
+    done.state = c.state;
+    done.rng = c.rng;
+    done.stats = c.stats;
+    done.mark = c.evaluator->Mark();
+    return done;
+  };
+  // With threads every chain runs in its own, up to `depth` blocks ahead of
+  // the swap decisions (speculation); a chain that an accepted swap reaches
+  // goes back to its checkpoint at that swap, so the result is the one of
+  // stepping the chains one after another.
+  const bool threaded = options_.parallel_chains && chains > 1;
+  const int depth = all_roll_back ? options_.speculation_depth : 0;
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::vector<std::deque<ChainCheckpoint>> published(chains);
+  std::vector<int> next_block(chains, 0);
+  std::vector<char> hold(chains, 0), held(chains, 0), release_pending(chains, 0);
+  std::vector<size_t> release_mark(chains, 0);
+  int decided = 0;  // blocks whose swaps are decided
+  bool stop = false;
+  std::exception_ptr failure;  // thrown in a chain's thread, rethrown here
+  auto chain_thread = [&](int i) {
+    for (;;) {
+      int block;
+      size_t release = 0;
+      bool do_release = false;
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        for (;;) {
+          if (stop) return;
+          if (hold[i]) {
+            held[i] = 1;
+            changed.notify_all();
+          } else if (next_block[i] < num_blocks && next_block[i] <= decided + depth) {
+            break;
+          }
+          changed.wait(lock);
+        }
+        block = next_block[i];
+        do_release = release_pending[i];
+        release_pending[i] = 0;
+        release = release_mark[i];
       }
+      ChainCheckpoint done;
+      try {
+        if (do_release) chain[i].evaluator->Release(release);
+        done = run_block(i, block);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!failure) failure = std::current_exception();
+        changed.notify_all();
+        return;
+      }
+      std::lock_guard<std::mutex> lock(mutex);
+      published[i].push_back(std::move(done));
+      ++next_block[i];
+      changed.notify_all();
     }
-    states[0] = record(last, states[0]);
-    if (progress) progress("MC3", last, options_.num_iterations);
+  };
+  std::vector<std::thread> threads;
+  if (threaded)
+    for (int i = 0; i < chains; ++i) threads.emplace_back(chain_thread, i);
+  auto stop_threads = [&] {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      stop = true;
+    }
+    changed.notify_all();
+    for (auto& thread : threads) thread.join();
+  };
+  try {
+    for (int block = 0; block < num_blocks; ++block) {
+      const int first = 1 + block * swap_every;
+      const int last = std::min(options_.num_iterations, first + swap_every - 1);
+      std::vector<ChainCheckpoint> at(chains);
+      if (threaded) {
+        std::unique_lock<std::mutex> lock(mutex);
+        changed.wait(lock, [&] {
+          if (failure) return true;
+          for (const auto& queue : published)
+            if (queue.empty()) return false;
+          return true;
+        });
+        if (failure) std::rethrow_exception(failure);
+        for (int i = 0; i < chains; ++i) {
+          at[i] = std::move(published[i].front());
+          published[i].pop_front();
+        }
+      } else {
+        for (int i = 0; i < chains; ++i) at[i] = run_block(i, block);
+      }
+      for (int t = first; t < last; ++t) record(t, at[0].cold_states[t - first]);
+      // Swaps of adjacent chains, hottest pair first (5.3); whole states
+      // move, and each evaluator learns the state it receives.
+      std::vector<EvaluationPtr> states(chains);
+      for (int i = 0; i < chains; ++i) states[i] = at[i].state;
+      std::vector<std::pair<int, EvaluationPtr>> learnt;
+      for (int i = chains - 1; i >= 1; --i) {
+        ++summary.swaps_proposed;
+        const double log_alpha = (chain[i - 1].beta - chain[i].beta) *
+                                 (states[i]->log_target - states[i - 1]->log_target);
+        const double u = std::uniform_real_distribution<double>(0.0, 1.0)(swap_rng);
+        if (std::log(u) < std::min(0.0, log_alpha)) {
+          std::swap(states[i], states[i - 1]);
+          learnt.emplace_back(i, states[i]);
+          learnt.emplace_back(i - 1, states[i - 1]);
+          ++summary.swaps_accepted;
+        }
+      }
+      std::vector<char> swapped(chains, 0);
+      for (const auto& entry : learnt) swapped[entry.first] = 1;
+      if (!learnt.empty()) {
+        if (threaded) {  // wait until the swapped chains are between blocks
+          std::unique_lock<std::mutex> lock(mutex);
+          for (int i = 0; i < chains; ++i) hold[i] = swapped[i];
+          changed.notify_all();
+          changed.wait(lock, [&] {
+            if (failure) return true;
+            for (int i = 0; i < chains; ++i)
+              if (swapped[i] && !held[i]) return false;
+            return true;
+          });
+          if (failure) std::rethrow_exception(failure);
+        }
+        for (int i = 0; i < chains; ++i) {
+          if (!swapped[i]) continue;
+          const size_t solves = chain[i].evaluator->num_solves();
+          chain[i].evaluator->RollBack(at[i].mark);
+          summary.speculative_solves_undone += solves - chain[i].evaluator->num_solves();
+          chain[i].evaluator->Release(at[i].mark);
+          chain[i].state = states[i];
+          chain[i].rng = at[i].rng;
+          chain[i].stats = at[i].stats;
+        }
+        for (const auto& [i, state] : learnt) chain[i].evaluator->Remember(state);
+      }
+      record(last, states[0]);
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (int i = 0; i < chains; ++i) {
+          if (swapped[i]) {
+            published[i].clear();
+            next_block[i] = block + 1;
+            hold[i] = held[i] = 0;
+          } else if (threaded) {
+            release_pending[i] = 1;
+            release_mark[i] = at[i].mark;
+          } else {
+            chain[i].evaluator->Release(at[i].mark);
+          }
+        }
+        decided = block + 1;
+      }
+      changed.notify_all();
+      if (progress) progress("MC3", last, options_.num_iterations);
+    }
+  } catch (...) {
+    stop_threads();
+    throw;
   }
-  summary.sampling = stats[0];
+  stop_threads();
+  summary.sampling = chain[0].stats;
   summary.sampling_time_s = Seconds(clock);
+  if (completer) summary.num_solves += completer->num_solves();
   for (const auto& evaluator : evaluators) {
     summary.num_solves += evaluator->num_solves();
     summary.num_cache_hits += evaluator->num_cache_hits();

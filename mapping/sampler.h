@@ -30,7 +30,7 @@ struct SamplerOptions {
   // would not raise the target. long_loop: -10 skips 60 % of the solves and
   // none that the solve would have accepted. Infinity: solve every proposal.
   double hill_climb_screen_nats = 10.0;
-  int refine_every = 50;       // K_NL: full optimisation of the current state
+  int refine_every = 50;  // K_NL: full optimisation of the current state
   MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
   MoveProbabilities sampling_moves{0.4, 0.4, 0.2};  // 0.5/0.5/0 with known classes
   MoveOptions moves;
@@ -46,6 +46,12 @@ struct SamplerOptions {
   int burn_in = 70;
   unsigned long seed = 1;
   bool parallel_chains = true;
+  // With threads, a chain may step up to this many swap intervals ahead of
+  // the swap decisions, so that it waits for no other chain; an accepted swap
+  // sends the chains it reaches back to that iteration (their evaluators roll
+  // back), and the result is the one of stepping the chains one after another.
+  // 0 (or an evaluator that cannot roll back): the chains step in lock-step.
+  int speculation_depth = 32;
   // MC³ proposals pass a cheap screen before they are solved (delayed
   // acceptance, Christen & Fox 2005): the first stage accepts with
   // min(1, exp(beta a(x, y))), a = the evaluator's approximate log ratio, the
@@ -59,9 +65,9 @@ struct SamplerOptions {
 
 struct MoveStatistics {
   long proposed = 0, accepted = 0, self_transitions = 0;
-  long cache_hits = 0;  // proposed states found in the evaluator's cache (no solve)
+  long cache_hits = 0;    // proposed states found in the evaluator's cache (no solve)
   long screened_out = 0;  // rejected by delayed acceptance's first stage (no solve)
-  double time_s = 0;    // spent evaluating proposals of this type (screen included)
+  double time_s = 0;      // spent evaluating proposals of this type (screen included)
   // Proposals that needed a solve.
   long solves() const { return proposed - self_transitions - cache_hits - screened_out; }
   // Proposals that were screened, looked up or solved (all but self-transitions).
@@ -71,6 +77,9 @@ struct MoveStatistics {
 struct SamplerSummary {
   std::array<MoveStatistics, 3> hill_climb{}, sampling{};  // by MoveType, cold chain
   long swaps_proposed = 0, swaps_accepted = 0;
+  // Solves done ahead of a swap that was then accepted, and undone (depend on
+  // the threads' timing; not in num_solves).
+  size_t speculative_solves_undone = 0;
   int hill_climb_steps = 0;              // taken (patience may add to the minimum)
   std::vector<double> hill_climb_trace;  // log target of the current state per step
   std::vector<double> cold_trace;        // cold chain's log target per iteration

@@ -12,9 +12,12 @@ namespace {
 GeometricSlamOptions StepOptions(const SlamTargetOptions& options) {
   GeometricSlamOptions step = options.slam;
   step.solver.max_iterations = options.proposal_iterations - 1;
-  step.solver.apply_final_step = true;  // the Gauss-Newton step of the last linear system
+  step.solver.apply_final_step = true;      // the Gauss-Newton step of the last linear system
   step.compute_object_covariances = false;  // added by Complete() to recorded samples only
   step.compute_pose_covariances = false;
+  // A proposal's value is then a function of (state, from) alone, so a
+  // speculative chain can undo evaluations and redo them (SupportsRollBack).
+  step.solver.independent_of_history = true;
   return step;
 }
 
@@ -56,7 +59,8 @@ SlamEvaluator::SlamEvaluator(const SlamTargetData& data, const ClassConfusionMod
       options_(options),
       full_(*data.camera, options.slam),
       step_(*data.camera, StepOptions(options)),
-      covariances_(*data.camera, CovarianceOptions(options)) {
+      covariances_(*data.camera, CovarianceOptions(options)),
+      cache_(options.max_cache_entries) {
   std::string why;
   if (!options.Validate(&why)) throw Error("O-SLAM target options: " + why);
 }
@@ -118,7 +122,7 @@ EvaluationPtr SlamEvaluator::Solve(const AssociationState& state, const StateEva
   GeometricSlam& slam = full ? full_ : step_;
   auto solution =
       std::make_shared<GeometricSlamResult>(slam.Solve(problem, warm_start ? &warm : nullptr));
-  ++solves_;
+  cache_.CountSolve();
   auto evaluation = std::make_shared<StateEvaluation>();
   evaluation->state = state;
   evaluation->valid = solution->summary.IsUsable() && solution->evidence.valid &&
@@ -203,30 +207,21 @@ EvaluationPtr SlamEvaluator::Approximate(const AssociationState& to, const State
   return approximate;
 }
 
-void SlamEvaluator::Store(const EvaluationPtr& evaluation) {
-  if (cache_.size() >= options_.max_cache_entries) cache_.clear();
-  cache_[evaluation->state] = evaluation;
-}
-
 EvaluationPtr SlamEvaluator::Evaluate(const AssociationState& state, const StateEvaluation* from) {
-  const auto found = cache_.find(state);
-  if (found != cache_.end()) {
-    ++hits_;
-    return found->second;
-  }
+  if (EvaluationPtr found = cache_.Find(state)) return found;
   EvaluationPtr evaluation = Solve(state, from, false);
-  Store(evaluation);
+  cache_.Store(evaluation);
   return evaluation;
 }
 
 EvaluationPtr SlamEvaluator::Refine(const AssociationState& state, const StateEvaluation* from) {
   EvaluationPtr evaluation = Solve(state, from, true);
-  Store(evaluation);
+  cache_.Store(evaluation);
   return evaluation;
 }
 
 void SlamEvaluator::Remember(const EvaluationPtr& evaluation) {
-  Store(evaluation);
+  cache_.Store(evaluation);
 }
 
 EvaluationPtr SlamEvaluator::Complete(const EvaluationPtr& evaluation) {
@@ -237,7 +232,7 @@ EvaluationPtr SlamEvaluator::Complete(const EvaluationPtr& evaluation) {
   GeometricSlamResult at_solution = *evaluation->solution;
   const GeometricSlamResult with =
       covariances_.Solve(BuildProblem(evaluation->state), &at_solution);
-  ++solves_;
+  cache_.CountSolve();
   if (!with.has_object_covariances) return evaluation;  // reported by the fusion as zero
   for (MappedObject& object : at_solution.objects)
     for (const MappedObject& solved : with.objects)
@@ -245,7 +240,7 @@ EvaluationPtr SlamEvaluator::Complete(const EvaluationPtr& evaluation) {
   at_solution.has_object_covariances = true;
   auto completed = std::make_shared<StateEvaluation>(*evaluation);
   completed->solution = std::make_shared<GeometricSlamResult>(std::move(at_solution));
-  Store(completed);
+  cache_.Store(completed);
   return completed;
 }
 

@@ -56,8 +56,12 @@ class SlamEvaluator : public StateEvaluator {
   // poses held at from's trajectory (ObjectLogEvidenceWithPosesHeld), change
   // from's log target; objects both states share keep from's values.
   EvaluationPtr Approximate(const AssociationState& to, const StateEvaluation& from) override;
-  size_t num_solves() const override { return solves_; }
-  size_t num_cache_hits() const override { return hits_; }
+  size_t num_solves() const override { return cache_.solves(); }
+  size_t num_cache_hits() const override { return cache_.hits(); }
+  bool SupportsRollBack() const override { return true; }
+  size_t Mark() override { return cache_.Mark(); }
+  void RollBack(size_t mark) override { cache_.RollBack(mark); }
+  void Release(size_t mark) override { cache_.Release(mark); }
 
   GeometricSlamProblem BuildProblem(const AssociationState& state) const;
 
@@ -75,14 +79,12 @@ class SlamEvaluator : public StateEvaluator {
   bool LocalObjectLogTarget(const std::vector<int>& block, int class_index,
                             const std::vector<Pose2>& poses, CylinderGeometry* object,
                             double* log_target, double* squared_residual) const;
-  void Store(const EvaluationPtr& evaluation);
 
   const SlamTargetData& data_;
   const ClassConfusionModel& model_;
   SlamTargetOptions options_;
   GeometricSlam full_, step_, covariances_;
-  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
-  size_t solves_ = 0, hits_ = 0;
+  EvaluationCache cache_;
 };
 
 }  // namespace oslam

@@ -43,26 +43,10 @@ class TestEvaluator : public StateEvaluator {
  public:
   explicit TestEvaluator(const ClassConfusionModel& model) : model_(model) {}
   EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation*) override {
-    auto found = cache_.find(state);
-    if (found != cache_.end()) {
-      ++hits_;
-      return found->second;
-    }
-    auto e = std::make_shared<StateEvaluation>();
-    e->state = state;
-    e->valid = true;
-    e->log_target = TestLogTarget(state, model_);
-    for (const auto& block : state.blocks) {
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (int t : block) mean += kTrackPositions[t];
-      mean /= block.size();
-      double spread = 0.2;
-      for (int t : block) spread += (kTrackPositions[t] - mean).squaredNorm();
-      e->locations.push_back(mean);
-      e->residual2.push_back(spread);
-    }
-    ++solves_;
-    cache_[state] = e;
+    if (EvaluationPtr found = cache_.Find(state)) return found;
+    EvaluationPtr e = Compute(state);
+    cache_.CountSolve();
+    cache_.Store(e);
     return e;
   }
   EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override {
@@ -77,10 +61,7 @@ class TestEvaluator : public StateEvaluator {
     if (key % 7 == 0) return nullptr;
     std::mt19937_64 rng(key);
     std::uniform_real_distribution<double> noise(-approximation_error_, approximation_error_);
-    const size_t solves = solves_, hits = hits_;
-    const EvaluationPtr exact = Evaluate(to, &from);
-    solves_ = solves, hits_ = hits;  // an approximation is neither a solve nor a cache hit
-    auto approximate = std::make_shared<StateEvaluation>(*exact);
+    auto approximate = std::make_shared<StateEvaluation>(*Compute(to));
     approximate->log_target += noise(rng);
     for (auto& location : approximate->locations) location.x() += 0.1 * noise(rng);
     return approximate;
@@ -89,14 +70,36 @@ class TestEvaluator : public StateEvaluator {
     approximate_ = true;
     approximation_error_ = error;
   }
-  void Remember(const EvaluationPtr& e) override { cache_[e->state] = e; }
-  size_t num_solves() const override { return solves_; }
-  size_t num_cache_hits() const override { return hits_; }
+  void Remember(const EvaluationPtr& e) override { cache_.Store(e); }
+  size_t num_solves() const override { return cache_.solves(); }
+  size_t num_cache_hits() const override { return cache_.hits(); }
+  void DisableRollBack() { roll_back_ = false; }
+  bool SupportsRollBack() const override { return roll_back_; }
+  size_t Mark() override { return cache_.Mark(); }
+  void RollBack(size_t mark) override { cache_.RollBack(mark); }
+  void Release(size_t mark) override { cache_.Release(mark); }
 
  private:
+  EvaluationPtr Compute(const AssociationState& state) const {
+    auto e = std::make_shared<StateEvaluation>();
+    e->state = state;
+    e->valid = true;
+    e->log_target = TestLogTarget(state, model_);
+    for (const auto& block : state.blocks) {
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (int t : block) mean += kTrackPositions[t];
+      mean /= block.size();
+      double spread = 0.2;
+      for (int t : block) spread += (kTrackPositions[t] - mean).squaredNorm();
+      e->locations.push_back(mean);
+      e->residual2.push_back(spread);
+    }
+    return e;
+  }
+
   const ClassConfusionModel& model_;
-  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
-  size_t solves_ = 0, hits_ = 0;
+  EvaluationCache cache_{1000000};
+  bool roll_back_ = true;
   bool approximate_ = false;
   double approximation_error_ = 0;
 };
@@ -273,6 +276,106 @@ TEST(SamplerTest, ReproducibleFromTheSeedWithThreads) {
   for (size_t i = 0; i < a.samples.size(); ++i)
     differ += !(a.samples[i]->state == c.samples[i]->state);
   EXPECT_GT(differ, 0u);
+}
+
+// Chains on threads that run ahead of the swap decisions (and go back when a
+// swap reaches them) give exactly the sequential result: the same samples,
+// move statistics and solve counts. A small temperature step makes swaps
+// frequent, so chains are sent back often.
+TEST(SamplerTest, SpeculativeChainsGiveTheSequentialResult) {
+  const ClassConfusionModel model = TestModel();
+  auto run = [&model](const SamplerOptions& options, bool roll_back) {
+    Sampler sampler(
+        model,
+        [&model, roll_back] {
+          auto evaluator = std::make_unique<TestEvaluator>(model);
+          evaluator->EnableApproximation(1.0);
+          if (!roll_back) evaluator->DisableRollBack();
+          return evaluator;
+        },
+        options);
+    return sampler.Run(SeparateTracksState(kTrackClass));
+  };
+  for (int swap_every : {1, 3}) {
+    SamplerOptions options = TestOptions(3, 1500);
+    options.burn_in = 100;
+    options.delta_temperature = 0.3;
+    options.swap_every = swap_every;
+    options.parallel_chains = false;
+    const SamplerResult reference = run(options, true);
+    EXPECT_GT(reference.summary.swaps_accepted, reference.summary.swaps_proposed / 4);
+    options.parallel_chains = true;
+    for (const auto& [depth, roll_back] :
+         {std::pair{0, true}, {1, true}, {32, true}, {32, false}}) {
+      options.speculation_depth = depth;
+      const SamplerResult result = run(options, roll_back);
+      SCOPED_TRACE("swap every " + std::to_string(swap_every) + ", depth " + std::to_string(depth) +
+                   (roll_back ? "" : ", no roll-back"));
+      ASSERT_EQ(result.samples.size(), reference.samples.size());
+      for (size_t i = 0; i < result.samples.size(); ++i)
+        ASSERT_EQ(result.samples[i]->state, reference.samples[i]->state) << i;
+      EXPECT_EQ(result.summary.cold_trace, reference.summary.cold_trace);
+      EXPECT_EQ(result.summary.swaps_accepted, reference.summary.swaps_accepted);
+      EXPECT_EQ(result.summary.num_solves, reference.summary.num_solves);
+      EXPECT_EQ(result.summary.num_cache_hits, reference.summary.num_cache_hits);
+      for (int m = 0; m < 3; ++m) {
+        EXPECT_EQ(result.summary.sampling[m].accepted, reference.summary.sampling[m].accepted);
+        EXPECT_EQ(result.summary.sampling[m].screened_out,
+                  reference.summary.sampling[m].screened_out);
+        EXPECT_EQ(result.summary.sampling[m].cache_hits, reference.summary.sampling[m].cache_hits);
+      }
+    }
+  }
+}
+
+// Going back to a mark restores the entries (also across a clear of a full
+// cache) and the counters; a released mark is refused.
+TEST(EvaluationCacheTest, RollBackRestoresEntriesAndCounters) {
+  auto evaluation = [](std::vector<std::vector<int>> blocks, double log_target) {
+    auto e = std::make_shared<StateEvaluation>();
+    e->state.blocks = std::move(blocks);
+    e->state.classes.assign(e->state.blocks.size(), 0);
+    e->state.Canonicalize();
+    e->valid = true;
+    e->log_target = log_target;
+    return EvaluationPtr(e);
+  };
+  const EvaluationPtr a = evaluation({{0}, {1}, {2}}, 1.0);
+  const EvaluationPtr a_refined = evaluation({{0}, {1}, {2}}, 1.5);
+  const EvaluationPtr b = evaluation({{0, 1}, {2}}, 2.0);
+  const EvaluationPtr c = evaluation({{0, 2}, {1}}, 3.0);
+  const EvaluationPtr d = evaluation({{0, 1, 2}}, 4.0);
+  EvaluationCache cache(3);
+  cache.Store(a);
+  cache.CountSolve();
+  EXPECT_EQ(cache.Find(a->state), a);
+  const size_t mark = cache.Mark();
+  cache.Store(b);
+  cache.CountSolve();
+  cache.Store(a_refined);  // replaces a
+  EXPECT_EQ(cache.Find(b->state), b);
+  cache.Store(c);
+  cache.Store(d);  // full: cleared first
+  EXPECT_EQ(cache.size(), 1u);
+  EXPECT_EQ(cache.solves(), 2u);
+  EXPECT_EQ(cache.hits(), 2u);
+  cache.RollBack(mark);
+  EXPECT_EQ(cache.size(), 1u);
+  EXPECT_EQ(cache.solves(), 1u);
+  EXPECT_EQ(cache.hits(), 1u);
+  EXPECT_EQ(cache.Find(a->state), a);
+  EXPECT_EQ(cache.Find(b->state), nullptr);
+  EXPECT_EQ(cache.Find(d->state), nullptr);
+
+  const size_t before_b = cache.Mark();
+  cache.Store(b);
+  const size_t before_c = cache.Mark();
+  cache.Store(c);
+  cache.Release(before_c);
+  EXPECT_THROW(cache.RollBack(before_b), Error);
+  cache.RollBack(before_c);
+  EXPECT_EQ(cache.Find(b->state), b);
+  EXPECT_EQ(cache.Find(c->state), nullptr);
 }
 
 TEST(SamplerTest, HillClimbingNeverDecreasesTheTarget) {
