@@ -51,7 +51,7 @@ struct SamplerOptions {
   // sends the chains it reaches back to that iteration (their evaluators roll
   // back), and the result is the one of stepping the chains one after another.
   // 0 (or an evaluator that cannot roll back): the chains step in lock-step.
-  int speculation_depth = 32;
+  int speculation_depth = 8;
   // MC³ proposals pass a cheap screen before they are solved (delayed
   // acceptance, Christen & Fox 2005): the first stage accepts with
   // min(1, exp(beta a(x, y))), a = the evaluator's approximate log ratio, the
