@@ -142,11 +142,11 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   const Input input = Load(arguments, settings);
   if (input.tracks.tracks.empty()) throw Error("no tracks: no detections survived pre-association");
   // The class decisions each track counts for (SlamSettings::class_likelihood_per_detection).
-  std::vector<int> track_class, track_size;
+  std::vector<int> track_class, track_size, track_detections;
   for (const Track& t : input.tracks.tracks) {
     track_class.push_back(t.class_index);
-    track_size.push_back(
-        settings.class_likelihood_per_detection ? static_cast<int>(t.detections.size()) : 1);
+    track_detections.push_back(static_cast<int>(t.detections.size()));
+    track_size.push_back(settings.class_likelihood_per_detection ? track_detections.back() : 1);
   }
   const int num_classes = static_cast<int>(input.class_names.size());
   const ClassConfusionModel model =
@@ -190,7 +190,7 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   const FusionResult fused =
-      FuseSamples(result.samples, input.data.classes, track_size, fusion_options);
+      FuseSamples(result.samples, input.data.classes, track_detections, fusion_options);
   WriteSampledOMap(arguments.Get("output"), fused, source,
                    arguments.Has("baseline") ? nullptr : &result.summary);
   if (quiet) return 0;

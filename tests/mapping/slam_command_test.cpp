@@ -145,7 +145,11 @@ TEST(SlamCommand, OSlamMapReadsBackWithObjectsAndTrajectory) {
     EXPECT_TRUE(sampler["sampling_moves"][move].contains("acceptance_rate")) << move;
     EXPECT_TRUE(sampler["sampling_moves"][move].contains("time_per_proposal_s")) << move;
   }
-  for (const auto& o : json["objects"]) EXPECT_FALSE(o["identities"].empty());
+  for (const auto& o : json["objects"]) {
+    EXPECT_FALSE(o["identities"].empty());
+    // Detections, not tracks: every track holds at least --min-track-length (3).
+    EXPECT_GE(o["num_detections"].get<size_t>(), 3 * o["tracks"].size());
+  }
 }
 
 // The sampler's report without its timings (which differ from run to run).
