@@ -170,7 +170,10 @@ struct SparseSolver::Impl {
   OrderingType compared_choice = OrderingType::kAmd;
   std::vector<int> factor_row;  // first row of each factor in J
   std::vector<std::vector<int>> scratch_rows;  // SetUp's block pattern, reused
-  std::vector<int> scratch_indices;  // SetUp: a factor's free variables, then its key columns
+  std::vector<int> scratch_indices;  // SetUp: fill positions, then a factor's key columns
+  // SetUp: factors per free variable (start offsets, factor indices), and
+  // the last column each variable was entered in.
+  std::vector<int> scratch_variable_start, scratch_variable_factors, scratch_stamp;
   int m = 0;
   Eigen::VectorXd gradient, diagonal;
   cholmod_dense* rhs = nullptr;
@@ -231,32 +234,47 @@ struct SparseSolver::Impl {
     // Scratch kept across solves (a proposal's graph is much like the last one).
     std::vector<std::vector<int>>& rows = scratch_rows;
     rows.resize(num_free);
-    for (auto& column : rows) column.clear();
-    std::vector<char> constrained(num_free, 0);
     const auto& factors = graph.factors();
     m = 0;
     factor_row.resize(factors.size());
-    std::vector<int>& free = scratch_indices;
+    // The factors of every free variable (compressed columns) ...
+    std::vector<int>& start = scratch_variable_start;
+    start.assign(num_free + 1, 0);
     for (size_t f = 0; f < factors.size(); ++f) {
       factor_row[f] = m;
       m += factors[f]->Dimension();
-      free.clear();
       for (int key : factors[f]->keys())
-        if (free_index[key] >= 0) free.push_back(free_index[key]);
-      for (int a : free) {
-        constrained[a] = 1;
-        for (int b : free)
-          if (a <= b) rows[b].push_back(a);
-      }
+        if (free_index[key] >= 0) ++start[free_index[key] + 1];
     }
-    for (int v = 0; v < num_free; ++v) {
-      if (!constrained[v]) {
+    for (int v = 0; v < num_free; ++v) start[v + 1] += start[v];
+    std::vector<int>& of_variable = scratch_variable_factors;
+    of_variable.resize(start[num_free]);
+    std::vector<int>& next = scratch_indices;
+    next.assign(start.begin(), start.end() - 1);
+    for (size_t f = 0; f < factors.size(); ++f)
+      for (int key : factors[f]->keys())
+        if (free_index[key] >= 0) of_variable[next[free_index[key]]++] = static_cast<int>(f);
+    // ... give each column's rows once each (an object's column would
+    // otherwise collect its base point once per detection, all to be sorted
+    // and dropped again).
+    std::vector<int>& stamp = scratch_stamp;
+    stamp.assign(num_free, -1);
+    for (int b = 0; b < num_free; ++b) {
+      if (start[b] == start[b + 1]) {
         *why = "a free variable is constrained by no factor (add a prior or fix it)";
         return false;
       }
-      rows[v].push_back(v);
-      std::sort(rows[v].begin(), rows[v].end());
-      rows[v].erase(std::unique(rows[v].begin(), rows[v].end()), rows[v].end());
+      std::vector<int>& column = rows[b];
+      column.clear();
+      for (int k = start[b]; k < start[b + 1]; ++k)
+        for (int key : factors[of_variable[k]]->keys()) {
+          const int a = free_index[key];
+          if (a >= 0 && a <= b && stamp[a] != b) {
+            stamp[a] = b;
+            column.push_back(a);
+          }
+        }
+      std::sort(column.begin(), column.end());
     }
 
     bool fits = allow_reuse && hessian && factor && dims == pattern_dims &&
