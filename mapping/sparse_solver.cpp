@@ -809,11 +809,10 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
     if (!(slope < 0.0)) return 0;
     const auto& factors = graph->factors();
     if (impl.stretched.errors.size() != factors.size()) impl.stretched.Resize(factors.size());
-    for (size_t f = 0; f < factors.size(); ++f) {
+    // Candidates are evaluated without Jacobians (most are rejected); the
+    // point finally taken is evaluated once more with them.
+    for (size_t f = 0; f < factors.size(); ++f)
       impl.stretched.errors[f].resize(impl.current.errors[f].size());
-      impl.stretched.jacobians[f].resize(impl.current.jacobians[f].rows(),
-                                         impl.current.jacobians[f].cols());
-    }
     // Up to three extra evaluations per step: the parabola's minimum; if the
     // cost rises there (the parabola fits the weak directions, while the
     // well-determined ones, pose chains, were already right at t = 1), a
@@ -838,19 +837,31 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
         if (v >= 0) stretched_values.Retract(key, scaled.data() + impl.offsets[v]);
       }
       double stretched_cost = 0.0;
-      if (!impl.Evaluate(*graph, stretched_values, true, &impl.stretched, &stretched_cost) ||
+      if (!impl.Evaluate(*graph, stretched_values, false, &impl.stretched, &stretched_cost) ||
           !(stretched_cost < *trial_cost)) {
         target = t + (target - t) / 3.0;
         continue;
       }
       std::swap(trial, stretched_values);
-      std::swap(impl.trial, impl.stretched);
       *trial_cost = stretched_cost;
       t = target;
       target = 0.0;
       ++stretches;
     }
-    if (stretches > 0) *step *= t;
+    if (stretches == 0) return 0;
+    double check = 0.0;
+    if (!impl.Evaluate(*graph, trial, true, &impl.trial, &check)) {
+      // Cannot happen where the cost could be evaluated; back to the LM step.
+      trial = values;
+      for (int key = 0; key < num_keys; ++key) {
+        const int v = impl.free_index[key];
+        if (v >= 0) trial.Retract(key, step->data() + impl.offsets[v]);
+      }
+      impl.Evaluate(*graph, trial, true, &impl.trial, trial_cost);
+      return 0;
+    }
+    *trial_cost = check;
+    *step *= t;
     return stretches;
   };
 
