@@ -29,6 +29,8 @@ void Report(benchmark::State& state, const testing::SyntheticScene& scene,
   state.counters["poses"] = scene.problem.increments.size();
   state.counters["detections"] = scene.problem.observations.size();
   state.counters["iterations"] = result.summary.iterations;
+  state.counters["converged"] = result.summary.termination == TerminationType::kConverged;
+  state.counters["final_cost"] = result.summary.final_cost;
   state.counters["factorize_ms_per_iter"] =
       1e3 * result.summary.factorize_time_s / std::max(1, result.summary.iterations);
   state.counters["linearize_ms"] = 1e3 * result.summary.linearize_time_s;
@@ -37,10 +39,13 @@ void Report(benchmark::State& state, const testing::SyntheticScene& scene,
   state.counters["solver_ms"] = 1e3 * result.summary.total_time_s;
 }
 
-void ColdSolve(benchmark::State& state, const testing::SyntheticScene& scene) {
+// `extrapolation`: SolverOptions::max_step_extrapolation (0: off, the default).
+void ColdSolve(benchmark::State& state, const testing::SyntheticScene& scene,
+               double extrapolation = 0.0) {
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
   GeometricSlamOptions options;
   options.compute_object_covariances = false;
+  options.solver.max_step_extrapolation = extrapolation;
   GeometricSlamResult result;
   for (auto _ : state) {
     GeometricSlam slam(camera, options);  // fresh: no cached analysis
@@ -62,6 +67,14 @@ void BM_LargeFromOdometry(benchmark::State& state) {
 }
 BENCHMARK(BM_LargeFromOdometry)->Unit(benchmark::kMillisecond)->Iterations(2);
 
+// The same with the line search beyond steps whose gain ratio shows J^T J
+// overstating the curvature (SolverOptions::max_step_extrapolation = 16).
+void BM_LargeFromOdometryExtrapolated(benchmark::State& state) {
+  static const testing::SyntheticScene scene = Scene(10000, 200, 60.0, 40.0, 3.5);
+  ColdSolve(state, scene, 16.0);
+}
+BENCHMARK(BM_LargeFromOdometryExtrapolated)->Unit(benchmark::kMillisecond)->Iterations(2);
+
 // Time growth with size: poses x 1..8 of the LPA loop, objects alike.
 void BM_GrowthFromOdometry(benchmark::State& state) {
   const int k = static_cast<int>(state.range(0));
@@ -69,6 +82,13 @@ void BM_GrowthFromOdometry(benchmark::State& state) {
   ColdSolve(state, scene);
 }
 BENCHMARK(BM_GrowthFromOdometry)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
+
+void BM_GrowthFromOdometryExtrapolated(benchmark::State& state) {
+  const int k = static_cast<int>(state.range(0));
+  const testing::SyntheticScene scene = Scene(300 * k, 10 * k, 6.0 * k, 4.0 * k, 5.0);
+  ColdSolve(state, scene, 16.0);
+}
+BENCHMARK(BM_GrowthFromOdometryExtrapolated)->Arg(4)->Arg(6)->Arg(8)->Unit(benchmark::kMillisecond);
 
 // Times re-solves of `problem` by one solver (its symbolic analysis kept
 // between iterations, as in the MCMC), warm-started from `warm`.
@@ -137,11 +157,13 @@ BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)->Unit(benchmark::kMillisecond);
 
 // The large problem started at the truth: the time per iteration without
 // the convergence trouble of a start from 2 km of raw odometry.
+// Arg: SolverOptions::max_step_extrapolation (0: off, the default; 16).
 void BM_LargeFromTruth(benchmark::State& state) {
   static const testing::SyntheticScene scene = Scene(10000, 200, 60.0, 40.0, 3.5);
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
   GeometricSlamOptions options;
   options.compute_object_covariances = false;
+  options.solver.max_step_extrapolation = static_cast<double>(state.range(0));
   GeometricSlamResult truth;
   truth.trajectory = scene.true_trajectory;
   for (size_t j = 0; j < scene.true_objects.size(); ++j) {
@@ -159,7 +181,7 @@ void BM_LargeFromTruth(benchmark::State& state) {
   }
   Report(state, scene, result);
 }
-BENCHMARK(BM_LargeFromTruth)->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK(BM_LargeFromTruth)->Arg(0)->Arg(16)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 // Same association, warm: the symbolic analysis is reused.
 void BM_LpaWarmResolveSameAssociation(benchmark::State& state) {

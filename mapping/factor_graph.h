@@ -14,12 +14,19 @@ namespace oslam {
 
 class FactorGraph {
  public:
-  int AddVariable(const Eigen::VectorXd& value, int angle_index = -1, bool fixed = false) {
+  int AddVariable(const Eigen::Ref<const Eigen::VectorXd>& value, int angle_index = -1,
+                  bool fixed = false) {
     fixed_.push_back(fixed);
     return values_.Add(value, angle_index);
   }
   int AddPose(double x_m, double y_m, double theta_rad, bool fixed = false) {
     return AddVariable(Eigen::Vector3d(x_m, y_m, theta_rad), 2, fixed);
+  }
+  // Room for this many variables (and scalars) and factors.
+  void Reserve(int variables, int scalars, int factors) {
+    values_.Reserve(variables, scalars);
+    fixed_.reserve(variables);
+    factors_.reserve(factors);
   }
   // Throws oslam::Error when a key is unknown.
   void Add(std::unique_ptr<Factor> factor);

@@ -77,7 +77,9 @@ BoundingSliceFactor::BoundingSliceFactor(const CameraModel* camera, int pose_key
     throw Error("a bounding slice needs a positive radius u_r");
   const Eigen::Vector4d sigma = NoiseSigma(measured, pixel_std_px);
   inverse_sigma_ = sigma.cwiseInverse();
-  log_det_ = 2.0 * sigma.array().log().sum();
+  // log |R| |W| = 2 sum log sigma, sigma = (E, E/u_r, sqrt2 E, sqrt2 E/u_r),
+  // with two logs instead of four (O-SLAM builds these per proposal).
+  log_det_ = 8.0 * std::log(pixel_std_px) + 2.0 * std::log(2.0) - 4.0 * std::log(measured.u_r_px);
 }
 
 Eigen::Vector4d BoundingSliceFactor::NoiseSigma(const BoundingSlice& measured,

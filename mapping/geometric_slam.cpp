@@ -266,6 +266,9 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
 
   // ---- variables and initial values ----
   FactorGraph graph;
+  const int num_objects = static_cast<int>(by_object.size());
+  graph.Reserve(static_cast<int>(num_poses) + 2 * num_objects, 3 * num_poses + 5 * num_objects,
+                static_cast<int>(num_poses - 1 + problem.observations.size()) + 2 * num_objects);
   std::vector<Pose2> initial_poses =
       (warm_start && warm_start->trajectory.size() == problem.increments.size())
           ? warm_start->trajectory

@@ -56,6 +56,12 @@ struct SolverOptions {
   double max_diagonal = 1e32;
   // A step is accepted when actual / predicted cost reduction exceeds this.
   double min_relative_decrease = 1e-3;
+  // Line search beyond accepted steps that gained more than 1.25 times the
+  // predicted decrease: up to this multiple of the LM step, at the minimum
+  // of the parabola through the cost at 0 and at the step and its slope at 0
+  // (<= 1: off). For problems where J^T J overstates the curvature (weakly
+  // observed objects' viewing rays: gain ratio near 2, linear convergence).
+  double max_step_extrapolation = 0.0;
   OrderingType ordering = OrderingType::kAutomatic;
   // Reuse the cached symbolic analysis when the new block pattern fits in it.
   bool reuse_symbolic_analysis = true;
@@ -86,6 +92,7 @@ struct SolverSummary {
   std::string message;
   int iterations = 0;        // linear solves attempted
   int successful_steps = 0;  // accepted steps
+  int step_extrapolations = 0;  // line-search stretches (max_step_extrapolation)
   double initial_cost = 0;   // 1/2 sum ||e||^2 at the start
   double final_cost = 0;
   int num_factors = 0;

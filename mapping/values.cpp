@@ -5,7 +5,7 @@
 
 namespace oslam {
 
-int Values::Add(const Eigen::VectorXd& value, int angle_index) {
+int Values::Add(const Eigen::Ref<const Eigen::VectorXd>& value, int angle_index) {
   if (value.size() == 0 || angle_index >= value.size() || angle_index < -1)
     throw Error("Values::Add: a variable needs at least one entry and a valid angle index");
   offset_.push_back(static_cast<int>(data_.size()));

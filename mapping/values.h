@@ -14,7 +14,15 @@ class Values {
  public:
   // Adds a variable; `angle_index` names the component that is an angle
   // (wrapped to (-pi, pi] after every update), or -1. Returns its key.
-  int Add(const Eigen::VectorXd& value, int angle_index = -1);
+  // (A Ref: a fixed-size vector is passed without a heap copy.)
+  int Add(const Eigen::Ref<const Eigen::VectorXd>& value, int angle_index = -1);
+  // Room for this many variables and scalars (a graph built per solve).
+  void Reserve(int variables, int scalars) {
+    offset_.reserve(variables);
+    dim_.reserve(variables);
+    angle_index_.reserve(variables);
+    data_.reserve(scalars);
+  }
   int AddPose(double x_m, double y_m, double theta_rad) {
     return Add(Eigen::Vector3d(x_m, y_m, theta_rad), 2);
   }
