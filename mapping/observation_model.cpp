@@ -12,17 +12,20 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   const double range = std::sqrt(base_robot.x() * base_robot.x() + base_robot.y() * base_robot.y());
   if (!(range > 0.0)) return false;
 
-  PolarPoint base_polar, top_polar;
-  Eigen::Matrix<double, 2, 3> base_jacobian, top_jacobian;
+  PolarPoint base_polar;
+  double top_radius = 0.0;
+  Eigen::Matrix<double, 2, 3> base_jacobian;
+  Eigen::RowVector3d top_jacobian;
   Eigen::Matrix<double, 2, 3>* want_base = jacobians ? &base_jacobian : nullptr;
-  Eigen::Matrix<double, 2, 3>* want_top = jacobians ? &top_jacobian : nullptr;
+  Eigen::RowVector3d* want_top = jacobians ? &top_jacobian : nullptr;
   if (!camera.ProjectToPolar(base_robot, &base_polar, want_base)) return false;
-  if (!camera.ProjectToPolar(top_robot, &top_polar, want_top)) return false;
+  // The top has the base's bearing: only its radius is needed.
+  if (!camera.ProjectRadius(top_robot, &top_radius, want_top)) return false;
 
   const double d = object.diameter_m;
   slice->u_r_px = base_polar.radius_px;
   slice->u_phi_rad = base_polar.angle_rad;
-  slice->s_r_px = top_polar.radius_px - base_polar.radius_px;
+  slice->s_r_px = top_radius - base_polar.radius_px;
   slice->s_phi_rad = 2.0 * std::atan(d / (2.0 * range));
   if (!jacobians) return true;
 
@@ -30,7 +33,7 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   Eigen::Matrix<double, 4, 3> wrt_point;
   wrt_point.row(0) = base_jacobian.row(0);
   wrt_point.row(1) = base_jacobian.row(1);
-  wrt_point.row(2) = top_jacobian.row(0) - base_jacobian.row(0);
+  wrt_point.row(2) = top_jacobian - base_jacobian.row(0);
   const double d_width_d_range = -4.0 * d / (4.0 * range * range + d * d);
   wrt_point.row(3) << d_width_d_range * base_robot.x() / range,
       d_width_d_range * base_robot.y() / range, 0.0;
@@ -46,7 +49,7 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   jacobians->wrt_base = wrt_point * point_wrt_base;
   jacobians->wrt_pose = wrt_point * point_wrt_pose;
   jacobians->wrt_size.setZero();
-  jacobians->wrt_size(2, 1) = top_jacobian(0, 2);  // d(s_r)/d(h) = d(radius_top)/dz
+  jacobians->wrt_size(2, 1) = top_jacobian(2);  // d(s_r)/d(h) = d(radius_top)/dz
   jacobians->wrt_size(3, 0) = 4.0 * range / (4.0 * range * range + d * d);
   return true;
 }
