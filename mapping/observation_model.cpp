@@ -7,7 +7,12 @@ namespace oslam {
 bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
                   const CylinderGeometry& object, BoundingSlice* slice,
                   SliceJacobians* jacobians) {
-  const Eigen::Vector3d base_robot = robot_pose_world.WorldToRobot(object.base_world);
+  // Pose2::WorldToRobot, with cos and sin kept for the Jacobians below (one
+  // sincos per prediction instead of two).
+  const double c = std::cos(robot_pose_world.theta), s = std::sin(robot_pose_world.theta);
+  const double dx = object.base_world.x() - robot_pose_world.x,
+               dy = object.base_world.y() - robot_pose_world.y;
+  const Eigen::Vector3d base_robot(c * dx + s * dy, -s * dx + c * dy, object.base_world.z());
   const Eigen::Vector3d top_robot = base_robot + Eigen::Vector3d(0, 0, object.height_m);
   const double range = std::sqrt(base_robot.x() * base_robot.x() + base_robot.y() * base_robot.y());
   if (!(range > 0.0)) return false;
@@ -39,7 +44,6 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
       d_width_d_range * base_robot.y() / range, 0.0;
 
   // point_robot = R(theta)^T (base_world - t) with z passed through.
-  const double c = std::cos(robot_pose_world.theta), s = std::sin(robot_pose_world.theta);
   Eigen::Matrix3d point_wrt_base;
   point_wrt_base << c, s, 0, -s, c, 0, 0, 0, 1;
   Eigen::Matrix3d point_wrt_pose;
