@@ -30,6 +30,16 @@ bool CameraModel::ProjectToPolar(const Eigen::Vector3d& point_robot, PolarPoint*
   return true;
 }
 
+bool CameraModel::ProjectRadius(const Eigen::Vector3d& point_robot, double* radius_px,
+                                Eigen::RowVector3d* jacobian) const {
+  PolarPoint polar;
+  Eigen::Matrix<double, 2, 3> polar_jacobian;
+  if (!ProjectToPolar(point_robot, &polar, jacobian ? &polar_jacobian : nullptr)) return false;
+  *radius_px = polar.radius_px;
+  if (jacobian) *jacobian = polar_jacobian.row(0);
+  return true;
+}
+
 PolarPoint CameraModel::PixelToPolar(const Eigen::Vector2d& pixel) const {
   const Eigen::Vector2d offset = pixel - ImageCenter();
   return {offset.norm(), std::atan2(offset.y(), offset.x())};

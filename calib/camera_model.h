@@ -78,6 +78,11 @@ class CameraModel {
   // as it is the inner loop of the bounding-slice factor.
   virtual bool ProjectToPolar(const Eigen::Vector3d& point_robot, PolarPoint* polar,
                               Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const;
+  // The radius alone, with d(radius)/d(point) (the top of a bounding slice,
+  // whose angle is the base's). By default the first row of ProjectToPolar;
+  // the hyperbolic mirror skips the angle's atan2.
+  virtual bool ProjectRadius(const Eigen::Vector3d& point_robot, double* radius_px,
+                             Eigen::RowVector3d* jacobian = nullptr) const;
 
   // ---- shared by every model ----
 

@@ -195,6 +195,21 @@ bool HyperbolicCamera::ProjectToPolar(const Eigen::Vector3d& point_robot, PolarP
   return true;
 }
 
+bool HyperbolicCamera::ProjectRadius(const Eigen::Vector3d& point_robot, double* radius_px,
+                                     Eigen::RowVector3d* jacobian) const {
+  const double range =
+      std::sqrt(point_robot.x() * point_robot.x() + point_robot.y() * point_robot.y());
+  if (!(range > 0.0)) return false;  // as ProjectToPolar
+  double d_radius_d_range = 0, d_radius_d_height = 0;
+  if (!ImageRadius(range, point_robot.z(), radius_px, jacobian ? &d_radius_d_range : nullptr,
+                   jacobian ? &d_radius_d_height : nullptr))
+    return false;
+  if (jacobian)
+    *jacobian << d_radius_d_range * point_robot.x() / range,
+        d_radius_d_range * point_robot.y() / range, d_radius_d_height;
+  return true;
+}
+
 bool HyperbolicCamera::BackProjectPixel(const Eigen::Vector2d& pixel, Ray* ray) const {
   if (!pixel.allFinite()) return false;
   const PolarPoint polar = PixelToPolar(pixel);

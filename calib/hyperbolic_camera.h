@@ -53,6 +53,8 @@ class HyperbolicCamera final : public CameraModel {
                       Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const override;
   bool ProjectToPolar(const Eigen::Vector3d& point_robot, PolarPoint* polar,
                       Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const override;
+  bool ProjectRadius(const Eigen::Vector3d& point_robot, double* radius_px,
+                     Eigen::RowVector3d* jacobian = nullptr) const override;
   bool BackProjectPixel(const Eigen::Vector2d& pixel, Ray* ray) const override;
 
   // T(r, z) and its partial derivatives. Returns false when the ray from the

@@ -621,8 +621,22 @@ struct SparseSolver::Impl {
       for (int q = 0; q < pair.b_dim; ++q) {
         double* out = x + p[pair.b_offset + q] + pair.row_prefix;
         const double* in = local.data() + (pair.b_column + q) * columns + pair.a_column;
-        const int last = pair.diagonal ? q : pair.a_dim - 1;
-        for (int r = 0; r <= last; ++r) out[r] += in[r];
+        const int count = pair.diagonal ? q + 1 : pair.a_dim;
+        // Blocks are 1-3 rows high: unrolled, not a short loop with
+        // vector set-up and remainder handling.
+        switch (count) {
+          case 3:
+            out[2] += in[2];
+            [[fallthrough]];
+          case 2:
+            out[1] += in[1];
+            [[fallthrough]];
+          case 1:
+            out[0] += in[0];
+            break;
+          default:
+            for (int r = 0; r < count; ++r) out[r] += in[r];
+        }
       }
       if (pair.diagonal)
         for (int r = 0; r < pair.a_dim; ++r)

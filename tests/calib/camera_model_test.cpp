@@ -142,6 +142,14 @@ TEST_P(EveryCamera, ProjectionJacobiansMatchCentralDifferences) {
     };
     const Eigen::MatrixXd numeric_polar = testing::NumericJacobian(to_polar, point);
     EXPECT_LT((polar_jacobian - numeric_polar).norm(), 1e-5 * (1.0 + numeric_polar.norm()));
+
+    // The radius alone is the polar projection's first row.
+    double radius = 0.0;
+    Eigen::RowVector3d radius_jacobian;
+    ASSERT_TRUE(camera_->ProjectRadius(point, &radius, &radius_jacobian));
+    EXPECT_NEAR(radius, polar.radius_px, 1e-9);
+    EXPECT_LT((radius_jacobian - polar_jacobian.row(0)).norm(),
+              1e-9 * (1.0 + numeric_polar.norm()));
   }
 }
 

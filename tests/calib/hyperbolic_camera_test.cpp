@@ -170,7 +170,12 @@ TEST(HyperbolicCamera, DirectPolarProjectionEqualsTheOneThroughPixels) {
           Eigen::Matrix<double, 2, 3> direct_jacobian, generic_jacobian;
           const bool ok = camera.ProjectToPolar(point, &direct, &direct_jacobian);
           ASSERT_EQ(ok, camera.CameraModel::ProjectToPolar(point, &generic, &generic_jacobian));
+          double radius = 0.0;
+          Eigen::RowVector3d radius_jacobian;
+          ASSERT_EQ(ok, camera.ProjectRadius(point, &radius, &radius_jacobian));
           if (!ok) continue;
+          EXPECT_EQ(radius, direct.radius_px);
+          EXPECT_EQ(radius_jacobian, direct_jacobian.row(0));
           EXPECT_NEAR(direct.radius_px, generic.radius_px, 1e-9);
           EXPECT_NEAR(WrapAngle(direct.angle_rad - generic.angle_rad), 0.0, 1e-12);
           EXPECT_LE((direct_jacobian - generic_jacobian).cwiseAbs().maxCoeff(), 1e-8)
