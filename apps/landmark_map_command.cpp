@@ -62,6 +62,8 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.window_poses = static_cast<int>(arguments.GetInt("window"));
   options.free_poses = static_cast<int>(arguments.GetInt("free-poses"));
   options.targeted_radius_m = arguments.GetDouble("targeted-radius");
+  options.targeted_max_candidates = static_cast<int>(arguments.GetInt("targeted-candidates"));
+  options.min_track_sightings = static_cast<int>(arguments.GetInt("min-track"));
   options.joint_min_inliers = static_cast<int>(arguments.GetInt("joint-inliers"));
   options.hill_climb_steps_per_track = arguments.GetDouble("hill-climb");
   options.final_hill_climb_steps = static_cast<int>(arguments.GetInt("final-steps"));
@@ -102,6 +104,12 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   WriteTextFileAtomically(trajectory_path, TrajectoryCsv(data, solution));
   if (quiet) return solution.summary.IsUsable() ? 0 : 1;
 
+  if (result.clutter_tracks > 0)
+    std::printf("clutter: %ld tracks of fewer than %d sightings, %ld sightings, left out\n",
+                result.clutter_tracks, options.min_track_sightings, result.clutter_sightings);
+  if (result.scan_splits > 0)
+    std::printf("%ld landmarks split where two merged tracks went on into one scan\n",
+                result.scan_splits);
   std::printf(
       "%zu landmarks from %zu tracks of %d sightings; %ld proposals evaluated (%ld accepted); "
       "hill climbing %.2f s (joint re-entry merges: %ld solves, %ld pairs kept, %.2f s), MC3 "
@@ -188,6 +196,14 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                       "unknown association: score each new landmark's merge with every landmark "
                       "this close first (marginal evaluation; 0: off)",
                       "50");
+  arguments.AddOption("targeted-candidates", "", "N",
+                      "unknown association: at most the N nearest landmarks per targeted merge "
+                      "(0: all within the radius)",
+                      "0");
+  arguments.AddOption("min-track", "", "N",
+                      "unknown association: tracks with fewer sightings are clutter, left out "
+                      "(1: none)",
+                      "1");
   arguments.AddOption("joint-inliers", "", "N",
                       "unknown association: joint re-entry merges (RANSAC alignment of the recent "
                       "landmarks onto old ones) need this many aligned pairs (0: off)",
@@ -195,6 +211,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("free-poses", "", "POSES",
                       "unknown association: poses free in a window's solves, earlier ones held "
                       "(0: all free)",
+                      "0");
+  arguments.AddOption("poses", "", "N",
+                      "use only the first N poses of the data set (0: all), e.g. to time subsets",
                       "0");
   arguments.AddOption("odometry-noise-scale", "", "K",
                       "multiply every odometry covariance by K (a model choice)", "1");
@@ -227,6 +246,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                                    : (measurements.parent_path() / "inputs.dat").string();
     data = ReadVictoriaRaw(measurements.string(), inputs);
   }
+  const long poses = arguments.GetInt("poses");
+  if (poses < 0) throw UsageError("--poses must be >= 0");
+  if (poses > 0 && poses < data.num_poses) data = PosePrefix(data, static_cast<int>(poses));
   const double odometry_scale = arguments.GetDouble("odometry-noise-scale");
   if (!(odometry_scale > 0) || !std::isfinite(odometry_scale))
     throw UsageError("--odometry-noise-scale must be > 0");

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
+#include <set>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -604,6 +606,10 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     if (why) *why = "targeted merges need the marginal evaluation";
     return false;
   }
+  if (min_track_sightings < 1 || targeted_max_candidates < 0) {
+    if (why) *why = "tracks need >= 1 sighting and the candidate cap must be >= 0 (0: none)";
+    return false;
+  }
   if (window_poses < 0 || free_poses < 0 || !(targeted_radius_m >= 0) ||
       !(hill_climb_steps_per_track >= 0) || final_hill_climb_steps < 0 || refine_every < 1 ||
       samples < 0 || num_chains < 1 || burn_in < 0 || (samples > 0 && burn_in >= samples)) {
@@ -638,9 +644,19 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (progress) progress(line);
   };
   UnknownAssociationResult result;
-  result.tracks = BuildLandmarkTracks(data, data.dead_reckoning, options.tracks);
+  for (auto& track : BuildLandmarkTracks(data, data.dead_reckoning, options.tracks)) {
+    if (static_cast<int>(track.size()) >= options.min_track_sightings) {
+      result.tracks.push_back(std::move(track));
+      continue;
+    }
+    ++result.clutter_tracks;
+    result.clutter_sightings += static_cast<long>(track.size());
+  }
   const int num_tracks = static_cast<int>(result.tracks.size());
-  if (num_tracks == 0) throw Error::InFile(data.path, "no sighting with a range > 0");
+  if (num_tracks == 0)
+    throw Error::InFile(data.path, "no track of at least " +
+                                       std::to_string(options.min_track_sightings) +
+                                       " sightings with a range > 0");
   // The prior's centre: the mean of the dead-reckoned sightings.
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   int placed = 0;
@@ -659,7 +675,11 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
   result.track_time_s = SecondsSince(start);
   say(Format("tracks: %.0f sightings -> %.0f tracks (gate %.2f m, pose gap %.0f), %.2f s",
              double(placed), double(num_tracks), options.tracks.gate_m,
-             double(options.tracks.max_pose_gap), result.track_time_s));
+             double(options.tracks.max_pose_gap), result.track_time_s) +
+      (result.clutter_tracks > 0
+           ? Format("; %.0f shorter tracks (%.0f sightings) left to clutter",
+                    double(result.clutter_tracks), double(result.clutter_sightings))
+           : std::string()));
 
   const ClassConfusionModel model =
       ClassConfusionModel::Identity(1, 1e-3, std::vector<int>(num_tracks, 0), track_size);
@@ -715,10 +735,21 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       for (size_t j = 0; j < s.blocks.size(); ++j) {
         if (s.blocks[j].back() < first_new) continue;  // no new track
         Candidate c{0, -1, -1, nullptr};
+        std::vector<std::pair<double, int>> candidates;  // (distance, block)
         for (size_t k = 0; k < s.blocks.size(); ++k) {
           if (k == j || (s.blocks[k].back() >= first_new && k < j)) continue;  // each pair once
-          if ((current->locations[j] - current->locations[k]).norm() > options.targeted_radius_m)
-            continue;
+          const double d = (current->locations[j] - current->locations[k]).norm();
+          if (d <= options.targeted_radius_m) candidates.push_back({d, static_cast<int>(k)});
+        }
+        const size_t cap = static_cast<size_t>(options.targeted_max_candidates);
+        if (cap > 0 && candidates.size() > cap) {
+          std::nth_element(candidates.begin(), candidates.begin() + cap, candidates.end());
+          candidates.resize(cap);
+          std::sort(candidates.begin(), candidates.end(),
+                    [](const auto& x, const auto& y) { return x.second < y.second; });
+        }
+        for (const auto& [distance, kk] : candidates) {
+          const size_t k = static_cast<size_t>(kk);
           AssociationState merged = s;
           merged.blocks[j].insert(merged.blocks[j].end(), s.blocks[k].begin(), s.blocks[k].end());
           std::sort(merged.blocks[j].begin(), merged.blocks[j].end());
@@ -849,19 +880,39 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (with_candidates < joint_needed) return 0;
     // Inliers of an alignment: mutually nearest (recent, old) pairs within
     // joint_inlier_m of each other once the recent unit is moved.
+    // The old units on a grid of joint_inlier_m cells: an alignment's inliers
+    // are then found in the 3 x 3 cells around each moved recent unit instead
+    // of among all its old units in reach (thousands with clutter); the same
+    // pairs as a scan of near[i] (ties to the higher index, as that scan).
+    auto cell_of = [&](const Eigen::Vector2d& p) {
+      return std::make_pair(static_cast<long>(std::floor(p.x() / inlier_m)),
+                            static_cast<long>(std::floor(p.y() / inlier_m)));
+    };
+    std::map<std::pair<long, long>, std::vector<int>> grid;
+    for (size_t o = 0; o < old.size(); ++o)
+      grid[cell_of(old[o].position_m)].push_back(static_cast<int>(o));
     auto inliers = [&](const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) {
       std::map<int, std::pair<double, int>> by_old;  // old unit -> (distance², recent unit)
       for (size_t i = 0; i < recent.size(); ++i) {
+        if (near[i].empty()) continue;
         const Eigen::Vector2d p = rigid(recent[i].position_m);
+        const auto [cx, cy] = cell_of(p);
         int nearest = -1;
         double best = inlier2;
-        for (int o : near[i]) {
-          const double d2 = (old[o].position_m - p).squaredNorm();
-          if (d2 <= best) {
-            best = d2;
-            nearest = o;
+        for (long x = cx - 1; x <= cx + 1; ++x)
+          for (long y = cy - 1; y <= cy + 1; ++y) {
+            const auto cell = grid.find({x, y});
+            if (cell == grid.end()) continue;
+            for (int o : cell->second) {
+              if ((old[o].position_m - recent[i].position_m).squaredNorm() > reach * reach)
+                continue;  // not in near[i]
+              const double d2 = (old[o].position_m - p).squaredNorm();
+              if (d2 < best || (d2 == best && o > nearest)) {
+                best = d2;
+                nearest = o;
+              }
+            }
           }
-        }
         if (nearest < 0) continue;
         const auto it = by_old.find(nearest);
         if (it == by_old.end() || best < it->second.first)
@@ -1056,10 +1107,46 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (options.free_poses > 0)
       window_target.slam.held_poses = std::min(previous_end, std::max(0, n - options.free_poses));
     auto window_evaluator = std::make_unique<LandmarkEvaluator>(*target_data, window_target);
-    for (int t = tracks_before; t < tracks_now; ++t) {
-      state.blocks.push_back({t});
-      state.classes.push_back(0);
+    if (options.target.one_sighting_per_scan) {
+      // Tracks merged in an earlier window may both go on into this one and
+      // be seen in one scan: the landmark would have two sightings of it
+      // (P = 0). Its tracks stay together, earliest first, while they share
+      // no scan; a track that does starts a new landmark (which the targeted
+      // merges may join elsewhere).
+      std::vector<std::vector<int>> blocks;
+      for (const auto& block : state.blocks) {
+        const bool goes_on = std::any_of(block.begin(), block.end(), [&](int t) {
+          return data.sightings[result.tracks[t].back()].pose >= previous_end;
+        });
+        if (block.size() < 2 || !goes_on) {  // no new scan can be shared
+          blocks.push_back(block);
+          continue;
+        }
+        std::vector<std::vector<int>> parts;
+        std::vector<std::set<int>> scans;  // poses seen per part
+        for (int t : block) {
+          std::vector<int> poses;
+          for (int k : result.tracks[t])
+            if (data.sightings[k].pose < n) poses.push_back(data.sightings[k].pose);
+          size_t p = 0;
+          while (p < parts.size() && std::any_of(poses.begin(), poses.end(), [&](int pose) {
+                   return scans[p].count(pose) > 0;
+                 }))
+            ++p;
+          if (p == parts.size()) {
+            parts.emplace_back();
+            scans.emplace_back();
+          }
+          parts[p].push_back(t);
+          scans[p].insert(poses.begin(), poses.end());
+        }
+        result.scan_splits += static_cast<long>(parts.size()) - 1;
+        blocks.insert(blocks.end(), parts.begin(), parts.end());
+      }
+      state.blocks = std::move(blocks);
     }
+    for (int t = tracks_before; t < tracks_now; ++t) state.blocks.push_back({t});
+    state.classes.assign(state.blocks.size(), 0);
     state.Canonicalize();
     // Warm start: the previous window's solution, its trajectory continued
     // by the odometry.
