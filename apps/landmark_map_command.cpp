@@ -47,9 +47,13 @@ void PrintGpsError(const Arguments& arguments, const LandmarkDataset& data,
   if (!arguments.Has("gps")) return;
   if (static_cast<int>(data.pose_times.size()) != data.num_poses)
     throw Error::InFile(data.path, "--gps needs pose times, which this format has not");
-  const GpsError e = CompareWithGps(trajectory, data.pose_times, ReadGps(arguments.Get("gps")));
-  std::printf("vs GPS (%d fixes, rigid alignment): RMSE %.2f m, median %.2f m, max %.2f m\n",
-              e.num_fixes, e.rmse_m, e.median_m, e.max_m);
+  const std::vector<GpsFix> gps = ReadGps(arguments.Get("gps"));
+  const GpsError e = CompareWithGps(trajectory, data.pose_times, gps);
+  const GpsError d = CompareWithGps(data.dead_reckoning, data.pose_times, gps);
+  std::printf(
+      "vs GPS (%d fixes, rigid alignment): RMSE %.2f m, median %.2f m, max %.2f m (dead "
+      "reckoning: RMSE %.2f m, median %.2f m, max %.2f m)\n",
+      e.num_fixes, e.rmse_m, e.median_m, e.max_m, d.rmse_m, d.median_m, d.max_m);
 }
 
 // --unknown-association: the file's ids are hidden from the solve and used
@@ -111,12 +115,14 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
     std::printf("%ld landmarks split where two merged tracks went on into one scan\n",
                 result.scan_splits);
   std::printf(
-      "%zu landmarks from %zu tracks of %d sightings; %ld proposals evaluated (%ld accepted); "
+      "%zu landmarks from %zu tracks of %d sightings; %ld proposals evaluated (%ld accepted, "
+      "%ld full solves in the last window, %ld cold retries); "
       "hill climbing %.2f s (joint re-entry merges: %ld solves, %ld pairs kept, %.2f s), MC3 "
       "%.2f s, total %.2f s\n",
       solution.landmarks.size(), result.tracks.size(), solution.num_sightings_used,
-      result.proposals, result.accepted, result.hill_climb_time_s, result.joint_tries,
-      result.joint_merges, result.joint_time_s, result.sampling_time_s, result.total_time_s);
+      result.proposals, result.accepted, result.solves, result.cold_retries,
+      result.hill_climb_time_s, result.joint_tries, result.joint_merges, result.joint_time_s,
+      result.sampling_time_s, result.total_time_s);
   if (data.has_landmark_ids) {
     const std::vector<int> shipped = GivenAssociation(data);
     const PairwiseAgreement a = ComparePairwise(result.association, shipped);

@@ -700,6 +700,14 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
   std::unique_ptr<LandmarkTargetData> window_data;
   std::unique_ptr<LandmarkEvaluator> evaluator;
   EvaluationPtr current;
+  // The window's full solves, timed (they dominate a window's cost).
+  auto refine = [&](const AssociationState& s, const StateEvaluation* from) {
+    const auto t = std::chrono::steady_clock::now();
+    EvaluationPtr e = evaluator->Refine(s, from);
+    result.refine_time_s += SecondsSince(t);
+    ++result.refines;
+    return e;
+  };
   auto climb = [&](long steps) {
     long accepted = 0;
     for (long step = 1; step <= steps; ++step) {
@@ -712,7 +720,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       const bool resolve =
           current != before && options.target.mode == LandmarkEvaluationMode::kMarginal;
       if (resolve || step % options.refine_every == 0 || step == steps) {
-        const EvaluationPtr refined = evaluator->Refine(current->state, current.get());
+        const EvaluationPtr refined = refine(current->state, current.get());
         if (refined->valid) current = refined;
       }
     }
@@ -756,7 +764,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
           merged.blocks.erase(merged.blocks.begin() + k);
           merged.classes.pop_back();
           merged.Canonicalize();
+          const auto t = std::chrono::steady_clock::now();
           const EvaluationPtr e = evaluator->Evaluate(merged, current.get());
+          result.targeted_time_s += SecondsSince(t);
           ++result.proposals;
           if (e->valid && e->log_target - base > c.delta)
             c = {e->log_target - base, static_cast<int>(j), static_cast<int>(k), e};
@@ -785,21 +795,21 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       for (auto& b : merged.blocks) std::sort(b.begin(), b.end());
       merged.Canonicalize();
       const EvaluationPtr before = current;
-      EvaluationPtr refined = evaluator->Refine(merged, best.front().evaluation.get());
+      EvaluationPtr refined = refine(merged, best.front().evaluation.get());
       auto fell = [&] { return !refined->valid || refined->log_target <= base; };
       if (fell() && made > 1) {  // only the single best merge
-        refined = evaluator->Refine(best.front().evaluation->state, best.front().evaluation.get());
+        refined = refine(best.front().evaluation->state, best.front().evaluation.get());
         made = 1;
       }
       if (fell() && best.front().delta > options.cold_retry_gain) {
         // A strong loop closure the warm re-solve could not pull in: solve
         // from dead reckoning (staged), away from the unclosed trajectory.
         ++result.cold_retries;
-        refined = evaluator->Refine(best.front().evaluation->state, nullptr);
+        refined = refine(best.front().evaluation->state, nullptr);
       }
       if (fell()) {
         // The linearised gain did not hold: back to the state before.
-        current = evaluator->Refine(before->state, before.get());
+        current = refine(before->state, before.get());
         break;
       }
       current = refined;
@@ -1065,7 +1075,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (best) {
       // The merges undone since the anchor may be redone (right this time)
       // by the targeted merges: the try is judged after them.
-      current = evaluator->Refine(best->state, best.get());
+      current = refine(best->state, best.get());
       if (current->valid && current->log_target <= base && options.targeted_radius_m > 0) {
         const int first_released = static_cast<int>(
             std::upper_bound(first_pose.begin(), first_pose.begin() + num_tracks, best_anchor) -
@@ -1079,7 +1089,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
         result.joint_merges += static_cast<long>(pairs.size());
         return static_cast<long>(pairs.size());
       }
-      current = evaluator->Refine(before->state, before.get());  // back to before
+      current = refine(before->state, before.get());  // back to before
     }
     joint_needed = static_cast<int>(pairs.size()) + options.joint_retry_inliers;
     last_failure = n;
@@ -1185,7 +1195,10 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
                "%.0f landmarks,",
                double(w + 1), double(ends.size()), double(n), double(tracks_now), double(steps),
                double(accepted), double(state.blocks.size())) +
-        Format(" log target %.1f, %.2f s", current->log_target, SecondsSince(window_start)));
+        Format(" log target %.1f, %.2f s (%.0f full solves so far, %.1f s; targeted merges "
+               "scored in %.1f s)",
+               current->log_target, SecondsSince(window_start), double(result.refines),
+               result.refine_time_s, result.targeted_time_s));
     tracks_before = tracks_now;
   }
   if (options.free_poses > 0 && options.free_poses < data.num_poses) {

@@ -279,6 +279,9 @@ struct UnknownAssociationResult {
   double track_time_s = 0, hill_climb_time_s = 0, sampling_time_s = 0, total_time_s = 0;
   double proposal_time_s = 0;  // spent evaluating proposals (hill climbing)
   double joint_time_s = 0;     // spent on joint re-entry merges (RANSAC, solves, re-merges)
+  long refines = 0;            // full solves of the windows' states (hill climbing)
+  double refine_time_s = 0;    // spent in them
+  double targeted_time_s = 0;  // spent scoring targeted merges
   SamplerSummary sampler;      // when samples > 0
 };
 
