@@ -68,6 +68,8 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.targeted_radius_m = arguments.GetDouble("targeted-radius");
   options.targeted_max_candidates = static_cast<int>(arguments.GetInt("targeted-candidates"));
   options.min_track_sightings = static_cast<int>(arguments.GetInt("min-track"));
+  options.sweep_radius_m = arguments.GetDouble("sweep-radius");
+  options.diameter_per_track = arguments.Flag("diameter-per-track");
   options.joint_min_inliers = static_cast<int>(arguments.GetInt("joint-inliers"));
   options.hill_climb_steps_per_track = arguments.GetDouble("hill-climb");
   options.final_hill_climb_steps = static_cast<int>(arguments.GetInt("final-steps"));
@@ -79,6 +81,7 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.moves.merge_sigma_m = options.moves.merge_distance_m / 2;
   options.target.slam.initialisation_window_poses =
       static_cast<int>(arguments.GetInt("init-window"));
+  options.target.slam.diameter_std_m = arguments.GetDouble("diameter-std");
   // A location prior is required to compare landmark counts: 100 m unless given.
   options.target.slam.landmark_prior_std_m =
       arguments.Has("landmark-prior-std") ? arguments.GetDouble("landmark-prior-std") : 100.0;
@@ -106,6 +109,11 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
                     std::nan(""), 0};
   WriteOMap(output, LandmarkResultAsOMap(solution), {arguments.Get("class")}, source);
   WriteTextFileAtomically(trajectory_path, TrajectoryCsv(data, solution));
+  if (arguments.Has("association-out")) {
+    std::ostringstream out;  // the --association format: one id per sighting
+    for (int id : result.association) out << id << '\n';
+    WriteTextFileAtomically(arguments.Get("association-out"), out.str());
+  }
   if (quiet) return solution.summary.IsUsable() ? 0 : 1;
 
   if (result.clutter_tracks > 0)
@@ -165,6 +173,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("association", "", "FILE",
                       "one landmark id per sighting (-1: leave out) instead of the file's ids");
   arguments.AddOption("output", "-o", "OMAP.json", "where to write the O-Map (atomically)");
+  arguments.AddOption("association-out", "", "FILE",
+                      "unknown association: write the landmark id of every sighting (-1: "
+                      "clutter), in the --association format");
   arguments.AddOption("trajectory", "", "CSV",
                       "where to write the trajectory (default: trajectory.csv beside the O-Map)");
   arguments.AddOption("class", "", "NAME", "class name of the landmarks in the O-Map", "tree");
@@ -174,6 +185,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                       "std of a zero-mean location prior on every landmark (0: none; makes the "
                       "evidence comparable across associations)",
                       "0");
+  arguments.AddOption("diameter-std", "", "M",
+                      "std of one trunk-diameter measurement (where the data set has them)",
+                      "0.05");
   arguments.AddFlag("pose-covariances", "also compute every pose's covariance (slower)");
   arguments.AddFlag("unknown-association",
                     "ignore the file's landmark ids: tracks, O-SLAM hill climbing in growing "
@@ -205,6 +219,13 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("targeted-candidates", "", "N",
                       "unknown association: at most the N nearest landmarks per targeted merge "
                       "(0: all within the radius)",
+                      "0");
+  arguments.AddFlag("diameter-per-track",
+                    "unknown association: a track measures its trunk diameter once (its mean) "
+                    "rather than once per sighting");
+  arguments.AddOption("sweep-radius", "", "M",
+                      "unknown association: after each window, score merging every pair of "
+                      "landmarks this close (0: off)",
                       "0");
   arguments.AddOption("min-track", "", "N",
                       "unknown association: tracks with fewer sightings are clutter, left out "
@@ -277,6 +298,7 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   options.initialisation_window_poses = static_cast<int>(arguments.GetInt("init-window"));
   options.compute_pose_covariances = arguments.Flag("pose-covariances");
   options.landmark_prior_std_m = arguments.GetDouble("landmark-prior-std");
+  options.diameter_std_m = arguments.GetDouble("diameter-std");
   std::string why;
   if (!options.Validate(&why)) throw UsageError(why);
   LandmarkSlam slam(options);

@@ -532,6 +532,30 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   for (int i = 0; i < 2; ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
   *delta = -0.5 * log_det_sigma + std::log(s2) - 0.5 * log_det_p + 0.5 * b.dot(l) -
            0.5 * mu.dot(lambda * mu) + 0.5 * m.squaredNorm() / s2;
+  // The trunk diameters: a variable per landmark (flat prior) tied only to
+  // its own measurements, so its part of the evidence is separate and exact:
+  // merging blocks with n_a, n_b measurements of means d_a, d_b adds
+  //   -n_a n_b / (2 n sigma^2) (d_a - d_b)^2 + 1/2 log(n_a n_b / (2 pi sigma^2 n)).
+  auto diameters = [&](int j, double* sum) {
+    int count = 0;
+    *sum = 0;
+    for (int t : reference_->state.blocks[j])
+      for (int k : data_.tracks[t]) {
+        const double d = data_.data->sightings[k].diameter_m;
+        if (!std::isfinite(d)) continue;
+        *sum += d;
+        ++count;
+      }
+    return count;
+  };
+  double sum_a = 0, sum_b = 0;
+  const int na = diameters(ja, &sum_a), nb = diameters(jb, &sum_b);
+  if (na > 0 && nb > 0) {
+    const double var = options_.slam.diameter_std_m * options_.slam.diameter_std_m;
+    const double n = na + nb, gap = sum_a / na - sum_b / nb;
+    *delta += -double(na) * nb / (2 * n * var) * gap * gap +
+              0.5 * std::log(double(na) * nb / (2 * kPi * var * n));
+  }
   *mean = l;
   return std::isfinite(*delta);
 }
@@ -606,7 +630,11 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     if (why) *why = "targeted merges need the marginal evaluation";
     return false;
   }
-  if (min_track_sightings < 1 || targeted_max_candidates < 0) {
+  if (sweep_radius_m > 0 && target.mode != LandmarkEvaluationMode::kMarginal) {
+    if (why) *why = "the duplicate sweep needs the marginal evaluation";
+    return false;
+  }
+  if (min_track_sightings < 1 || targeted_max_candidates < 0 || !(sweep_radius_m >= 0)) {
     if (why) *why = "tracks need >= 1 sighting and the candidate cap must be >= 0 (0: none)";
     return false;
   }
@@ -633,7 +661,7 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
   return true;
 }
 
-UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
+UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& input,
                                                  const UnknownAssociationOptions& options_in,
                                                  const LandmarkProgress& progress) {
   const auto start = std::chrono::steady_clock::now();
@@ -644,7 +672,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (progress) progress(line);
   };
   UnknownAssociationResult result;
-  for (auto& track : BuildLandmarkTracks(data, data.dead_reckoning, options.tracks)) {
+  for (auto& track : BuildLandmarkTracks(input, input.dead_reckoning, options.tracks)) {
     if (static_cast<int>(track.size()) >= options.min_track_sightings) {
       result.tracks.push_back(std::move(track));
       continue;
@@ -652,6 +680,24 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     ++result.clutter_tracks;
     result.clutter_sightings += static_cast<long>(track.size());
   }
+  // Per-track diameters: the track's mean on its first sighting, the others
+  // unmeasured (same sightings, same order, so every index stays valid).
+  LandmarkDataset per_track;
+  if (options.diameter_per_track) {
+    per_track = input;
+    for (const auto& track : result.tracks) {
+      double sum = 0;
+      int count = 0;
+      for (int k : track)
+        if (std::isfinite(input.sightings[k].diameter_m)) {
+          sum += input.sightings[k].diameter_m;
+          ++count;
+        }
+      for (int k : track) per_track.sightings[k].diameter_m = std::nan("");
+      if (count > 0) per_track.sightings[track.front()].diameter_m = sum / count;
+    }
+  }
+  const LandmarkDataset& data = options.diameter_per_track ? per_track : input;
   const int num_tracks = static_cast<int>(result.tracks.size());
   if (num_tracks == 0)
     throw Error::InFile(data.path, "no track of at least " +
@@ -729,7 +775,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     return accepted;
   };
   // Targeted merges of the blocks holding tracks >= first_new (see the options).
-  auto targeted = [&](int first_new) {
+  // With sweep_m > 0 instead: every pair of landmarks within sweep_m (see
+  // UnknownAssociationOptions::sweep_radius_m).
+  auto targeted = [&](int first_new, double sweep_m = 0) {
     long merges = 0;
     for (int round = 0; round < 1000; ++round) {
       const AssociationState& s = current->state;
@@ -741,13 +789,15 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       };
       std::vector<Candidate> best;
       for (size_t j = 0; j < s.blocks.size(); ++j) {
-        if (s.blocks[j].back() < first_new) continue;  // no new track
+        if (sweep_m <= 0 && s.blocks[j].back() < first_new) continue;  // no new track
         Candidate c{0, -1, -1, nullptr};
         std::vector<std::pair<double, int>> candidates;  // (distance, block)
-        for (size_t k = 0; k < s.blocks.size(); ++k) {
-          if (k == j || (s.blocks[k].back() >= first_new && k < j)) continue;  // each pair once
+        for (size_t k = sweep_m > 0 ? j + 1 : 0; k < s.blocks.size(); ++k) {
+          if (k == j || (sweep_m <= 0 && s.blocks[k].back() >= first_new && k < j))
+            continue;  // each pair once
           const double d = (current->locations[j] - current->locations[k]).norm();
-          if (d <= options.targeted_radius_m) candidates.push_back({d, static_cast<int>(k)});
+          if (d <= (sweep_m > 0 ? sweep_m : options.targeted_radius_m))
+            candidates.push_back({d, static_cast<int>(k)});
         }
         const size_t cap = static_cast<size_t>(options.targeted_max_candidates);
         if (cap > 0 && candidates.size() > cap) {
@@ -807,6 +857,10 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
         ++result.cold_retries;
         refined = refine(best.front().evaluation->state, nullptr);
       }
+      if (sweep_m > 0)
+        say(Format("sweep: %.0f landmarks with a paying merge, %.0f made, log target %.1f -> %.1f",
+                   double(best.size()), double(made), base,
+                   refined->valid ? refined->log_target : -1e300));
       if (fell()) {
         // The linearised gain did not hold: back to the state before.
         current = refine(before->state, before.get());
@@ -822,6 +876,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
   std::vector<int> last_pose(num_tracks);
   for (int t = 0; t < num_tracks; ++t) last_pose[t] = data.sightings[result.tracks[t].back()].pose;
   int last_ransac = std::numeric_limits<int>::min() / 2;
+  int held_poses = 0;  // the current window's (free_poses)
   int joint_needed = options.joint_min_inliers, last_failure = 0;
   auto joint = [&](int n) -> long {
     if (options.joint_min_inliers <= 0 || n - last_ransac < options.joint_every_poses) return 0;
@@ -1006,6 +1061,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       const int anchor = std::max(0, n - 1 - (options.joint_recent_poses << k));
       if (anchor == previous_anchor) break;
       previous_anchor = anchor;
+      // The correction moves every pose after the anchor: poses held in the
+      // window's solves would stay bent, their odometry broken.
+      if (anchor + 1 < held_poses) break;
       const double span = driven.back() - driven[anchor];
       if (!(span > 0)) continue;
       auto fraction = [&](int pose) {
@@ -1116,6 +1174,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     const int previous_end = w > 0 ? ends[w - 1] : 0;
     if (options.free_poses > 0)
       window_target.slam.held_poses = std::min(previous_end, std::max(0, n - options.free_poses));
+    held_poses = window_target.slam.held_poses;
     auto window_evaluator = std::make_unique<LandmarkEvaluator>(*target_data, window_target);
     if (options.target.one_sighting_per_scan) {
       // Tracks merged in an earlier window may both go on into this one and
@@ -1179,6 +1238,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     const long steps =
         std::lround(options.hill_climb_steps_per_track * double(tracks_now - tracks_before));
     long accepted = options.targeted_radius_m > 0 ? targeted(tracks_before) : 0;
+    if (options.sweep_radius_m > 0) accepted += targeted(0, options.sweep_radius_m);
     if (const long joined = joint(n); joined > 0) {
       accepted += joined;
       // The rest of the re-entry: the recent tracks against everything.
@@ -1208,6 +1268,13 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (refined->valid) current = refined;
     evaluator = std::move(whole);
     say(Format("all poses free: log target %.1f", current->log_target));
+  }
+  if (options.sweep_radius_m > 0) {
+    // The whole trajectory relaxed: duplicates the windows could not join
+    // (their drift needed bending poses held then) may be side by side now.
+    const long merged = targeted(0, options.sweep_radius_m);
+    say(Format("final sweep: %.0f merges, %.0f landmarks, log target %.1f", double(merged),
+               double(current->state.blocks.size()), current->log_target));
   }
   if (options.final_hill_climb_steps > 0) {
     const auto pass_start = std::chrono::steady_clock::now();

@@ -191,6 +191,13 @@ struct UnknownAssociationOptions {
   // with the pre-processed sightings (with_ids) a tree is often seen once,
   // hence 1 (every track a landmark candidate) by default.
   int min_track_sightings = 1;
+  // A track measures its trunk's diameter once (its mean, with
+  // target.slam.diameter_std_m) instead of once per sighting: on the raw
+  // Victoria Park scans the diameter's error is mostly per track (range,
+  // viewing angle; consecutive scans differ by 0.08 m, tracks of one trunk
+  // by about as much in their means), so per-sighting factors make two
+  // tracks of one tree with 40 sightings each look like different trees.
+  bool diameter_per_track = false;
   LandmarkTargetOptions target;
   MoveOptions moves;  // merge_distance_m / merge_sigma_m: how far apart merge candidates are
   MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
@@ -221,6 +228,14 @@ struct UnknownAssociationOptions {
   // nearest ones (0: every landmark within targeted_radius_m). Bounds a
   // window's cost where landmarks are dense (clutter).
   int targeted_max_candidates = 0;
+  // Duplicate sweep, after each window's targeted merges: every pair of
+  // landmarks within this distance anywhere is scored (closed form) and
+  // merged as the targeted merges are. Two landmarks of one tree can end up
+  // centimetres apart when neither holds a new track any more (the merge
+  // that would have joined them was not yet paying when their tracks were
+  // new; later loop closures brought them together), and only random moves
+  // would find them. 0: off.
+  double sweep_radius_m = 0;
   // When a targeted merge gaining more than this (linearised) fails its
   // warm re-solve, it is re-solved once more from dead reckoning.
   double cold_retry_gain = 10;
