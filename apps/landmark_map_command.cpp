@@ -71,6 +71,7 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.sweep_radius_m = arguments.GetDouble("sweep-radius");
   options.diameter_per_track = arguments.Flag("diameter-per-track");
   options.joint_min_inliers = static_cast<int>(arguments.GetInt("joint-inliers"));
+  options.joint_max_shift_m = arguments.GetDouble("joint-max-shift");
   options.hill_climb_steps_per_track = arguments.GetDouble("hill-climb");
   options.final_hill_climb_steps = static_cast<int>(arguments.GetInt("final-steps"));
   options.samples = static_cast<int>(arguments.GetInt("samples"));
@@ -235,6 +236,10 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                       "unknown association: joint re-entry merges (RANSAC alignment of the recent "
                       "landmarks onto old ones) need this many aligned pairs (0: off)",
                       "8");
+  arguments.AddOption("joint-max-shift", "", "M",
+                      "unknown association: joint merges only for alignments shifting the "
+                      "recent landmarks at most this far (0: no limit)",
+                      "0");
   arguments.AddOption("free-poses", "", "POSES",
                       "unknown association: poses free in a window's solves, earlier ones held "
                       "(0: all free)",

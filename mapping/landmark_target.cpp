@@ -651,7 +651,8 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
       (joint_min_inliers > 0 &&
        (joint_min_inliers < 3 || joint_recent_poses < 1 || !(joint_search_m > 0) ||
         !(joint_inlier_m > 0) || !(joint_max_rotation_rad >= 0) || joint_ransac_iterations < 1 ||
-        joint_anchors < 1 || joint_retry_inliers < 0 || joint_every_poses < 1))) {
+        joint_anchors < 1 || joint_retry_inliers < 0 || joint_every_poses < 1 ||
+        !(joint_max_shift_m >= 0)))) {
     if (why)
       *why =
           "joint merges need >= 3 inliers (0: off), recent poses, RANSAC samples, anchors "
@@ -1006,6 +1007,10 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& input,
           if (std::abs(v.norm() - d) > inlier_m) continue;
           const double angle = WrapAngle(std::atan2(v.y(), v.x()) - heading);
           if (std::abs(angle) > options.joint_max_rotation_rad) continue;
+          if (options.joint_max_shift_m > 0 &&
+              (0.5 * (old[oa].position_m + old[ob].position_m - ra - rb)).norm() >
+                  options.joint_max_shift_m)
+            continue;
           Rigid2 rigid;
           rigid.angle = angle;
           rigid.t = 0.5 * (old[oa].position_m + old[ob].position_m) -
@@ -1047,6 +1052,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& input,
       unmerged += s.BlockOf(recent[r].tracks.front()) != s.BlockOf(old[o].tracks.front());
     }
     if (largest_move < inlier_m || unmerged == 0) return 0;
+    if (options.joint_max_shift_m > 0 &&
+        (best_rigid(pivot) - pivot).norm() > options.joint_max_shift_m)
+      return 0;
     // Per anchor pose: the merges made since it are undone (they were made
     // under the drift), every pair merged, and the state solved from the
     // trajectory with the correction spread along the drive since the anchor.

@@ -266,6 +266,12 @@ struct UnknownAssociationOptions {
   double joint_search_m = 60;
   double joint_inlier_m = 2.5;
   double joint_max_rotation_rad = 0.5;
+  // Alignments shifting the recent landmarks by more than this are not
+  // tried (0: no limit). On the raw Victoria Park drive every alignment
+  // shifting them 40-56 m was a random one in the dense park, and its solve
+  // (from a start tens of metres off) the most expensive; the true re-entries
+  // there shift them 1-16 m.
+  double joint_max_shift_m = 0;
   int joint_ransac_iterations = 300;
   int joint_anchors = 2;
   int joint_retry_inliers = 2;
