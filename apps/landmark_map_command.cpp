@@ -47,9 +47,13 @@ void PrintGpsError(const Arguments& arguments, const LandmarkDataset& data,
   if (!arguments.Has("gps")) return;
   if (static_cast<int>(data.pose_times.size()) != data.num_poses)
     throw Error::InFile(data.path, "--gps needs pose times, which this format has not");
-  const GpsError e = CompareWithGps(trajectory, data.pose_times, ReadGps(arguments.Get("gps")));
-  std::printf("vs GPS (%d fixes, rigid alignment): RMSE %.2f m, median %.2f m, max %.2f m\n",
-              e.num_fixes, e.rmse_m, e.median_m, e.max_m);
+  const std::vector<GpsFix> gps = ReadGps(arguments.Get("gps"));
+  const GpsError e = CompareWithGps(trajectory, data.pose_times, gps);
+  const GpsError d = CompareWithGps(data.dead_reckoning, data.pose_times, gps);
+  std::printf(
+      "vs GPS (%d fixes, rigid alignment): RMSE %.2f m, median %.2f m, max %.2f m (dead "
+      "reckoning: RMSE %.2f m, median %.2f m, max %.2f m)\n",
+      e.num_fixes, e.rmse_m, e.median_m, e.max_m, d.rmse_m, d.median_m, d.max_m);
 }
 
 // --unknown-association: the file's ids are hidden from the solve and used
@@ -62,7 +66,12 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.window_poses = static_cast<int>(arguments.GetInt("window"));
   options.free_poses = static_cast<int>(arguments.GetInt("free-poses"));
   options.targeted_radius_m = arguments.GetDouble("targeted-radius");
+  options.targeted_max_candidates = static_cast<int>(arguments.GetInt("targeted-candidates"));
+  options.min_track_sightings = static_cast<int>(arguments.GetInt("min-track"));
+  options.sweep_radius_m = arguments.GetDouble("sweep-radius");
+  options.diameter_per_track = arguments.Flag("diameter-per-track");
   options.joint_min_inliers = static_cast<int>(arguments.GetInt("joint-inliers"));
+  options.joint_max_shift_m = arguments.GetDouble("joint-max-shift");
   options.hill_climb_steps_per_track = arguments.GetDouble("hill-climb");
   options.final_hill_climb_steps = static_cast<int>(arguments.GetInt("final-steps"));
   options.samples = static_cast<int>(arguments.GetInt("samples"));
@@ -73,6 +82,7 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.moves.merge_sigma_m = options.moves.merge_distance_m / 2;
   options.target.slam.initialisation_window_poses =
       static_cast<int>(arguments.GetInt("init-window"));
+  options.target.slam.diameter_std_m = arguments.GetDouble("diameter-std");
   // A location prior is required to compare landmark counts: 100 m unless given.
   options.target.slam.landmark_prior_std_m =
       arguments.Has("landmark-prior-std") ? arguments.GetDouble("landmark-prior-std") : 100.0;
@@ -100,15 +110,28 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
                     std::nan(""), 0};
   WriteOMap(output, LandmarkResultAsOMap(solution), {arguments.Get("class")}, source);
   WriteTextFileAtomically(trajectory_path, TrajectoryCsv(data, solution));
+  if (arguments.Has("association-out")) {
+    std::ostringstream out;  // the --association format: one id per sighting
+    for (int id : result.association) out << id << '\n';
+    WriteTextFileAtomically(arguments.Get("association-out"), out.str());
+  }
   if (quiet) return solution.summary.IsUsable() ? 0 : 1;
 
+  if (result.clutter_tracks > 0)
+    std::printf("clutter: %ld tracks of fewer than %d sightings, %ld sightings, left out\n",
+                result.clutter_tracks, options.min_track_sightings, result.clutter_sightings);
+  if (result.scan_splits > 0)
+    std::printf("%ld landmarks split where two merged tracks went on into one scan\n",
+                result.scan_splits);
   std::printf(
-      "%zu landmarks from %zu tracks of %d sightings; %ld proposals evaluated (%ld accepted); "
+      "%zu landmarks from %zu tracks of %d sightings; %ld proposals evaluated (%ld accepted, "
+      "%ld full solves in the last window, %ld cold retries); "
       "hill climbing %.2f s (joint re-entry merges: %ld solves, %ld pairs kept, %.2f s), MC3 "
       "%.2f s, total %.2f s\n",
       solution.landmarks.size(), result.tracks.size(), solution.num_sightings_used,
-      result.proposals, result.accepted, result.hill_climb_time_s, result.joint_tries,
-      result.joint_merges, result.joint_time_s, result.sampling_time_s, result.total_time_s);
+      result.proposals, result.accepted, result.solves, result.cold_retries,
+      result.hill_climb_time_s, result.joint_tries, result.joint_merges, result.joint_time_s,
+      result.sampling_time_s, result.total_time_s);
   if (data.has_landmark_ids) {
     const std::vector<int> shipped = GivenAssociation(data);
     const PairwiseAgreement a = ComparePairwise(result.association, shipped);
@@ -151,6 +174,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("association", "", "FILE",
                       "one landmark id per sighting (-1: leave out) instead of the file's ids");
   arguments.AddOption("output", "-o", "OMAP.json", "where to write the O-Map (atomically)");
+  arguments.AddOption("association-out", "", "FILE",
+                      "unknown association: write the landmark id of every sighting (-1: "
+                      "clutter), in the --association format");
   arguments.AddOption("trajectory", "", "CSV",
                       "where to write the trajectory (default: trajectory.csv beside the O-Map)");
   arguments.AddOption("class", "", "NAME", "class name of the landmarks in the O-Map", "tree");
@@ -160,6 +186,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                       "std of a zero-mean location prior on every landmark (0: none; makes the "
                       "evidence comparable across associations)",
                       "0");
+  arguments.AddOption("diameter-std", "", "M",
+                      "std of one trunk-diameter measurement (where the data set has them)",
+                      "0.05");
   arguments.AddFlag("pose-covariances", "also compute every pose's covariance (slower)");
   arguments.AddFlag("unknown-association",
                     "ignore the file's landmark ids: tracks, O-SLAM hill climbing in growing "
@@ -188,13 +217,35 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                       "unknown association: score each new landmark's merge with every landmark "
                       "this close first (marginal evaluation; 0: off)",
                       "50");
+  arguments.AddOption("targeted-candidates", "", "N",
+                      "unknown association: at most the N nearest landmarks per targeted merge "
+                      "(0: all within the radius)",
+                      "0");
+  arguments.AddFlag("diameter-per-track",
+                    "unknown association: a track measures its trunk diameter once (its mean) "
+                    "rather than once per sighting");
+  arguments.AddOption("sweep-radius", "", "M",
+                      "unknown association: after each window, score merging every pair of "
+                      "landmarks this close (0: off)",
+                      "0");
+  arguments.AddOption("min-track", "", "N",
+                      "unknown association: tracks with fewer sightings are clutter, left out "
+                      "(1: none)",
+                      "1");
   arguments.AddOption("joint-inliers", "", "N",
                       "unknown association: joint re-entry merges (RANSAC alignment of the recent "
                       "landmarks onto old ones) need this many aligned pairs (0: off)",
                       "8");
+  arguments.AddOption("joint-max-shift", "", "M",
+                      "unknown association: joint merges only for alignments shifting the "
+                      "recent landmarks at most this far (0: no limit)",
+                      "0");
   arguments.AddOption("free-poses", "", "POSES",
                       "unknown association: poses free in a window's solves, earlier ones held "
                       "(0: all free)",
+                      "0");
+  arguments.AddOption("poses", "", "N",
+                      "use only the first N poses of the data set (0: all), e.g. to time subsets",
                       "0");
   arguments.AddOption("odometry-noise-scale", "", "K",
                       "multiply every odometry covariance by K (a model choice)", "1");
@@ -227,6 +278,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
                                    : (measurements.parent_path() / "inputs.dat").string();
     data = ReadVictoriaRaw(measurements.string(), inputs);
   }
+  const long poses = arguments.GetInt("poses");
+  if (poses < 0) throw UsageError("--poses must be >= 0");
+  if (poses > 0 && poses < data.num_poses) data = PosePrefix(data, static_cast<int>(poses));
   const double odometry_scale = arguments.GetDouble("odometry-noise-scale");
   if (!(odometry_scale > 0) || !std::isfinite(odometry_scale))
     throw UsageError("--odometry-noise-scale must be > 0");
@@ -249,6 +303,7 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   options.initialisation_window_poses = static_cast<int>(arguments.GetInt("init-window"));
   options.compute_pose_covariances = arguments.Flag("pose-covariances");
   options.landmark_prior_std_m = arguments.GetDouble("landmark-prior-std");
+  options.diameter_std_m = arguments.GetDouble("diameter-std");
   std::string why;
   if (!options.Validate(&why)) throw UsageError(why);
   LandmarkSlam slam(options);

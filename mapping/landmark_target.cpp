@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
+#include <set>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -530,6 +532,30 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   for (int i = 0; i < 2; ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
   *delta = -0.5 * log_det_sigma + std::log(s2) - 0.5 * log_det_p + 0.5 * b.dot(l) -
            0.5 * mu.dot(lambda * mu) + 0.5 * m.squaredNorm() / s2;
+  // The trunk diameters: a variable per landmark (flat prior) tied only to
+  // its own measurements, so its part of the evidence is separate and exact:
+  // merging blocks with n_a, n_b measurements of means d_a, d_b adds
+  //   -n_a n_b / (2 n sigma^2) (d_a - d_b)^2 + 1/2 log(n_a n_b / (2 pi sigma^2 n)).
+  auto diameters = [&](int j, double* sum) {
+    int count = 0;
+    *sum = 0;
+    for (int t : reference_->state.blocks[j])
+      for (int k : data_.tracks[t]) {
+        const double d = data_.data->sightings[k].diameter_m;
+        if (!std::isfinite(d)) continue;
+        *sum += d;
+        ++count;
+      }
+    return count;
+  };
+  double sum_a = 0, sum_b = 0;
+  const int na = diameters(ja, &sum_a), nb = diameters(jb, &sum_b);
+  if (na > 0 && nb > 0) {
+    const double var = options_.slam.diameter_std_m * options_.slam.diameter_std_m;
+    const double n = na + nb, gap = sum_a / na - sum_b / nb;
+    *delta += -double(na) * nb / (2 * n * var) * gap * gap +
+              0.5 * std::log(double(na) * nb / (2 * kPi * var * n));
+  }
   *mean = l;
   return std::isfinite(*delta);
 }
@@ -604,6 +630,14 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     if (why) *why = "targeted merges need the marginal evaluation";
     return false;
   }
+  if (sweep_radius_m > 0 && target.mode != LandmarkEvaluationMode::kMarginal) {
+    if (why) *why = "the duplicate sweep needs the marginal evaluation";
+    return false;
+  }
+  if (min_track_sightings < 1 || targeted_max_candidates < 0 || !(sweep_radius_m >= 0)) {
+    if (why) *why = "tracks need >= 1 sighting and the candidate cap must be >= 0 (0: none)";
+    return false;
+  }
   if (window_poses < 0 || free_poses < 0 || !(targeted_radius_m >= 0) ||
       !(hill_climb_steps_per_track >= 0) || final_hill_climb_steps < 0 || refine_every < 1 ||
       samples < 0 || num_chains < 1 || burn_in < 0 || (samples > 0 && burn_in >= samples)) {
@@ -617,7 +651,8 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
       (joint_min_inliers > 0 &&
        (joint_min_inliers < 3 || joint_recent_poses < 1 || !(joint_search_m > 0) ||
         !(joint_inlier_m > 0) || !(joint_max_rotation_rad >= 0) || joint_ransac_iterations < 1 ||
-        joint_anchors < 1 || joint_retry_inliers < 0 || joint_every_poses < 1))) {
+        joint_anchors < 1 || joint_retry_inliers < 0 || joint_every_poses < 1 ||
+        !(joint_max_shift_m >= 0)))) {
     if (why)
       *why =
           "joint merges need >= 3 inliers (0: off), recent poses, RANSAC samples, anchors "
@@ -627,7 +662,7 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
   return true;
 }
 
-UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
+UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& input,
                                                  const UnknownAssociationOptions& options_in,
                                                  const LandmarkProgress& progress) {
   const auto start = std::chrono::steady_clock::now();
@@ -638,9 +673,37 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (progress) progress(line);
   };
   UnknownAssociationResult result;
-  result.tracks = BuildLandmarkTracks(data, data.dead_reckoning, options.tracks);
+  for (auto& track : BuildLandmarkTracks(input, input.dead_reckoning, options.tracks)) {
+    if (static_cast<int>(track.size()) >= options.min_track_sightings) {
+      result.tracks.push_back(std::move(track));
+      continue;
+    }
+    ++result.clutter_tracks;
+    result.clutter_sightings += static_cast<long>(track.size());
+  }
+  // Per-track diameters: the track's mean on its first sighting, the others
+  // unmeasured (same sightings, same order, so every index stays valid).
+  LandmarkDataset per_track;
+  if (options.diameter_per_track) {
+    per_track = input;
+    for (const auto& track : result.tracks) {
+      double sum = 0;
+      int count = 0;
+      for (int k : track)
+        if (std::isfinite(input.sightings[k].diameter_m)) {
+          sum += input.sightings[k].diameter_m;
+          ++count;
+        }
+      for (int k : track) per_track.sightings[k].diameter_m = std::nan("");
+      if (count > 0) per_track.sightings[track.front()].diameter_m = sum / count;
+    }
+  }
+  const LandmarkDataset& data = options.diameter_per_track ? per_track : input;
   const int num_tracks = static_cast<int>(result.tracks.size());
-  if (num_tracks == 0) throw Error::InFile(data.path, "no sighting with a range > 0");
+  if (num_tracks == 0)
+    throw Error::InFile(data.path, "no track of at least " +
+                                       std::to_string(options.min_track_sightings) +
+                                       " sightings with a range > 0");
   // The prior's centre: the mean of the dead-reckoned sightings.
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   int placed = 0;
@@ -659,7 +722,11 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
   result.track_time_s = SecondsSince(start);
   say(Format("tracks: %.0f sightings -> %.0f tracks (gate %.2f m, pose gap %.0f), %.2f s",
              double(placed), double(num_tracks), options.tracks.gate_m,
-             double(options.tracks.max_pose_gap), result.track_time_s));
+             double(options.tracks.max_pose_gap), result.track_time_s) +
+      (result.clutter_tracks > 0
+           ? Format("; %.0f shorter tracks (%.0f sightings) left to clutter",
+                    double(result.clutter_tracks), double(result.clutter_sightings))
+           : std::string()));
 
   const ClassConfusionModel model =
       ClassConfusionModel::Identity(1, 1e-3, std::vector<int>(num_tracks, 0), track_size);
@@ -680,6 +747,14 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
   std::unique_ptr<LandmarkTargetData> window_data;
   std::unique_ptr<LandmarkEvaluator> evaluator;
   EvaluationPtr current;
+  // The window's full solves, timed (they dominate a window's cost).
+  auto refine = [&](const AssociationState& s, const StateEvaluation* from) {
+    const auto t = std::chrono::steady_clock::now();
+    EvaluationPtr e = evaluator->Refine(s, from);
+    result.refine_time_s += SecondsSince(t);
+    ++result.refines;
+    return e;
+  };
   auto climb = [&](long steps) {
     long accepted = 0;
     for (long step = 1; step <= steps; ++step) {
@@ -692,7 +767,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       const bool resolve =
           current != before && options.target.mode == LandmarkEvaluationMode::kMarginal;
       if (resolve || step % options.refine_every == 0 || step == steps) {
-        const EvaluationPtr refined = evaluator->Refine(current->state, current.get());
+        const EvaluationPtr refined = refine(current->state, current.get());
         if (refined->valid) current = refined;
       }
     }
@@ -701,7 +776,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     return accepted;
   };
   // Targeted merges of the blocks holding tracks >= first_new (see the options).
-  auto targeted = [&](int first_new) {
+  // With sweep_m > 0 instead: every pair of landmarks within sweep_m (see
+  // UnknownAssociationOptions::sweep_radius_m).
+  auto targeted = [&](int first_new, double sweep_m = 0) {
     long merges = 0;
     for (int round = 0; round < 1000; ++round) {
       const AssociationState& s = current->state;
@@ -713,19 +790,34 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       };
       std::vector<Candidate> best;
       for (size_t j = 0; j < s.blocks.size(); ++j) {
-        if (s.blocks[j].back() < first_new) continue;  // no new track
+        if (sweep_m <= 0 && s.blocks[j].back() < first_new) continue;  // no new track
         Candidate c{0, -1, -1, nullptr};
-        for (size_t k = 0; k < s.blocks.size(); ++k) {
-          if (k == j || (s.blocks[k].back() >= first_new && k < j)) continue;  // each pair once
-          if ((current->locations[j] - current->locations[k]).norm() > options.targeted_radius_m)
-            continue;
+        std::vector<std::pair<double, int>> candidates;  // (distance, block)
+        for (size_t k = sweep_m > 0 ? j + 1 : 0; k < s.blocks.size(); ++k) {
+          if (k == j || (sweep_m <= 0 && s.blocks[k].back() >= first_new && k < j))
+            continue;  // each pair once
+          const double d = (current->locations[j] - current->locations[k]).norm();
+          if (d <= (sweep_m > 0 ? sweep_m : options.targeted_radius_m))
+            candidates.push_back({d, static_cast<int>(k)});
+        }
+        const size_t cap = static_cast<size_t>(options.targeted_max_candidates);
+        if (cap > 0 && candidates.size() > cap) {
+          std::nth_element(candidates.begin(), candidates.begin() + cap, candidates.end());
+          candidates.resize(cap);
+          std::sort(candidates.begin(), candidates.end(),
+                    [](const auto& x, const auto& y) { return x.second < y.second; });
+        }
+        for (const auto& [distance, kk] : candidates) {
+          const size_t k = static_cast<size_t>(kk);
           AssociationState merged = s;
           merged.blocks[j].insert(merged.blocks[j].end(), s.blocks[k].begin(), s.blocks[k].end());
           std::sort(merged.blocks[j].begin(), merged.blocks[j].end());
           merged.blocks.erase(merged.blocks.begin() + k);
           merged.classes.pop_back();
           merged.Canonicalize();
+          const auto t = std::chrono::steady_clock::now();
           const EvaluationPtr e = evaluator->Evaluate(merged, current.get());
+          result.targeted_time_s += SecondsSince(t);
           ++result.proposals;
           if (e->valid && e->log_target - base > c.delta)
             c = {e->log_target - base, static_cast<int>(j), static_cast<int>(k), e};
@@ -754,21 +846,25 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       for (auto& b : merged.blocks) std::sort(b.begin(), b.end());
       merged.Canonicalize();
       const EvaluationPtr before = current;
-      EvaluationPtr refined = evaluator->Refine(merged, best.front().evaluation.get());
+      EvaluationPtr refined = refine(merged, best.front().evaluation.get());
       auto fell = [&] { return !refined->valid || refined->log_target <= base; };
       if (fell() && made > 1) {  // only the single best merge
-        refined = evaluator->Refine(best.front().evaluation->state, best.front().evaluation.get());
+        refined = refine(best.front().evaluation->state, best.front().evaluation.get());
         made = 1;
       }
       if (fell() && best.front().delta > options.cold_retry_gain) {
         // A strong loop closure the warm re-solve could not pull in: solve
         // from dead reckoning (staged), away from the unclosed trajectory.
         ++result.cold_retries;
-        refined = evaluator->Refine(best.front().evaluation->state, nullptr);
+        refined = refine(best.front().evaluation->state, nullptr);
       }
+      if (sweep_m > 0)
+        say(Format("sweep: %.0f landmarks with a paying merge, %.0f made, log target %.1f -> %.1f",
+                   double(best.size()), double(made), base,
+                   refined->valid ? refined->log_target : -1e300));
       if (fell()) {
         // The linearised gain did not hold: back to the state before.
-        current = evaluator->Refine(before->state, before.get());
+        current = refine(before->state, before.get());
         break;
       }
       current = refined;
@@ -781,6 +877,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
   std::vector<int> last_pose(num_tracks);
   for (int t = 0; t < num_tracks; ++t) last_pose[t] = data.sightings[result.tracks[t].back()].pose;
   int last_ransac = std::numeric_limits<int>::min() / 2;
+  int held_poses = 0;  // the current window's (free_poses)
   int joint_needed = options.joint_min_inliers, last_failure = 0;
   auto joint = [&](int n) -> long {
     if (options.joint_min_inliers <= 0 || n - last_ransac < options.joint_every_poses) return 0;
@@ -849,19 +946,39 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (with_candidates < joint_needed) return 0;
     // Inliers of an alignment: mutually nearest (recent, old) pairs within
     // joint_inlier_m of each other once the recent unit is moved.
+    // The old units on a grid of joint_inlier_m cells: an alignment's inliers
+    // are then found in the 3 x 3 cells around each moved recent unit instead
+    // of among all its old units in reach (thousands with clutter); the same
+    // pairs as a scan of near[i] (ties to the higher index, as that scan).
+    auto cell_of = [&](const Eigen::Vector2d& p) {
+      return std::make_pair(static_cast<long>(std::floor(p.x() / inlier_m)),
+                            static_cast<long>(std::floor(p.y() / inlier_m)));
+    };
+    std::map<std::pair<long, long>, std::vector<int>> grid;
+    for (size_t o = 0; o < old.size(); ++o)
+      grid[cell_of(old[o].position_m)].push_back(static_cast<int>(o));
     auto inliers = [&](const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) {
       std::map<int, std::pair<double, int>> by_old;  // old unit -> (distance², recent unit)
       for (size_t i = 0; i < recent.size(); ++i) {
+        if (near[i].empty()) continue;
         const Eigen::Vector2d p = rigid(recent[i].position_m);
+        const auto [cx, cy] = cell_of(p);
         int nearest = -1;
         double best = inlier2;
-        for (int o : near[i]) {
-          const double d2 = (old[o].position_m - p).squaredNorm();
-          if (d2 <= best) {
-            best = d2;
-            nearest = o;
+        for (long x = cx - 1; x <= cx + 1; ++x)
+          for (long y = cy - 1; y <= cy + 1; ++y) {
+            const auto cell = grid.find({x, y});
+            if (cell == grid.end()) continue;
+            for (int o : cell->second) {
+              if ((old[o].position_m - recent[i].position_m).squaredNorm() > reach * reach)
+                continue;  // not in near[i]
+              const double d2 = (old[o].position_m - p).squaredNorm();
+              if (d2 < best || (d2 == best && o > nearest)) {
+                best = d2;
+                nearest = o;
+              }
+            }
           }
-        }
         if (nearest < 0) continue;
         const auto it = by_old.find(nearest);
         if (it == by_old.end() || best < it->second.first)
@@ -890,6 +1007,10 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
           if (std::abs(v.norm() - d) > inlier_m) continue;
           const double angle = WrapAngle(std::atan2(v.y(), v.x()) - heading);
           if (std::abs(angle) > options.joint_max_rotation_rad) continue;
+          if (options.joint_max_shift_m > 0 &&
+              (0.5 * (old[oa].position_m + old[ob].position_m - ra - rb)).norm() >
+                  options.joint_max_shift_m)
+            continue;
           Rigid2 rigid;
           rigid.angle = angle;
           rigid.t = 0.5 * (old[oa].position_m + old[ob].position_m) -
@@ -931,6 +1052,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       unmerged += s.BlockOf(recent[r].tracks.front()) != s.BlockOf(old[o].tracks.front());
     }
     if (largest_move < inlier_m || unmerged == 0) return 0;
+    if (options.joint_max_shift_m > 0 &&
+        (best_rigid(pivot) - pivot).norm() > options.joint_max_shift_m)
+      return 0;
     // Per anchor pose: the merges made since it are undone (they were made
     // under the drift), every pair merged, and the state solved from the
     // trajectory with the correction spread along the drive since the anchor.
@@ -945,6 +1069,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
       const int anchor = std::max(0, n - 1 - (options.joint_recent_poses << k));
       if (anchor == previous_anchor) break;
       previous_anchor = anchor;
+      // The correction moves every pose after the anchor: poses held in the
+      // window's solves would stay bent, their odometry broken.
+      if (anchor + 1 < held_poses) break;
       const double span = driven.back() - driven[anchor];
       if (!(span > 0)) continue;
       auto fraction = [&](int pose) {
@@ -1014,7 +1141,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (best) {
       // The merges undone since the anchor may be redone (right this time)
       // by the targeted merges: the try is judged after them.
-      current = evaluator->Refine(best->state, best.get());
+      current = refine(best->state, best.get());
       if (current->valid && current->log_target <= base && options.targeted_radius_m > 0) {
         const int first_released = static_cast<int>(
             std::upper_bound(first_pose.begin(), first_pose.begin() + num_tracks, best_anchor) -
@@ -1028,7 +1155,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
         result.joint_merges += static_cast<long>(pairs.size());
         return static_cast<long>(pairs.size());
       }
-      current = evaluator->Refine(before->state, before.get());  // back to before
+      current = refine(before->state, before.get());  // back to before
     }
     joint_needed = static_cast<int>(pairs.size()) + options.joint_retry_inliers;
     last_failure = n;
@@ -1055,11 +1182,48 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     const int previous_end = w > 0 ? ends[w - 1] : 0;
     if (options.free_poses > 0)
       window_target.slam.held_poses = std::min(previous_end, std::max(0, n - options.free_poses));
+    held_poses = window_target.slam.held_poses;
     auto window_evaluator = std::make_unique<LandmarkEvaluator>(*target_data, window_target);
-    for (int t = tracks_before; t < tracks_now; ++t) {
-      state.blocks.push_back({t});
-      state.classes.push_back(0);
+    if (options.target.one_sighting_per_scan) {
+      // Tracks merged in an earlier window may both go on into this one and
+      // be seen in one scan: the landmark would have two sightings of it
+      // (P = 0). Its tracks stay together, earliest first, while they share
+      // no scan; a track that does starts a new landmark (which the targeted
+      // merges may join elsewhere).
+      std::vector<std::vector<int>> blocks;
+      for (const auto& block : state.blocks) {
+        const bool goes_on = std::any_of(block.begin(), block.end(), [&](int t) {
+          return data.sightings[result.tracks[t].back()].pose >= previous_end;
+        });
+        if (block.size() < 2 || !goes_on) {  // no new scan can be shared
+          blocks.push_back(block);
+          continue;
+        }
+        std::vector<std::vector<int>> parts;
+        std::vector<std::set<int>> scans;  // poses seen per part
+        for (int t : block) {
+          std::vector<int> poses;
+          for (int k : result.tracks[t])
+            if (data.sightings[k].pose < n) poses.push_back(data.sightings[k].pose);
+          size_t p = 0;
+          while (p < parts.size() && std::any_of(poses.begin(), poses.end(), [&](int pose) {
+                   return scans[p].count(pose) > 0;
+                 }))
+            ++p;
+          if (p == parts.size()) {
+            parts.emplace_back();
+            scans.emplace_back();
+          }
+          parts[p].push_back(t);
+          scans[p].insert(poses.begin(), poses.end());
+        }
+        result.scan_splits += static_cast<long>(parts.size()) - 1;
+        blocks.insert(blocks.end(), parts.begin(), parts.end());
+      }
+      state.blocks = std::move(blocks);
     }
+    for (int t = tracks_before; t < tracks_now; ++t) state.blocks.push_back({t});
+    state.classes.assign(state.blocks.size(), 0);
     state.Canonicalize();
     // Warm start: the previous window's solution, its trajectory continued
     // by the odometry.
@@ -1082,6 +1246,7 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     const long steps =
         std::lround(options.hill_climb_steps_per_track * double(tracks_now - tracks_before));
     long accepted = options.targeted_radius_m > 0 ? targeted(tracks_before) : 0;
+    if (options.sweep_radius_m > 0) accepted += targeted(0, options.sweep_radius_m);
     if (const long joined = joint(n); joined > 0) {
       accepted += joined;
       // The rest of the re-entry: the recent tracks against everything.
@@ -1098,7 +1263,10 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
                "%.0f landmarks,",
                double(w + 1), double(ends.size()), double(n), double(tracks_now), double(steps),
                double(accepted), double(state.blocks.size())) +
-        Format(" log target %.1f, %.2f s", current->log_target, SecondsSince(window_start)));
+        Format(" log target %.1f, %.2f s (%.0f full solves so far, %.1f s; targeted merges "
+               "scored in %.1f s)",
+               current->log_target, SecondsSince(window_start), double(result.refines),
+               result.refine_time_s, result.targeted_time_s));
     tracks_before = tracks_now;
   }
   if (options.free_poses > 0 && options.free_poses < data.num_poses) {
@@ -1108,6 +1276,13 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
     if (refined->valid) current = refined;
     evaluator = std::move(whole);
     say(Format("all poses free: log target %.1f", current->log_target));
+  }
+  if (options.sweep_radius_m > 0) {
+    // The whole trajectory relaxed: duplicates the windows could not join
+    // (their drift needed bending poses held then) may be side by side now.
+    const long merged = targeted(0, options.sweep_radius_m);
+    say(Format("final sweep: %.0f merges, %.0f landmarks, log target %.1f", double(merged),
+               double(current->state.blocks.size()), current->log_target));
   }
   if (options.final_hill_climb_steps > 0) {
     const auto pass_start = std::chrono::steady_clock::now();

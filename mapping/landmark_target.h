@@ -182,6 +182,22 @@ struct UnknownAssociationOptions {
     moves.merge_sigma_m = 1.5;
   }
   LandmarkTrackOptions tracks;
+  // Clutter: tracks with fewer sightings than this are explained by the
+  // sensor's clutter (false detections, uniform over the field of view)
+  // rather than by a landmark; they stay out of the state (association -1).
+  // The clutter term is then the same for every state, so it drops out of
+  // the comparisons. A birth rule as in FastSLAM / RFS-SLAM: on the raw
+  // Victoria Park scans most short tracks are clutter (docs/benchmarks.md);
+  // with the pre-processed sightings (with_ids) a tree is often seen once,
+  // hence 1 (every track a landmark candidate) by default.
+  int min_track_sightings = 1;
+  // A track measures its trunk's diameter once (its mean, with
+  // target.slam.diameter_std_m) instead of once per sighting: on the raw
+  // Victoria Park scans the diameter's error is mostly per track (range,
+  // viewing angle; consecutive scans differ by 0.08 m, tracks of one trunk
+  // by about as much in their means), so per-sighting factors make two
+  // tracks of one tree with 40 sightings each look like different trees.
+  bool diameter_per_track = false;
   LandmarkTargetOptions target;
   MoveOptions moves;  // merge_distance_m / merge_sigma_m: how far apart merge candidates are
   MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
@@ -208,6 +224,18 @@ struct UnknownAssociationOptions {
   // whole-problem target fell, only the single best is kept); repeated until
   // nothing improves. 0: off. Needs LandmarkEvaluationMode::kMarginal.
   double targeted_radius_m = 50;
+  // At most this many candidates per landmark for the targeted merges, the
+  // nearest ones (0: every landmark within targeted_radius_m). Bounds a
+  // window's cost where landmarks are dense (clutter).
+  int targeted_max_candidates = 0;
+  // Duplicate sweep, after each window's targeted merges: every pair of
+  // landmarks within this distance anywhere is scored (closed form) and
+  // merged as the targeted merges are. Two landmarks of one tree can end up
+  // centimetres apart when neither holds a new track any more (the merge
+  // that would have joined them was not yet paying when their tracks were
+  // new; later loop closures brought them together), and only random moves
+  // would find them. 0: off.
+  double sweep_radius_m = 0;
   // When a targeted merge gaining more than this (linearised) fails its
   // warm re-solve, it is re-solved once more from dead reckoning.
   double cold_retry_gain = 10;
@@ -238,6 +266,12 @@ struct UnknownAssociationOptions {
   double joint_search_m = 60;
   double joint_inlier_m = 2.5;
   double joint_max_rotation_rad = 0.5;
+  // Alignments shifting the recent landmarks by more than this are not
+  // tried (0: no limit). On the raw Victoria Park drive every alignment
+  // shifting them 40-56 m was a random one in the dense park, and its solve
+  // (from a start tens of metres off) the most expensive; the true re-entries
+  // there shift them 1-16 m.
+  double joint_max_shift_m = 0;
   int joint_ransac_iterations = 300;
   int joint_anchors = 2;
   int joint_retry_inliers = 2;
@@ -259,9 +293,16 @@ struct UnknownAssociationResult {
   double log_target = 0;         // of `state`, full evaluation
   long proposals = 0, accepted = 0, solves = 0, cache_hits = 0, cold_retries = 0;
   long joint_tries = 0, joint_merges = 0;  // joint re-entry merges: solves tried, pairs kept
+  long clutter_tracks = 0, clutter_sightings = 0;  // left out (min_track_sightings)
+  // Landmarks split at a window start because two of their tracks, merged
+  // before, both continued into one scan (one sighting per scan).
+  long scan_splits = 0;
   double track_time_s = 0, hill_climb_time_s = 0, sampling_time_s = 0, total_time_s = 0;
   double proposal_time_s = 0;  // spent evaluating proposals (hill climbing)
   double joint_time_s = 0;     // spent on joint re-entry merges (RANSAC, solves, re-merges)
+  long refines = 0;            // full solves of the windows' states (hill climbing)
+  double refine_time_s = 0;    // spent in them
+  double targeted_time_s = 0;  // spent scoring targeted merges
   SamplerSummary sampler;      // when samples > 0
 };
 

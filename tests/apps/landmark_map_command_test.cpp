@@ -93,6 +93,18 @@ TEST(LandmarkMapCommand, UnknownAssociationComparesWithTheIds) {
   EXPECT_EQ(RunOslam(common + " --evaluation fast").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --track-gate 0").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --landmark-prior-std 0").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --min-track 0").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --poses -1").exit_code, 2);
+  // --poses: a prefix; --association-out: one id per sighting of it.
+  const testing::CommandResult prefix =
+      RunOslam(common + " --poses 3 --association-out " + dir.Path("a.txt"));
+  ASSERT_EQ(prefix.exit_code, 0) << prefix.err;
+  EXPECT_EQ(ReadOMap(dir.Path("omap.json")).trajectory.size(), 3u);
+  std::ifstream ids(dir.Path("a.txt"));
+  int lines = 0;
+  for (std::string line; std::getline(ids, line);) ++lines;
+  EXPECT_GT(lines, 0);
+  EXPECT_LE(lines, 3);  // the sightings of the first 3 poses
 }
 
 TEST(LandmarkMapCommand, BadInputAndUsage) {
