@@ -32,15 +32,7 @@ double ThreadSeconds() {
 
 testing::SyntheticScene Scene(int k) {
   static const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
-  testing::SyntheticSceneOptions options;
-  options.num_poses = 300 * k;
-  options.num_objects = 10 * k;
-  options.loop_length_m = 6.0 * k;
-  options.loop_width_m = 4.0 * k;
-  options.max_range_m = 5.0;
-  options.pixel_std_px = 30.0;
-  options.odometry_noise = true;
-  return testing::MakeSyntheticScene(camera, options);
+  return testing::MakeSyntheticScene(camera, testing::GrownLpaLoop(k));
 }
 
 // The graph GeometricSlam solves, at its initial values (a solve with no

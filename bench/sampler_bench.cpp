@@ -31,14 +31,7 @@ struct Problem {
 // Each object's detections, in frame order, cut into tracks of kTrackLength.
 std::unique_ptr<Problem> MakeProblem(int k) {
   auto p = std::make_unique<Problem>();
-  testing::SyntheticSceneOptions options;
-  options.num_poses = 300 * k;
-  options.num_objects = 10 * k;
-  options.loop_length_m = 6.0 * k;
-  options.loop_width_m = 4.0 * k;
-  options.max_range_m = 5.0;
-  options.pixel_std_px = 30.0;
-  options.odometry_noise = true;
+  const testing::SyntheticSceneOptions options = testing::GrownLpaLoop(k);
   p->scene = testing::MakeSyntheticScene(p->camera, options);
   const GeometricSlamProblem& problem = p->scene.problem;
   p->data.camera = &p->camera;

@@ -35,6 +35,21 @@ struct SyntheticSceneOptions {
   unsigned seed = 1;
 };
 
+// The benchmarks' LPA-like loop grown k times: 300 k poses, 10 k objects, a
+// 6 k x 4 k m rectangle, detections up to 5 m with the thesis' E = 30 px, and
+// noisy odometry.
+inline SyntheticSceneOptions GrownLpaLoop(int k) {
+  SyntheticSceneOptions options;
+  options.num_poses = 300 * k;
+  options.num_objects = 10 * k;
+  options.loop_length_m = 6.0 * k;
+  options.loop_width_m = 4.0 * k;
+  options.max_range_m = 5.0;
+  options.pixel_std_px = 30.0;
+  options.odometry_noise = true;
+  return options;
+}
+
 inline SyntheticScene MakeSyntheticScene(const CameraModel& camera,
                                          const SyntheticSceneOptions& options) {
   std::mt19937 rng(options.seed);
