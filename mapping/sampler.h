@@ -37,8 +37,7 @@ struct SamplerOptions {
   int num_chains = 3;               // N_c; 1 = plain Metropolis-Hastings
   double delta_temperature = 3.33;  // beta_i = 1 / (1 + dT (i - 1))
   // Adjacent chains may swap after every `swap_every` iterations (1: after
-  // each, Algorithm 8). In between the chains step independently, which
-  // keeps both cores busy: a chain that solves waits for no other.
+  // each, Algorithm 8); any schedule keeps the tempered targets invariant.
   int swap_every = 1;
   // Iterations t = 1..num_iterations; the cold chain's state is recorded when
   // t > burn_in (Algorithm 8), so num_iterations counts the burn-in (#21).
