@@ -163,14 +163,16 @@ SamplerOptions TestOptions(int chains, int iterations) {
   return options;
 }
 
-// approximation_error > 0: the evaluators offer approximations (delayed acceptance).
+// approximation_error > 0: the evaluators offer approximations (delayed
+// acceptance); roll_back false: they cannot roll back (chains in lock-step).
 SamplerResult RunTest(const SamplerOptions& options, const ClassConfusionModel& model,
-                      double approximation_error = 0) {
+                      double approximation_error = 0, bool roll_back = true) {
   Sampler sampler(
       model,
-      [&model, approximation_error] {
+      [&model, approximation_error, roll_back] {
         auto evaluator = std::make_unique<TestEvaluator>(model);
         if (approximation_error > 0) evaluator->EnableApproximation(approximation_error);
+        if (!roll_back) evaluator->DisableRollBack();
         return evaluator;
       },
       options);
@@ -284,31 +286,19 @@ TEST(SamplerTest, ReproducibleFromTheSeedWithThreads) {
 // frequent, so chains are sent back often.
 TEST(SamplerTest, SpeculativeChainsGiveTheSequentialResult) {
   const ClassConfusionModel model = TestModel();
-  auto run = [&model](const SamplerOptions& options, bool roll_back) {
-    Sampler sampler(
-        model,
-        [&model, roll_back] {
-          auto evaluator = std::make_unique<TestEvaluator>(model);
-          evaluator->EnableApproximation(1.0);
-          if (!roll_back) evaluator->DisableRollBack();
-          return evaluator;
-        },
-        options);
-    return sampler.Run(SeparateTracksState(kTrackClass));
-  };
   for (int swap_every : {1, 3}) {
     SamplerOptions options = TestOptions(3, 1500);
     options.burn_in = 100;
     options.delta_temperature = 0.3;
     options.swap_every = swap_every;
     options.parallel_chains = false;
-    const SamplerResult reference = run(options, true);
+    const SamplerResult reference = RunTest(options, model, 1.0);
     EXPECT_GT(reference.summary.swaps_accepted, reference.summary.swaps_proposed / 4);
     options.parallel_chains = true;
     for (const auto& [depth, roll_back] :
          {std::pair{0, true}, {1, true}, {32, true}, {32, false}}) {
       options.speculation_depth = depth;
-      const SamplerResult result = run(options, roll_back);
+      const SamplerResult result = RunTest(options, model, 1.0, roll_back);
       SCOPED_TRACE("swap every " + std::to_string(swap_every) + ", depth " + std::to_string(depth) +
                    (roll_back ? "" : ", no roll-back"));
       ASSERT_EQ(result.samples.size(), reference.samples.size());
