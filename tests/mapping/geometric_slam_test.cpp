@@ -305,15 +305,8 @@ TEST(GeometricSlamTest, WarmStartAfterAnAssociationChangeConvergesFasterToTheSam
 // minimum (no higher) in fewer iterations.
 TEST(GeometricSlamTest, StepExtrapolationReachesTheSameMinimumInFewerIterations) {
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
-  testing::SyntheticSceneOptions scene_options;
-  scene_options.num_poses = 1800;
-  scene_options.num_objects = 60;
-  scene_options.loop_length_m = 36.0;
-  scene_options.loop_width_m = 24.0;
-  scene_options.max_range_m = 5.0;
-  scene_options.pixel_std_px = 30.0;
-  scene_options.odometry_noise = true;
-  const testing::SyntheticScene scene = testing::MakeSyntheticScene(camera, scene_options);
+  const testing::SyntheticScene scene =
+      testing::MakeSyntheticScene(camera, testing::GrownLpaLoop(6));
   GeometricSlamOptions options;
   options.compute_object_covariances = false;
   GeometricSlam plain(camera, options);
