@@ -64,6 +64,10 @@ int RunDetectCommand(const std::vector<std::string>& args) {
                       "with --colour-box scaled: accept brightness from 1/R to R times the "
                       "examples' range",
                       "2.5");
+  arguments.AddFlag("keep-look-alikes",
+                    "keep every class a blob's colour matches (the thesis); by default, where "
+                    "two classes' blobs are the same pixels, only the one whose colour and "
+                    "learnt image shape fit better is kept");
   arguments.AddOption("sift-templates", "", "FILE.yaml",
                       "keep a detection of a class with templates only if SIFT verifies it");
   arguments.AddFlag("skip-bad-frames", "warn about unreadable frames and go on");
@@ -82,6 +86,7 @@ int RunDetectCommand(const std::vector<std::string>& args) {
   if (!ParseColourBoxShape(arguments.Get("colour-box"), &options.colour.shape))
     throw UsageError("--colour-box must be 'yuv' or 'scaled'");
   options.colour.brightness_range = arguments.GetDouble("brightness-range");
+  options.separate_look_alikes = !arguments.Flag("keep-look-alikes");
   std::string why;
   if (!options.Validate(&why)) throw UsageError(why);
   const bool quiet = arguments.Flag("quiet");

@@ -83,6 +83,9 @@ RunConfig::RunConfig() {
        "yuv = the thesis' mean +- k sigma YUV box; scaled = chroma scaled with brightness"},
       {"detect", "brightness_range", "2.5", "--brightness-range", Kind::kNumber,
        "colour_box scaled: accept brightness from 1/R to R times the examples' range"},
+      {"detect", "keep_look_alikes", "0", "--keep-look-alikes", Kind::kFlag,
+       "1: keep every class a blob's colour matches (thesis); 0: of look-alike classes on the "
+       "same pixels keep the one whose colour and image shape fit better"},
       {"detect", "sift_templates", "", "--sift-templates", Kind::kText,
        "templates.yaml for SIFT verification; empty = colour only"},
       {"detect", "threads", "2", "--threads", Kind::kInteger,
@@ -326,6 +329,7 @@ void RunConfig::Check() const {
   if (!ParseColourBoxShape(Get("detect", "colour_box"), &detect.colour.shape))
     Fail("configuration: detect.colour_box must be 'yuv' or 'scaled'");
   detect.colour.brightness_range = std::stod(Get("detect", "brightness_range"));
+  detect.separate_look_alikes = Get("detect", "keep_look_alikes") == "0";
   ExportOptions models;
   models.min_existence = std::stod(Get("export", "min_existence"));
   FigureOptions figures;

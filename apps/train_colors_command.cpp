@@ -17,10 +17,14 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
                       "example pixels;\nbox = mean ± k·σ) and the class-confusion matrix, and "
                       "writes them into classes.yaml.");
   arguments.AddPositional("CLASSES.yaml", "the classes to train (updated in place unless -o)");
-  arguments.AddOption("examples", "", "EXAMPLES.yaml", "example regions per class (docs/formats.md)");
-  arguments.AddOption("from-ground-truth", "", "RUN_DIR",
-                      "instead of --examples: ROIs on the ground-truth objects of a simulated run");
-  arguments.AddOption("k-sigma", "", "K", "half-width of the colour box in standard deviations", "3");
+  arguments.AddOption("examples", "", "EXAMPLES.yaml",
+                      "example regions per class (docs/formats.md)");
+  arguments.AddOption(
+      "from-ground-truth", "", "RUN_DIR",
+      "instead of --examples: ROIs on the ground-truth objects of a simulated run;\n"
+      "also learns each class's image shape (slice elongation) from its views");
+  arguments.AddOption("k-sigma", "", "K", "half-width of the colour box in standard deviations",
+                      "3");
   arguments.AddOption("output", "-o", "OUT.yaml", "where to write (default: CLASSES.yaml)");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
@@ -32,9 +36,12 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
   const std::string classes_path = arguments.Get("CLASSES.yaml");
   const std::vector<ObjectClass> classes = ReadClasses(classes_path);
   const std::vector<ColourExample> examples =
-      arguments.Has("examples") ? ReadColourExamples(arguments.Get("examples"), classes)
-                                : ExamplesFromGroundTruth(arguments.Get("from-ground-truth"), classes);
-  const std::vector<ObjectClass> trained = TrainColourModels(classes, examples, k_sigma);
+      arguments.Has("examples")
+          ? ReadColourExamples(arguments.Get("examples"), classes)
+          : ExamplesFromGroundTruth(arguments.Get("from-ground-truth"), classes);
+  std::vector<ObjectClass> trained = TrainColourModels(classes, examples, k_sigma);
+  if (arguments.Has("from-ground-truth"))
+    trained = LearnImageShapes(trained, arguments.Get("from-ground-truth"));
   const ConfusionMatrix confusion = ColourConfusion(trained);
   const std::string output = arguments.Has("output") ? arguments.Get("output") : classes_path;
   WriteClasses(trained, output, confusion);
@@ -45,9 +52,13 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
         continue;
       }
       const ColourBox& box = *trained[c].colour;
-      std::printf("%-16s YUV mean (%.1f, %.1f, %.1f) std (%.1f, %.1f, %.1f)  P(correct) %.3f\n",
+      std::printf("%-16s YUV mean (%.1f, %.1f, %.1f) std (%.1f, %.1f, %.1f)  P(correct) %.3f",
                   trained[c].name.c_str(), box.yuv_mean[0], box.yuv_mean[1], box.yuv_mean[2],
                   box.yuv_std[0], box.yuv_std[1], box.yuv_std[2], confusion[c][c]);
+      if (trained[c].image_shape)
+        std::printf("  elongation %.2f ± %.2f", trained[c].image_shape->elongation_mean,
+                    trained[c].image_shape->elongation_std);
+      std::printf("\n");
     }
     std::printf("wrote %s\n", output.c_str());
   }

@@ -42,4 +42,23 @@ BoundingSlice SliceOfPolarPoints(const std::vector<double>& radii_px,
   return SliceFromExtents(*r_min, *r_max, sorted[arc_begin], sorted[arc_end]);
 }
 
+double SliceElongation(const BoundingSlice& slice) {
+  const double arc_width_px = slice.s_phi_rad * (slice.u_r_px + 0.5 * slice.s_r_px);
+  return arc_width_px > 0 ? slice.s_r_px / arc_width_px : 0.0;
+}
+
+double SliceCoverage(const BoundingSlice& slice, const BoundingSlice& other) {
+  if (!(slice.s_r_px > 0) || !(slice.s_phi_rad > 0)) return 0.0;
+  const double radial = std::min(slice.u_r_px + slice.s_r_px, other.u_r_px + other.s_r_px) -
+                        std::max(slice.u_r_px, other.u_r_px);
+  // Two arcs can meet on both sides of the circle when together they span more than half of it.
+  const double half_sum = 0.5 * (slice.s_phi_rad + other.s_phi_rad);
+  const double apart = std::abs(WrapAngle(slice.u_phi_rad - other.u_phi_rad));
+  const double angular =
+      std::min(std::min(slice.s_phi_rad, other.s_phi_rad),
+               std::max(0.0, half_sum - apart) + std::max(0.0, half_sum - (2.0 * kPi - apart)));
+  return std::clamp(radial / slice.s_r_px, 0.0, 1.0) *
+         std::clamp(angular / slice.s_phi_rad, 0.0, 1.0);
+}
+
 }  // namespace oslam

@@ -25,4 +25,13 @@ BoundingSlice SliceFromExtents(double r_min_px, double r_max_px, double angle_be
 BoundingSlice SliceOfPolarPoints(const std::vector<double>& radii_px,
                                  const std::vector<double>& angles_rad);
 
+// Radial length over arc width at the slice's middle radius: a shape measure
+// independent of the object's distance to first order (a sphere gives about 1).
+// 0 for a slice of zero width.
+double SliceElongation(const BoundingSlice& slice);
+
+// The share of `slice`'s area (in polar coordinates) that `other` covers: the
+// product of the shared fractions of its radial and angular extents, in [0, 1].
+double SliceCoverage(const BoundingSlice& slice, const BoundingSlice& other);
+
 }  // namespace oslam

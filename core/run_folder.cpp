@@ -23,9 +23,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::vector<std::string> kClassKeys = {"name",          "display_rgb",   "diameter_mean_m",
+const std::vector<std::string> kClassKeys = {"name",           "display_rgb",   "diameter_mean_m",
                                              "diameter_std_m", "height_mean_m", "height_std_m",
-                                             "colour"};
+                                             "colour",         "image_shape"};
 
 ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std::string& prefix) {
   if (!node.isMap()) file.Fail(prefix, "each class must be a mapping");
@@ -62,6 +62,18 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
     if (!(box.k_sigma > 0)) file.Fail(colour_key + "k_sigma", "must be positive");
     object_class.colour = box;
   }
+  const cv::FileNode shape = node["image_shape"];
+  if (!shape.empty() && !shape.isNone()) {
+    const std::string shape_key = key + "image_shape.";
+    if (!shape.isMap()) file.Fail(key + "image_shape", "must be a mapping");
+    file.RequireOnlyKeys(shape, shape_key, {"elongation_mean", "elongation_std"});
+    ImageShapeModel model;
+    model.elongation_mean = file.Double(shape, "elongation_mean", shape_key);
+    model.elongation_std = file.Double(shape, "elongation_std", shape_key);
+    if (!(model.elongation_mean > 0)) file.Fail(shape_key + "elongation_mean", "must be positive");
+    if (!(model.elongation_std > 0)) file.Fail(shape_key + "elongation_std", "must be positive");
+    object_class.image_shape = model;
+  }
   return object_class;
 }
 
@@ -89,7 +101,8 @@ std::optional<ConfusionMatrix> ReadConfusion(const std::string& path) {
   const cv::FileNode node = file.root()["confusion"];
   if (node.empty() || node.isNone()) return std::nullopt;
   if (!node.isSeq() || node.size() != num_classes)
-    file.Fail("confusion", "must be a list of " + std::to_string(num_classes) + " rows, one per class");
+    file.Fail("confusion",
+              "must be a list of " + std::to_string(num_classes) + " rows, one per class");
   ConfusionMatrix matrix;
   for (size_t c = 0; c < num_classes; ++c) {
     const std::string key = "confusion[" + std::to_string(c) + "]";
@@ -106,7 +119,8 @@ std::optional<ConfusionMatrix> ReadConfusion(const std::string& path) {
       probabilities.push_back(p);
       total += p;
     }
-    if (std::abs(total - 1.0) > 1e-6) file.Fail(key, "must sum to 1, sums to " + std::to_string(total));
+    if (std::abs(total - 1.0) > 1e-6)
+      file.Fail(key, "must sum to 1, sums to " + std::to_string(total));
     matrix.push_back(std::move(probabilities));
   }
   return matrix;
@@ -117,7 +131,8 @@ void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& pa
   WriteAtomically(path, [&](const std::string& temp_path) {
     cv::FileStorage fs(temp_path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
     if (!fs.isOpened()) throw Error::InFile(path, "cannot open for writing");
-    fs << "classes" << "[";
+    fs << "classes"
+       << "[";
     for (const ObjectClass& c : classes) {
       fs << "{";
       fs << "name" << c.name;
@@ -125,17 +140,27 @@ void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& pa
       fs << "diameter_mean_m" << c.diameter_mean_m << "diameter_std_m" << c.diameter_std_m;
       fs << "height_mean_m" << c.height_mean_m << "height_std_m" << c.height_std_m;
       if (c.colour) {
-        fs << "colour" << "{";
-        fs << "yuv_mean" << std::vector<double>(c.colour->yuv_mean.begin(), c.colour->yuv_mean.end());
+        fs << "colour"
+           << "{";
+        fs << "yuv_mean"
+           << std::vector<double>(c.colour->yuv_mean.begin(), c.colour->yuv_mean.end());
         fs << "yuv_std" << std::vector<double>(c.colour->yuv_std.begin(), c.colour->yuv_std.end());
         fs << "k_sigma" << c.colour->k_sigma;
+        fs << "}";
+      }
+      if (c.image_shape) {
+        fs << "image_shape"
+           << "{";
+        fs << "elongation_mean" << c.image_shape->elongation_mean;
+        fs << "elongation_std" << c.image_shape->elongation_std;
         fs << "}";
       }
       fs << "}";
     }
     fs << "]";
     if (confusion) {
-      fs << "confusion" << "[";
+      fs << "confusion"
+         << "[";
       for (const std::vector<double>& row : *confusion) fs << row;
       fs << "]";
     }
@@ -268,9 +293,9 @@ FrameSource::FrameSource(const std::string& run_dir) {
     return;
   }
   for (const auto& entry : fs::directory_iterator(run_dir))
-    if (entry.is_regular_file() && entry.path().stem() == "video") video_path_ = entry.path().string();
-  if (video_path_.empty())
-    throw Error::InFile(run_dir, "no frames/ folder and no video.* file");
+    if (entry.is_regular_file() && entry.path().stem() == "video")
+      video_path_ = entry.path().string();
+  if (video_path_.empty()) throw Error::InFile(run_dir, "no frames/ folder and no video.* file");
   cv::VideoCapture capture(video_path_);
   if (!capture.isOpened()) throw Error::InFile(video_path_, "OpenCV cannot open this video");
   const double frames = capture.get(cv::CAP_PROP_FRAME_COUNT);
@@ -376,8 +401,9 @@ std::optional<GroundTruth> ReadGroundTruth(const std::string& run_dir) {
     const bool known = std::any_of(truth.objects.begin(), truth.objects.end(),
                                    [&](const auto& o) { return o.id == sighting.object_id; });
     if (!known)
-      throw Error::InFile((dir / "sightings.csv").string(),
-                          "object_id " + std::to_string(sighting.object_id) + " not in objects.csv");
+      throw Error::InFile(
+          (dir / "sightings.csv").string(),
+          "object_id " + std::to_string(sighting.object_id) + " not in objects.csv");
   }
   return truth;
 }

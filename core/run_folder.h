@@ -24,6 +24,16 @@ struct ColourBox {
   double k_sigma = 3.0;  // box half-width in standard deviations (thesis: 3)
 };
 
+// How a class's whole, unoccluded views look in the image, learnt from
+// examples: the elongation of its bounding slice (SliceElongation: radial
+// length over arc width, about 1 for a ball and 1.35 for a bucket a bit taller
+// than wide). Lets the detector tell apart look-alike colours of differently
+// shaped classes.
+struct ImageShapeModel {
+  double elongation_mean = 1.0;
+  double elongation_std = 0.1;
+};
+
 struct ObjectClass {
   std::string name;
   std::array<int, 3> display_rgb{128, 128, 128};
@@ -32,7 +42,8 @@ struct ObjectClass {
   double diameter_std_m = 0.0;
   double height_mean_m = 0.0;
   double height_std_m = 0.0;
-  std::optional<ColourBox> colour;  // detector settings, once trained
+  std::optional<ColourBox> colour;             // detector settings, once trained
+  std::optional<ImageShapeModel> image_shape;  // likewise; optional
 };
 
 // P(detected class a | true class c) as matrix[c][a], rows in the order of

@@ -1,5 +1,6 @@
 #include "detect/blob_detector.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -19,6 +20,10 @@ bool BlobDetectorOptions::Validate(std::string* why) const {
   }
   if (opening_radius_px < 0 || opening_radius_px > 10) {
     if (why) *why = "opening_radius_px must be in 0..10";
+    return false;
+  }
+  if (!(look_alike_coverage > 0 && look_alike_coverage <= 1)) {
+    if (why) *why = "look_alike_coverage must be in (0, 1]";
     return false;
   }
   return colour.Validate(why);
@@ -75,28 +80,72 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
       const cv::Rect box(
           stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
           stats.at<int>(label, cv::CC_STAT_WIDTH), stats.at<int>(label, cv::CC_STAT_HEIGHT));
-      detections.push_back(DescribeBlob(labels, label, box, roi.tl(), yuv, c, frame));
+      detections.push_back(DescribeBlob(labels, label, box, roi.tl(), yuv, class_bits, c, frame));
     }
   }
+  if (options_.separate_look_alikes) SeparateLookAlikes(&detections);
   return detections;
 }
 
+double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice) {
+  const double elongation = SliceElongation(slice);
+  const double arc_width_px = slice.s_phi_rad * (slice.u_r_px + 0.5 * slice.s_r_px);
+  const double quantisation =
+      elongation * std::sqrt(1.0 / std::max(1.0, slice.s_r_px * slice.s_r_px) +
+                             1.0 / std::max(1.0, arc_width_px * arc_width_px));
+  const double variance = model.elongation_std * model.elongation_std + quantisation * quantisation;
+  const double error = elongation - model.elongation_mean;
+  return error * error / variance;
+}
+
+void BlobDetector::SeparateLookAlikes(std::vector<Detection>* detections) const {
+  std::vector<double> misfit(detections->size(), 0.0);
+  for (size_t i = 0; i < detections->size(); ++i) {
+    const Detection& d = (*detections)[i];
+    const ObjectClass& object_class = classes_[d.class_index];
+    if (!object_class.image_shape) continue;
+    misfit[i] = -2.0 * std::log(std::max(d.score, 1e-300)) +
+                ShapeSquaredDistance(*object_class.image_shape, d.slice);
+  }
+  std::vector<Detection> kept;
+  kept.reserve(detections->size());
+  for (size_t i = 0; i < detections->size(); ++i) {
+    const Detection& d = (*detections)[i];
+    bool explained_better = false;
+    for (size_t j = 0; j < detections->size() && !explained_better; ++j) {
+      const Detection& other = (*detections)[j];
+      explained_better =
+          other.class_index != d.class_index && classes_[d.class_index].image_shape &&
+          classes_[other.class_index].image_shape &&
+          ((d.look_alike_classes >> other.class_index) & 1u) && misfit[j] < misfit[i] &&
+          SliceCoverage(d.slice, other.slice) >= options_.look_alike_coverage;
+    }
+    if (!explained_better) kept.push_back(d);
+  }
+  *detections = std::move(kept);
+}
+
 Detection BlobDetector::DescribeBlob(const cv::Mat& labels, int label, const cv::Rect& box,
-                                     const cv::Point& offset, const cv::Mat& yuv, int class_index,
-                                     long frame) const {
+                                     const cv::Point& offset, const cv::Mat& yuv,
+                                     const cv::Mat& class_bits, int class_index, long frame) const {
   std::vector<double> radii, angles;
   std::array<double, 3> sum{};
+  std::array<int, ColourClassifier::kMaxClasses> shared_pixels{};
+  const uint32_t own_bit = 1u << class_index;
   for (int y = box.y; y < box.y + box.height; ++y) {
     const int* row = labels.ptr<int>(y);
     const float* radius_row = radius_px_.ptr<float>(y + offset.y);
     const float* angle_row = angle_rad_.ptr<float>(y + offset.y);
     const cv::Vec3b* colour_row = yuv.ptr<cv::Vec3b>(y + offset.y);
+    const uint32_t* bits_row = class_bits.ptr<uint32_t>(y + offset.y);
     for (int x = box.x; x < box.x + box.width; ++x) {
       if (row[x] != label) continue;
       radii.push_back(radius_row[x + offset.x]);
       angles.push_back(angle_row[x + offset.x]);
       const cv::Vec3b& colour = colour_row[x + offset.x];
       for (int ch = 0; ch < 3; ++ch) sum[ch] += colour[ch];
+      for (uint32_t others = bits_row[x + offset.x] & ~own_bit; others != 0; others &= others - 1)
+        ++shared_pixels[__builtin_ctz(others)];
     }
   }
   Detection detection;
@@ -104,6 +153,8 @@ Detection BlobDetector::DescribeBlob(const cv::Mat& labels, int label, const cv:
   detection.class_index = class_index;
   detection.class_name = classes_[class_index].name;
   detection.area_px = static_cast<int>(radii.size());
+  for (int c = 0; c < ColourClassifier::kMaxClasses; ++c)
+    if (2 * shared_pixels[c] >= detection.area_px) detection.look_alike_classes |= 1u << c;
   detection.slice = SliceOfPolarPoints(radii, angles);
   // Pixels are unit squares, their centres sampled: widen by half a pixel on
   // every side so sizes are not biased low.

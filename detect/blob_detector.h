@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,9 @@ struct Detection {
   // distance in standard deviations under the detector's box shape
   // (ColourClassifier::SquaredDistance): 1 = the class's typical colour.
   double score = 0.0;
+  // Bit c set when class c's colour box also holds at least half of this
+  // blob's pixels: a look-alike colour (BlobDetectorOptions::separate_look_alikes).
+  uint32_t look_alike_classes = 0;
 };
 
 struct BlobDetectorOptions {
@@ -35,8 +39,19 @@ struct BlobDetectorOptions {
   int opening_radius_px = 1;       // morphological opening per class mask; 0 = off
   bool annulus_only = true;        // ignore the blind disc and everything beyond the mirror rim
   ColourClassifierOptions colour;  // box shape (thesis YUV box or brightness-scaled)
+  // Where the blobs of two classes are the same pixels (look-alike colours,
+  // e.g. an orange ball and an orange bucket), keep only the class whose colour
+  // and image shape (ObjectClass::image_shape) fit the blob better. Classes
+  // without an image shape model are always kept.
+  bool separate_look_alikes = true;
+  // ... when at least this share of a blob lies in the other class's blob's slice.
+  double look_alike_coverage = 0.5;
   bool Validate(std::string* why) const;
 };
+
+// (elongation − mean)² / variance of a slice under a class's image shape
+// model; the variance adds one pixel of quantisation on each extent.
+double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice);
 
 class BlobDetector {
  public:
@@ -53,8 +68,11 @@ class BlobDetector {
  private:
   // `labels` covers the image region starting at `offset`; `box` is in labels' coordinates.
   Detection DescribeBlob(const cv::Mat& labels, int label, const cv::Rect& box,
-                         const cv::Point& offset, const cv::Mat& yuv, int class_index,
-                         long frame) const;
+                         const cv::Point& offset, const cv::Mat& yuv, const cv::Mat& class_bits,
+                         int class_index, long frame) const;
+  // Drops each detection that a look-alike detection of another class covers
+  // and explains better (lower colour plus shape distance).
+  void SeparateLookAlikes(std::vector<Detection>* detections) const;
 
   std::vector<ObjectClass> classes_;
   BlobDetectorOptions options_;

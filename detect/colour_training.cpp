@@ -1,6 +1,7 @@
 #include "detect/colour_training.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include <opencv2/imgcodecs.hpp>
@@ -8,6 +9,8 @@
 
 #include "calib/camera_io.h"
 #include "core/angles.h"
+#include "core/bounding_slice.h"
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/yaml.h"
 #include "detect/colour_classifier.h"
@@ -160,6 +163,50 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
     }
   }
   return examples;
+}
+
+std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classes,
+                                          const std::string& run_dir, int min_views) {
+  const std::optional<GroundTruth> truth = ReadGroundTruth(run_dir);
+  if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder to learn image shapes from");
+  const CsvTable views = CsvTable::Read(
+      (std::filesystem::path(run_dir) / "ground_truth" / "visible_slices.csv").string());
+  const int object_column = views.ColumnIndex("object_id"),
+            visible_column = views.ColumnIndex("visible_px"),
+            footprint_column = views.ColumnIndex("footprint_px"),
+            u_r_column = views.ColumnIndex("u_r_px"), u_phi_column = views.ColumnIndex("u_phi_rad"),
+            s_r_column = views.ColumnIndex("s_r_px"), s_phi_column = views.ColumnIndex("s_phi_rad");
+  std::vector<std::vector<double>> elongations(classes.size());
+  for (size_t row = 0; row < views.num_rows(); ++row) {
+    const long object_id = views.Integer(row, object_column);
+    const auto object = std::find_if(truth->objects.begin(), truth->objects.end(),
+                                     [&](const auto& o) { return o.id == object_id; });
+    if (object == truth->objects.end())
+      throw Error::AtLine(views.path(), views.line_of_row(row),
+                          "object " + std::to_string(object_id) + " is not in objects.csv");
+    const int class_index = FindClass(classes, object->class_name);
+    if (class_index < 0) continue;  // a distractor or a class not being trained
+    if (views.Double(row, visible_column) < 0.95 * views.Double(row, footprint_column)) continue;
+    const BoundingSlice slice{views.Double(row, u_r_column), views.Double(row, u_phi_column),
+                              views.Double(row, s_r_column), views.Double(row, s_phi_column)};
+    if (slice.s_r_px < 8 || slice.s_phi_rad * (slice.u_r_px + 0.5 * slice.s_r_px) < 8) continue;
+    elongations[class_index].push_back(SliceElongation(slice));
+  }
+  std::vector<ObjectClass> learnt = classes;
+  for (size_t c = 0; c < classes.size(); ++c) {
+    const std::vector<double>& values = elongations[c];
+    if (static_cast<int>(values.size()) < std::max(2, min_views)) continue;
+    double sum = 0, sum_squares = 0;
+    for (double e : values) sum += e;
+    const double mean = sum / values.size();
+    for (double e : values) sum_squares += (e - mean) * (e - mean);
+    ImageShapeModel model;
+    model.elongation_mean = mean;
+    // A floor: a rigid object's views vary at least this much with where it stands.
+    model.elongation_std = std::max(0.02, std::sqrt(sum_squares / (values.size() - 1)));
+    learnt[c].image_shape = model;
+  }
+  return learnt;
 }
 
 std::vector<ObjectClass> TrainColourModels(const std::vector<ObjectClass>& classes,

@@ -44,6 +44,15 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
                                                    const std::vector<ObjectClass>& classes,
                                                    int per_class = 8);
 
+// Returns `classes` with an image shape model (ObjectClass::image_shape) for
+// every class with at least `min_views` usable views in a simulated run's
+// ground_truth/visible_slices.csv (the pixel extent of each sighting, what an
+// ideal detector reports): at least 95 % visible, 8 px long and 8 px wide;
+// mean and standard deviation of their SliceElongation. Other classes keep
+// theirs. Throws oslam::Error naming the file when it is missing or malformed.
+std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classes,
+                                          const std::string& run_dir, int min_views = 5);
+
 // Returns `classes` with the colour box of every class that has examples
 // replaced by the learnt one (classes without examples keep theirs).
 std::vector<ObjectClass> TrainColourModels(const std::vector<ObjectClass>& classes,

@@ -40,5 +40,28 @@ TEST(BoundingSlice, OfPolarPointsFindsTheSmallestArc) {
   EXPECT_EQ(SliceOfPolarPoints({}, {}).s_phi_rad, 0.0);
 }
 
+TEST(BoundingSlice, ElongationIsRadialLengthOverMiddleArcWidth) {
+  EXPECT_DOUBLE_EQ(SliceElongation({100.0, 0.3, 20.0, 0.2}), 20.0 / (0.2 * 110.0));
+  EXPECT_DOUBLE_EQ(SliceElongation({100.0, 0.3, 20.0, 0.0}), 0.0);
+}
+
+TEST(BoundingSlice, CoverageIsTheSharedShareOfTheSlice) {
+  const BoundingSlice slice{100.0, 0.0, 20.0, 0.4};
+  EXPECT_DOUBLE_EQ(SliceCoverage(slice, slice), 1.0);
+  // Half the radial extent and half the arc: a quarter.
+  EXPECT_NEAR(SliceCoverage(slice, {110.0, 0.2, 40.0, 0.4}), 0.25, 1e-12);
+  // A larger slice covers a smaller one wholly, not the other way round.
+  EXPECT_DOUBLE_EQ(SliceCoverage({105.0, 0.0, 5.0, 0.1}, slice), 1.0);
+  EXPECT_NEAR(SliceCoverage(slice, {105.0, 0.0, 5.0, 0.1}), 0.25 * 0.25, 1e-12);
+  EXPECT_DOUBLE_EQ(SliceCoverage(slice, {130.0, 0.0, 5.0, 0.4}), 0.0);
+  EXPECT_DOUBLE_EQ(SliceCoverage(slice, {100.0, 1.0, 20.0, 0.4}), 0.0);
+  // Across the ±π seam.
+  EXPECT_NEAR(SliceCoverage({100.0, kPi - 0.1, 20.0, 0.4}, {100.0, -kPi + 0.1, 20.0, 0.4}), 0.5,
+              1e-12);
+  // Two wide arcs meeting on both sides of the circle.
+  EXPECT_NEAR(SliceCoverage({100.0, 0.0, 20.0, 4.0}, {100.0, kPi, 20.0, 4.0}),
+              2.0 * (4.0 - kPi) / 4.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace oslam

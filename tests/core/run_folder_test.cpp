@@ -43,6 +43,7 @@ TEST(Classes, WriteThenReadRoundTrips) {
   ObjectClass ball = GreenBox();
   ball.name = "pink ball";
   ball.colour = ColourBox{{150, 120, 170}, {8, 3, 4}, 3.0};
+  ball.image_shape = ImageShapeModel{1.02, 0.04};
   WriteClasses({GreenBox(), ball}, dir.Path("classes.yaml"));
   const std::vector<ObjectClass> read = ReadClasses(dir.Path("classes.yaml"));
   ASSERT_EQ(read.size(), 2u);
@@ -52,6 +53,10 @@ TEST(Classes, WriteThenReadRoundTrips) {
   EXPECT_FALSE(read[0].colour.has_value());
   ASSERT_TRUE(read[1].colour.has_value());
   EXPECT_DOUBLE_EQ(read[1].colour->yuv_mean[2], 170);
+  EXPECT_FALSE(read[0].image_shape.has_value());
+  ASSERT_TRUE(read[1].image_shape.has_value());
+  EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_mean, 1.02);
+  EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_std, 0.04);
   EXPECT_EQ(FindClass(read, "pink ball"), 1);
   EXPECT_EQ(FindClass(read, "unicorn"), -1);
 }
@@ -69,10 +74,10 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
   std::ofstream(path) << good;
   EXPECT_EQ(ReadClasses(path).at(0).name, "door");
   EXPECT_EQ(error_for(good + "    size: 3\n"),
-            path + ": classes[0].size: unknown key (allowed: name, display_rgb, diameter_mean_m, "
-                   "diameter_std_m, height_mean_m, height_std_m, colour)");
-  EXPECT_EQ(error_for(good + good.substr(9)),
-            path + ": classes[1].name: duplicate class 'door'");
+            path +
+                ": classes[0].size: unknown key (allowed: name, display_rgb, diameter_mean_m, "
+                "diameter_std_m, height_mean_m, height_std_m, colour, image_shape)");
+  EXPECT_EQ(error_for(good + good.substr(9)), path + ": classes[1].name: duplicate class 'door'");
   EXPECT_TRUE(Contains(error_for("classes: []\n"), "no classes listed"));
   std::string negative = good;
   negative.replace(negative.find("0.5"), 3, "-0.5");
@@ -80,6 +85,10 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
   std::string no_colour = good;
   no_colour.replace(no_colour.find("[255, 128, 0]"), 13, "[255, 128]");
   EXPECT_EQ(error_for(no_colour), path + ": classes[0].display_rgb: expected 3 numbers, found 2");
+  EXPECT_EQ(error_for(good + "    image_shape: {elongation_mean: 1.0, elongation_std: 0}\n"),
+            path + ": classes[0].image_shape.elongation_std: must be positive");
+  EXPECT_TRUE(Contains(error_for(good + "    image_shape: {elongation_mean: 1.0}\n"),
+                       "classes[0].image_shape.elongation_std"));
 }
 
 TEST(Odometry, PosesAndIncrementsGiveTheSamePoses) {
@@ -126,7 +135,8 @@ TEST(Odometry, BadFilesAreReportedWithTheLine) {
             path + ": has 2 rows but the run has 3 frames");
   EXPECT_EQ(error_for(header), path + ": no odometry rows");
   EXPECT_TRUE(Contains(error_for("frame,a,b\n0,1,2\n"), "needs columns x_m,y_m,theta_rad"));
-  EXPECT_EQ(error_for(header + "0,0,0\n"), path + ":2: expected 4 fields as in the header, found 3");
+  EXPECT_EQ(error_for(header + "0,0,0\n"),
+            path + ":2: expected 4 fields as in the header, found 3");
 }
 
 TEST(Frames, ImagesAreSortedByNameAndBadImagesNamed) {

@@ -243,5 +243,92 @@ TEST(Detections, CsvRoundTripAndUnknownClass) {
   EXPECT_THROW(ReadDetections(dir.Path("detections.csv"), fewer), Error);
 }
 
+// Two classes of one colour (an orange ball and an orange bucket): both colour
+// boxes hold both blobs. Their image shapes differ: the ball's slice is as long
+// as it is wide, the bucket's 1.4 times longer.
+struct LookAlikeScene {
+  HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  const cv::Vec3b orange{30, 130, 250};
+  std::vector<ObjectClass> classes = {ClassWithColour("orange ball", orange, 4),
+                                      ClassWithColour("orange bucket", orange, 4),
+                                      ClassWithColour("blue ball", kBlue, 4)};
+  // Elongation s_r / (s_phi · (u_r + s_r / 2)): 1.0 and 1.4.
+  const BoundingSlice ball{120.0, 1.0, 20.0, 20.0 / 130.0};
+  const BoundingSlice bucket{120.0, -1.5, 28.0, 28.0 / (1.4 * 134.0)};
+  // Blue, touching the ball's slice from outside: not a look-alike of it.
+  const BoundingSlice blue{140.0, 1.0, 20.0, 20.0 / 150.0};
+  LookAlikeScene() {
+    classes[0].image_shape = ImageShapeModel{1.0, 0.05};
+    classes[1].image_shape = ImageShapeModel{1.4, 0.05};
+    classes[2].image_shape = ImageShapeModel{3.0, 0.05};  // fits nothing here
+  }
+  cv::Mat Render() const {
+    cv::Mat image(camera.image_height(), camera.image_width(), CV_8UC3, cv::Scalar(128, 128, 128));
+    PaintSlice(&image, camera, ball, orange);
+    PaintSlice(&image, camera, bucket, orange);
+    PaintSlice(&image, camera, blue, kBlue);
+    return image;
+  }
+};
+
+std::vector<std::string> ClassesOn(const std::vector<Detection>& detections,
+                                   const BoundingSlice& slice) {
+  std::vector<std::string> names;
+  for (const Detection& d : detections)
+    if (SliceCoverage(d.slice, slice) > 0.5) names.push_back(d.class_name);
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(BlobDetector, OfLookAlikeClassesOnTheSamePixelsKeepsTheBetterShapedOne) {
+  const LookAlikeScene scene;
+  const cv::Mat image = scene.Render();
+  using Names = std::vector<std::string>;
+
+  const std::vector<Detection> separated =
+      BlobDetector(scene.camera, scene.classes).Detect(image, 0);
+  EXPECT_EQ(ClassesOn(separated, scene.ball), Names{"orange ball"});
+  EXPECT_EQ(ClassesOn(separated, scene.bucket), Names{"orange bucket"});
+  // The blue blob overlaps the ball's slice but shares no pixels with it: kept, although
+  // its shape fits badly.
+  EXPECT_EQ(ClassesOn(separated, scene.blue), Names{"blue ball"});
+  for (const Detection& d : separated) {
+    if (d.class_name == "blue ball")
+      EXPECT_EQ(d.look_alike_classes, 0u);
+    else
+      EXPECT_EQ(d.look_alike_classes, d.class_index == 0 ? 2u : 1u) << d.class_name;
+  }
+
+  BlobDetectorOptions keep;
+  keep.separate_look_alikes = false;
+  const std::vector<Detection> kept =
+      BlobDetector(scene.camera, scene.classes, keep).Detect(image, 0);
+  EXPECT_EQ(ClassesOn(kept, scene.ball), (Names{"orange ball", "orange bucket"}));
+  EXPECT_EQ(ClassesOn(kept, scene.bucket), (Names{"orange ball", "orange bucket"}));
+
+  // Without an image shape model a class is never dropped.
+  std::vector<ObjectClass> no_shapes = scene.classes;
+  no_shapes[1].image_shape.reset();
+  const std::vector<Detection> unchecked = BlobDetector(scene.camera, no_shapes).Detect(image, 0);
+  EXPECT_EQ(ClassesOn(unchecked, scene.ball), (Names{"orange ball", "orange bucket"}));
+
+  keep.look_alike_coverage = 0.0;
+  EXPECT_THROW(BlobDetector(scene.camera, scene.classes, keep), Error);
+}
+
+TEST(BlobDetector, ShapeDistanceGrowsWithTheElongationErrorAndShrinksWithBlobSize) {
+  const ImageShapeModel model{1.0, 0.05};
+  const BoundingSlice fitting{100.0, 0.0, 20.0, 20.0 / 110.0};
+  const BoundingSlice longer{100.0, 0.0, 26.0, 20.0 / 113.0};
+  EXPECT_NEAR(ShapeSquaredDistance(model, fitting), 0.0, 1e-12);
+  const double error = SliceElongation(longer) - 1.0;
+  EXPECT_GT(ShapeSquaredDistance(model, longer), 0.0);
+  EXPECT_LT(ShapeSquaredDistance(model, longer), error * error / (0.05 * 0.05));
+  // Twice as large, same shape: quantisation matters less, so the distance grows.
+  const BoundingSlice longer_and_larger{100.0, 0.0, 52.0, 40.0 / 126.0};
+  EXPECT_NEAR(SliceElongation(longer_and_larger), SliceElongation(longer), 0.02);
+  EXPECT_GT(ShapeSquaredDistance(model, longer_and_larger), ShapeSquaredDistance(model, longer));
+}
+
 }  // namespace
 }  // namespace oslam
