@@ -4,8 +4,10 @@
 # class confusion from the simulated ground truth, then `oslam run` (detect,
 # O-SLAM, export, evaluate).
 # The O-Map is written to runs/lab_out/map.glb (override the folders with
-# OSLAM_RUN_DIR and OSLAM_OUT_DIR). OSLAM_SCENE=long_loop (or house) does the
-# same for another scene of samples/scenes/.
+# OSLAM_RUN_DIR and OSLAM_OUT_DIR). OSLAM_SCENE=long_loop does the same for
+# that scene. (house's furniture is not a colour-detector scene: the thesis
+# hand-annotated Cogniron, and colour blobs there give thousands of spurious
+# detections.)
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 oslam_install_missing
