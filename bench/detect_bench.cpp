@@ -29,7 +29,8 @@ struct LabFrames {
     Simulate(LoadScene(std::string(OSLAM_SOURCE_DIR) + "/samples/scenes/lab.yaml"), run_dir, options);
     camera = LoadCamera(run_dir + "/camera.yaml");
     const std::vector<ObjectClass> untrained = ReadClasses(run_dir + "/classes.yaml");
-    classes = TrainColourModels(untrained, ExamplesFromGroundTruth(run_dir, untrained), 3.0);
+    classes = LearnImageShapes(
+        TrainColourModels(untrained, ExamplesFromGroundTruth(run_dir, untrained), 3.0), run_dir);
     const FrameSource source(run_dir);
     for (size_t i = 0; i < source.size(); ++i) frames.push_back(source.Read(i));
     std::filesystem::remove_all(run_dir);
@@ -41,10 +42,12 @@ const LabFrames& Lab() {
   return lab;
 }
 
+// Args: opening radius; 1 = separate look-alike classes by image shape (the default).
 void BM_ColourBlobDetection640x480(benchmark::State& state) {
   const LabFrames& lab = Lab();
   BlobDetectorOptions options;
   options.opening_radius_px = static_cast<int>(state.range(0));
+  options.separate_look_alikes = state.range(1) != 0;
   const BlobDetector detector(*lab.camera, lab.classes, options);
   size_t i = 0, detections = 0;
   for (auto _ : state) {
@@ -55,7 +58,11 @@ void BM_ColourBlobDetection640x480(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());  // items = frames
   state.counters["detections_per_frame"] = double(detections) / state.iterations();
 }
-BENCHMARK(BM_ColourBlobDetection640x480)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ColourBlobDetection640x480)
+    ->Args({0, 1})
+    ->Args({1, 1})
+    ->Args({0, 0})
+    ->Unit(benchmark::kMicrosecond);
 
 // Colour detection plus SIFT verification of every detection, on the SIFT
 // test scene (a textured box and a same-coloured plain box; four templates).
