@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 #include "core/error.h"
@@ -123,6 +124,11 @@ double Arguments::GetDouble(const std::string& name) const {
   if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(value))
     throw UsageError("--" + name + ": '" + text + "' is not a finite number");
   return value;
+}
+
+double Arguments::GetDoubleOrInfinity(const std::string& name) const {
+  if (Get(name) == "inf") return std::numeric_limits<double>::infinity();
+  return GetDouble(name);
 }
 
 long Arguments::GetInt(const std::string& name) const {

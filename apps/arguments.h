@@ -32,6 +32,8 @@ class Arguments {
   std::string Get(const std::string& name) const;  // value, default, or ""
   bool Flag(const std::string& name) const;
   double GetDouble(const std::string& name) const;  // UsageError when not a number
+  // The same, but "inf" is allowed (limits and penalties that may be off).
+  double GetDoubleOrInfinity(const std::string& name) const;
   long GetInt(const std::string& name) const;
   std::vector<std::string> GetAll(const std::string& name) const;
 

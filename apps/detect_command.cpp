@@ -68,6 +68,10 @@ int RunDetectCommand(const std::vector<std::string>& args) {
                     "keep every class a blob's colour matches (the thesis); by default, where "
                     "two classes' blobs are the same pixels, only the one whose colour and "
                     "learnt image shape fit better is kept");
+  arguments.AddOption("max-shape-distance", "", "SIGMAS",
+                      "drop detections whose slice elongation is further than this from their "
+                      "class's image shape (inf = off)",
+                      "inf");
   arguments.AddOption("sift-templates", "", "FILE.yaml",
                       "keep a detection of a class with templates only if SIFT verifies it");
   arguments.AddFlag("skip-bad-frames", "warn about unreadable frames and go on");
@@ -87,6 +91,7 @@ int RunDetectCommand(const std::vector<std::string>& args) {
     throw UsageError("--colour-box must be 'yuv' or 'scaled'");
   options.colour.brightness_range = arguments.GetDouble("brightness-range");
   options.separate_look_alikes = !arguments.Flag("keep-look-alikes");
+  options.max_shape_distance = arguments.GetDoubleOrInfinity("max-shape-distance");
   std::string why;
   if (!options.Validate(&why)) throw UsageError(why);
   const bool quiet = arguments.Flag("quiet");

@@ -86,6 +86,9 @@ RunConfig::RunConfig() {
       {"detect", "keep_look_alikes", "0", "--keep-look-alikes", Kind::kFlag,
        "1: keep every class a blob's colour matches (thesis); 0: of look-alike classes on the "
        "same pixels keep the one whose colour and image shape fit better"},
+      {"detect", "max_shape_distance", "inf", "--max-shape-distance", Kind::kNumberOrInf,
+       "drop detections whose slice elongation is further than this many sigmas from their "
+       "class's image shape; inf = off"},
       {"detect", "sift_templates", "", "--sift-templates", Kind::kText,
        "templates.yaml for SIFT verification; empty = colour only"},
       {"detect", "threads", "2", "--threads", Kind::kInteger,
@@ -330,6 +333,9 @@ void RunConfig::Check() const {
     Fail("configuration: detect.colour_box must be 'yuv' or 'scaled'");
   detect.colour.brightness_range = std::stod(Get("detect", "brightness_range"));
   detect.separate_look_alikes = Get("detect", "keep_look_alikes") == "0";
+  detect.max_shape_distance = Get("detect", "max_shape_distance") == "inf"
+                                  ? std::numeric_limits<double>::infinity()
+                                  : std::stod(Get("detect", "max_shape_distance"));
   ExportOptions models;
   models.min_existence = std::stod(Get("export", "min_existence"));
   FigureOptions figures;

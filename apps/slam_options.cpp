@@ -23,12 +23,6 @@ std::string Triple(const MoveProbabilities& p) {
   return Number(p.merge) + "," + Number(p.split) + "," + Number(p.switch_class);
 }
 
-// Like Arguments::GetDouble, but "inf" is allowed (penalties that forbid).
-double GetDoubleOrInfinity(const Arguments& arguments, const std::string& name) {
-  if (arguments.Get(name) == "inf") return std::numeric_limits<double>::infinity();
-  return arguments.GetDouble(name);
-}
-
 MoveProbabilities GetMoves(const Arguments& arguments, const std::string& name) {
   const std::string text = arguments.Get(name);
   std::stringstream items(text);
@@ -202,7 +196,7 @@ SlamSettings SlamSettingsFrom(const Arguments& arguments) {
   FusionOptions& f = s.fusion;
   f.merge_identities = !arguments.Flag("no-identity-merge");
   f.identity_merge_distance_m = number("identity-distance");
-  f.identity_class_mismatch_penalty = GetDoubleOrInfinity(arguments, "identity-mismatch-penalty");
+  f.identity_class_mismatch_penalty = arguments.GetDoubleOrInfinity("identity-mismatch-penalty");
   f.identity_max_cooccurrence = number("identity-max-cooccurrence");
   f.spurious_model = !arguments.Flag("no-spurious-model");
   f.spurious_t0_m2 = number("spurious-t0");
@@ -239,9 +233,9 @@ SlamSettings SlamSettingsFrom(const Arguments& arguments) {
   sampler.delayed_acceptance = !arguments.Flag("no-delayed-acceptance");
   sampler.swap_every = integer("swap-every");
   sampler.speculation_depth = integer("speculation-depth");
-  sampler.hill_climb_screen_nats = GetDoubleOrInfinity(arguments, "hill-climb-screen");
+  sampler.hill_climb_screen_nats = arguments.GetDoubleOrInfinity("hill-climb-screen");
   MoveOptions& m = sampler.moves;
-  m.class_mismatch_penalty = GetDoubleOrInfinity(arguments, "mismatch-penalty");
+  m.class_mismatch_penalty = arguments.GetDoubleOrInfinity("mismatch-penalty");
   m.merge_distance_m = number("merge-distance");
   m.merge_sigma_m = number("merge-sigma");
   m.merge_count_smoothing = number("merge-count-smoothing");

@@ -22,6 +22,10 @@ bool BlobDetectorOptions::Validate(std::string* why) const {
     if (why) *why = "opening_radius_px must be in 0..10";
     return false;
   }
+  if (!(max_shape_distance > 0)) {
+    if (why) *why = "max_shape_distance must be positive (inf = off)";
+    return false;
+  }
   if (!(look_alike_coverage > 0 && look_alike_coverage <= 1)) {
     if (why) *why = "look_alike_coverage must be in (0, 1]";
     return false;
@@ -84,6 +88,16 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
     }
   }
   if (options_.separate_look_alikes) SeparateLookAlikes(&detections);
+  if (std::isfinite(options_.max_shape_distance)) {
+    const double max_squared = options_.max_shape_distance * options_.max_shape_distance;
+    detections.erase(std::remove_if(detections.begin(), detections.end(),
+                                    [&](const Detection& d) {
+                                      const auto& shape = classes_[d.class_index].image_shape;
+                                      return shape && ShapeSquaredDistance(*shape, d.slice) >
+                                                          max_squared;
+                                    }),
+                     detections.end());
+  }
   return detections;
 }
 

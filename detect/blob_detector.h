@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,10 @@ struct BlobDetectorOptions {
   bool separate_look_alikes = true;
   // ... when at least this share of a blob lies in the other class's blob's slice.
   double look_alike_coverage = 0.5;
+  // Drop a detection whose slice's elongation lies more than this many
+  // standard deviations (ShapeSquaredDistance) from its class's image shape
+  // model: a thin pole or a door is no ball. inf = off.
+  double max_shape_distance = std::numeric_limits<double>::infinity();
   bool Validate(std::string* why) const;
 };
 

@@ -316,6 +316,21 @@ TEST(BlobDetector, OfLookAlikeClassesOnTheSamePixelsKeepsTheBetterShapedOne) {
   EXPECT_THROW(BlobDetector(scene.camera, scene.classes, keep), Error);
 }
 
+TEST(BlobDetector, ShapeGateDropsOnlyDetectionsFarFromTheirClassShape) {
+  const LookAlikeScene scene;
+  BlobDetectorOptions gated;
+  gated.max_shape_distance = 5.0;
+  const std::vector<Detection> detections =
+      BlobDetector(scene.camera, scene.classes, gated).Detect(scene.Render(), 0);
+  using Names = std::vector<std::string>;
+  EXPECT_EQ(ClassesOn(detections, scene.ball), Names{"orange ball"});
+  EXPECT_EQ(ClassesOn(detections, scene.bucket), Names{"orange bucket"});
+  // The blue blob is as long as wide; its class's model says 3.0 ± 0.05.
+  EXPECT_EQ(ClassesOn(detections, scene.blue), Names{});
+  gated.max_shape_distance = -1.0;
+  EXPECT_THROW(BlobDetector(scene.camera, scene.classes, gated), Error);
+}
+
 TEST(BlobDetector, ShapeDistanceGrowsWithTheElongationErrorAndShrinksWithBlobSize) {
   const ImageShapeModel model{1.0, 0.05};
   const BoundingSlice fitting{100.0, 0.0, 20.0, 20.0 / 110.0};
