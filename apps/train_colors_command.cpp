@@ -1,6 +1,7 @@
 // oslam train-colors: learn the classes' YUV colour boxes from example regions
 // and store them, with the class-confusion matrix, in classes.yaml.
 #include <cstdio>
+#include <filesystem>
 
 #include "apps/arguments.h"
 #include "apps/commands.h"
@@ -40,8 +41,17 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
           ? ReadColourExamples(arguments.Get("examples"), classes)
           : ExamplesFromGroundTruth(arguments.Get("from-ground-truth"), classes);
   std::vector<ObjectClass> trained = TrainColourModels(classes, examples, k_sigma);
-  if (arguments.Has("from-ground-truth"))
-    trained = LearnImageShapes(trained, arguments.Get("from-ground-truth"));
+  if (arguments.Has("from-ground-truth")) {
+    const std::string run_dir = arguments.Get("from-ground-truth");
+    // Runs simulated before visible_slices.csv existed still train colours.
+    if (std::filesystem::exists(run_dir + "/ground_truth/visible_slices.csv"))
+      trained = LearnImageShapes(trained, run_dir);
+    else if (!arguments.Flag("quiet"))
+      std::fprintf(
+          stderr,
+          "warning: %s/ground_truth/visible_slices.csv is missing: no image shapes learnt\n",
+          run_dir.c_str());
+  }
   const ConfusionMatrix confusion = ColourConfusion(trained);
   const std::string output = arguments.Has("output") ? arguments.Get("output") : classes_path;
   WriteClasses(trained, output, confusion);
