@@ -2,6 +2,7 @@
 // same configuration, they are the mapping code's defaults, every O-SLAM
 // parameter has a key, an override reaches the options struct the sampler
 // gets, and bad values are one-line errors naming the file or the key.
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -202,6 +203,28 @@ TEST(RunConfig, AnOverrideReachesTheOptionsTheSamplerGets) {
     EXPECT_NO_THROW(config.Check()) << c.assignment;
     EXPECT_TRUE(c.applied(SettingsOf(config))) << c.assignment;
   }
+}
+
+TEST(RunConfig, LookAlikeAndShapeGateKeysReachTheDetectCommand) {
+  auto has = [](const std::vector<std::string>& options, const std::string& option) {
+    return std::find(options.begin(), options.end(), option) != options.end();
+  };
+  RunConfig defaults;
+  EXPECT_FALSE(has(defaults.OptionsFor("detect"), "--keep-look-alikes"));
+  EXPECT_EQ(defaults.Get("detect", "max_shape_distance"), "inf");
+  RunConfig config;
+  config.Override("detect.keep_look_alikes=1");
+  config.Override("detect.max_shape_distance=5");
+  config.Check();
+  const std::vector<std::string> options = config.OptionsFor("detect");
+  EXPECT_TRUE(has(options, "--keep-look-alikes"));
+  const auto gate = std::find(options.begin(), options.end(), "--max-shape-distance");
+  ASSERT_NE(gate, options.end());
+  ASSERT_NE(gate + 1, options.end());
+  EXPECT_EQ(*(gate + 1), "5");
+  RunConfig bad;
+  bad.Override("detect.max_shape_distance=-2");
+  EXPECT_THROW(bad.Check(), UsageError);
 }
 
 TEST(RunConfig, BadValuesAreOneLineErrorsNamingTheKeyOrFile) {
