@@ -72,7 +72,7 @@ TEST_F(LookAlikes, LearntImageShapesSeparateASameColouredBallAndBucket) {
   ASSERT_TRUE(classes[kBallId].image_shape && classes[kBucketId].image_shape);
   const ImageShapeModel& ball = *classes[kBallId].image_shape;
   const ImageShapeModel& bucket = *classes[kBucketId].image_shape;
-  // A sphere's slice is about as long as wide; the 0.3 × 0.4 m bucket's about 1.4 times.
+  // A sphere's slice is about as long as wide; the 0.30 × 0.35 m bucket's about 1.35 times.
   EXPECT_NEAR(ball.elongation_mean, 1.0, 0.1);
   EXPECT_GT(bucket.elongation_mean, 1.25);
   EXPECT_GT(bucket.elongation_mean - ball.elongation_mean,
