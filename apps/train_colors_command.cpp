@@ -1,10 +1,12 @@
 // oslam train-colors: learn the classes' YUV colour boxes from example regions
 // and store them, with the class-confusion matrix, in classes.yaml.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
 #include "apps/arguments.h"
 #include "apps/commands.h"
+#include "calib/camera_io.h"
 #include "core/error.h"
 #include "core/run_folder.h"
 #include "detect/colour_classifier.h"
@@ -41,6 +43,18 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
           ? ReadColourExamples(arguments.Get("examples"), classes)
           : ExamplesFromGroundTruth(arguments.Get("from-ground-truth"), classes);
   std::vector<ObjectClass> trained = TrainColourModels(classes, examples, k_sigma);
+  const bool has_outlines = std::any_of(examples.begin(), examples.end(),
+                                        [](const ColourExample& e) { return e.outline; });
+  if (arguments.Has("examples") && has_outlines) {
+    const std::string camera_path =
+        arguments.Has("camera")
+            ? arguments.Get("camera")
+            : (std::filesystem::path(classes_path).parent_path() / "camera.yaml").string();
+    if (!std::filesystem::exists(camera_path))
+      throw Error::InFile(camera_path,
+                          "not found: outline examples need the camera (give --camera)");
+    trained = LearnImageShapesFromExamples(trained, examples, *LoadCamera(camera_path));
+  }
   if (arguments.Has("from-ground-truth")) {
     const std::string run_dir = arguments.Get("from-ground-truth");
     // Runs simulated before visible_slices.csv existed still train colours.

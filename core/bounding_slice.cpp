@@ -42,6 +42,17 @@ BoundingSlice SliceOfPolarPoints(const std::vector<double>& radii_px,
   return SliceFromExtents(*r_min, *r_max, sorted[arc_begin], sorted[arc_end]);
 }
 
+BoundingSlice SliceOfPixelCentres(const std::vector<double>& radii_px,
+                                  const std::vector<double>& angles_rad) {
+  BoundingSlice slice = SliceOfPolarPoints(radii_px, angles_rad);
+  if (radii_px.empty()) return slice;
+  const double pad_angle_rad = 0.5 / std::max(1.0, slice.u_r_px);
+  slice.u_r_px -= 0.5;
+  slice.s_r_px += 1.0;
+  slice.s_phi_rad += 2.0 * pad_angle_rad;
+  return slice;
+}
+
 double SliceElongation(const BoundingSlice& slice) {
   const double arc_width_px = slice.s_phi_rad * (slice.u_r_px + 0.5 * slice.s_r_px);
   return arc_width_px > 0 ? slice.s_r_px / arc_width_px : 0.0;

@@ -25,6 +25,12 @@ BoundingSlice SliceFromExtents(double r_min_px, double r_max_px, double angle_be
 BoundingSlice SliceOfPolarPoints(const std::vector<double>& radii_px,
                                  const std::vector<double>& angles_rad);
 
+// The slice of a set of pixels given by their centres' polar coordinates:
+// SliceOfPolarPoints widened by half a pixel on every side, since pixels are
+// unit squares and only their centres are sampled (sizes not biased low).
+BoundingSlice SliceOfPixelCentres(const std::vector<double>& radii_px,
+                                  const std::vector<double>& angles_rad);
+
 // Radial length over arc width at the slice's middle radius: a shape measure
 // independent of the object's distance to first order (a sphere gives about 1).
 // 0 for a slice of zero width.

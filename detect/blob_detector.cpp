@@ -93,8 +93,8 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
     detections.erase(std::remove_if(detections.begin(), detections.end(),
                                     [&](const Detection& d) {
                                       const auto& shape = classes_[d.class_index].image_shape;
-                                      return shape && ShapeSquaredDistance(*shape, d.slice) >
-                                                          max_squared;
+                                      return shape &&
+                                             ShapeSquaredDistance(*shape, d.slice) > max_squared;
                                     }),
                      detections.end());
   }
@@ -169,13 +169,7 @@ Detection BlobDetector::DescribeBlob(const cv::Mat& labels, int label, const cv:
   detection.area_px = static_cast<int>(radii.size());
   for (int c = 0; c < ColourClassifier::kMaxClasses; ++c)
     if (2 * shared_pixels[c] >= detection.area_px) detection.look_alike_classes |= 1u << c;
-  detection.slice = SliceOfPolarPoints(radii, angles);
-  // Pixels are unit squares, their centres sampled: widen by half a pixel on
-  // every side so sizes are not biased low.
-  const double pad_angle = 0.5 / std::max(1.0, detection.slice.u_r_px);
-  detection.slice.u_r_px -= 0.5;
-  detection.slice.s_r_px += 1.0;
-  detection.slice.s_phi_rad += 2.0 * pad_angle;
+  detection.slice = SliceOfPixelCentres(radii, angles);
   for (int ch = 0; ch < 3; ++ch) detection.mean_yuv[ch] = sum[ch] / detection.area_px;
   detection.score = std::exp(
       -0.5 * classifier_.SquaredDistance(*classes_[class_index].colour, detection.mean_yuv));

@@ -30,7 +30,7 @@ std::vector<ColourExample> ReadColourExamples(const std::string& path,
     const std::string key = "examples[" + std::to_string(i) + "]";
     const cv::FileNode node = list[static_cast<int>(i)];
     if (!node.isMap()) file.Fail(key, "must be a mapping");
-    file.RequireOnlyKeys(node, key + ".", {"image", "class", "roi", "mask"});
+    file.RequireOnlyKeys(node, key + ".", {"image", "class", "roi", "mask", "outline"});
     ColourExample example;
     example.image_path = (base / file.String(node, "image", key + ".")).string();
     example.class_name = file.String(node, "class", key + ".");
@@ -50,6 +50,13 @@ std::vector<ColourExample> ReadColourExamples(const std::string& path,
       example.mask_path = (base / file.String(node, "mask", key + ".")).string();
       if (!fs::is_regular_file(example.mask_path))
         file.Fail(key + ".mask", "file not found: " + example.mask_path);
+    }
+    if (!node["outline"].empty()) {
+      const int outline = file.Int(node, "outline", key + ".");
+      if (outline != 0 && outline != 1) file.Fail(key + ".outline", "must be 0 or 1");
+      if (outline == 1 && has_roi)
+        file.Fail(key + ".outline", "needs a mask (an ROI is no object outline)");
+      example.outline = outline == 1;
     }
     examples.push_back(example);
   }
@@ -108,6 +115,27 @@ cv::Mat CentralSliceMask(const CameraModel& camera, const GroundTruthSighting& s
         mask.at<uint8_t>(y, x) = 255;
     }
   return mask;
+}
+
+// `classes` with an image shape model (mean, standard deviation floored at
+// `min_std`) for every class with at least `min_views` elongations.
+std::vector<ObjectClass> WithShapeModels(const std::vector<ObjectClass>& classes,
+                                         const std::vector<std::vector<double>>& elongations,
+                                         int min_views, double min_std) {
+  std::vector<ObjectClass> learnt = classes;
+  for (size_t c = 0; c < classes.size(); ++c) {
+    const std::vector<double>& values = elongations[c];
+    if (static_cast<int>(values.size()) < std::max(2, min_views)) continue;
+    double sum = 0, sum_squares = 0;
+    for (double e : values) sum += e;
+    const double mean = sum / values.size();
+    for (double e : values) sum_squares += (e - mean) * (e - mean);
+    ImageShapeModel model;
+    model.elongation_mean = mean;
+    model.elongation_std = std::max(min_std, std::sqrt(sum_squares / (values.size() - 1)));
+    learnt[c].image_shape = model;
+  }
+  return learnt;
 }
 
 }  // namespace
@@ -192,21 +220,38 @@ std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classe
     if (slice.s_r_px < 8 || slice.s_phi_rad * (slice.u_r_px + 0.5 * slice.s_r_px) < 8) continue;
     elongations[class_index].push_back(SliceElongation(slice));
   }
-  std::vector<ObjectClass> learnt = classes;
-  for (size_t c = 0; c < classes.size(); ++c) {
-    const std::vector<double>& values = elongations[c];
-    if (static_cast<int>(values.size()) < std::max(2, min_views)) continue;
-    double sum = 0, sum_squares = 0;
-    for (double e : values) sum += e;
-    const double mean = sum / values.size();
-    for (double e : values) sum_squares += (e - mean) * (e - mean);
-    ImageShapeModel model;
-    model.elongation_mean = mean;
-    // A floor: a rigid object's views vary at least this much with where it stands.
-    model.elongation_std = std::max(0.02, std::sqrt(sum_squares / (values.size() - 1)));
-    learnt[c].image_shape = model;
+  // A floor: a rigid object's views vary at least this much with where it stands.
+  return WithShapeModels(classes, elongations, min_views, 0.02);
+}
+
+std::vector<ObjectClass> LearnImageShapesFromExamples(const std::vector<ObjectClass>& classes,
+                                                      const std::vector<ColourExample>& examples,
+                                                      const CameraModel& camera, int min_views) {
+  std::vector<std::vector<double>> elongations(classes.size());
+  for (const ColourExample& example : examples) {
+    if (!example.outline) continue;
+    const int class_index = FindClass(classes, example.class_name);
+    if (class_index < 0) continue;
+    cv::Mat mask = example.mask;
+    if (mask.empty()) {
+      mask = cv::imread(example.mask_path, cv::IMREAD_GRAYSCALE);
+      if (mask.empty()) throw Error::InFile(example.mask_path, "cannot read mask image");
+    }
+    if (mask.cols != camera.image_width() || mask.rows != camera.image_height())
+      throw Error::InFile(example.mask_path.empty() ? example.image_path : example.mask_path,
+                          "outline mask size differs from the camera's image size");
+    std::vector<double> radii, angles;
+    for (int y = 0; y < mask.rows; ++y)
+      for (int x = 0; x < mask.cols; ++x) {
+        if (mask.at<uint8_t>(y, x) == 0) continue;
+        const PolarPoint polar = camera.PixelToPolar(Eigen::Vector2d(x, y));
+        radii.push_back(polar.radius_px);
+        angles.push_back(polar.angle_rad);
+      }
+    if (radii.empty()) continue;
+    elongations[class_index].push_back(SliceElongation(SliceOfPixelCentres(radii, angles)));
   }
-  return learnt;
+  return WithShapeModels(classes, elongations, min_views, 0.05);
 }
 
 std::vector<ObjectClass> TrainColourModels(const std::vector<ObjectClass>& classes,

@@ -7,6 +7,9 @@
 //       class: green box
 //       roi: [x, y, width, height]  # pixels; or
 //       mask: masks/000012_green.png  # non-zero pixels are examples
+//       outline: 1                    # optional, with mask: the mask is the
+//                                     # object's whole unoccluded silhouette
+//                                     # (teaches its image shape too)
 #pragma once
 
 #include <string>
@@ -24,7 +27,8 @@ struct ColourExample {
   std::string class_name;
   cv::Rect roi;  // used when mask_path is empty
   std::string mask_path;
-  cv::Mat mask;  // in-memory mask (8-bit, non-zero = example); overrides roi and mask_path
+  cv::Mat mask;          // in-memory mask (8-bit, non-zero = example); overrides roi and mask_path
+  bool outline = false;  // the mask covers the whole, unoccluded object (image shape example)
 };
 
 // Throws oslam::Error naming the file and key (unknown class, missing image, ROI
@@ -52,6 +56,16 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
 // theirs. Throws oslam::Error naming the file when it is missing or malformed.
 std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classes,
                                           const std::string& run_dir, int min_views = 5);
+
+// Returns `classes` with an image shape model for every class with at least
+// `min_views` outline examples (ColourExample::outline): mean and standard
+// deviation (floored at 0.05, as a few views say little about the spread) of
+// the SliceElongation of each outline's pixels, as the detector measures a
+// blob. Other classes keep theirs. Throws oslam::Error naming an unreadable
+// mask or one of the wrong size for `camera`.
+std::vector<ObjectClass> LearnImageShapesFromExamples(const std::vector<ObjectClass>& classes,
+                                                      const std::vector<ColourExample>& examples,
+                                                      const CameraModel& camera, int min_views = 3);
 
 // Returns `classes` with the colour box of every class that has examples
 // replaced by the learnt one (classes without examples keep theirs).
