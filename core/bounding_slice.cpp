@@ -53,8 +53,12 @@ BoundingSlice SliceOfPixelCentres(const std::vector<double>& radii_px,
   return slice;
 }
 
+double SliceArcWidth(const BoundingSlice& slice) {
+  return slice.s_phi_rad * (slice.u_r_px + 0.5 * slice.s_r_px);
+}
+
 double SliceElongation(const BoundingSlice& slice) {
-  const double arc_width_px = slice.s_phi_rad * (slice.u_r_px + 0.5 * slice.s_r_px);
+  const double arc_width_px = SliceArcWidth(slice);
   return arc_width_px > 0 ? slice.s_r_px / arc_width_px : 0.0;
 }
 

@@ -31,6 +31,9 @@ BoundingSlice SliceOfPolarPoints(const std::vector<double>& radii_px,
 BoundingSlice SliceOfPixelCentres(const std::vector<double>& radii_px,
                                   const std::vector<double>& angles_rad);
 
+// Arc width in pixels at the slice's middle radius.
+double SliceArcWidth(const BoundingSlice& slice);
+
 // Radial length over arc width at the slice's middle radius: a shape measure
 // independent of the object's distance to first order (a sphere gives about 1).
 // 0 for a slice of zero width.

@@ -103,7 +103,7 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
 
 double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice) {
   const double elongation = SliceElongation(slice);
-  const double arc_width_px = slice.s_phi_rad * (slice.u_r_px + 0.5 * slice.s_r_px);
+  const double arc_width_px = SliceArcWidth(slice);
   const double quantisation =
       elongation * std::sqrt(1.0 / std::max(1.0, slice.s_r_px * slice.s_r_px) +
                              1.0 / std::max(1.0, arc_width_px * arc_width_px));

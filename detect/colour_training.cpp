@@ -217,7 +217,7 @@ std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classe
     if (views.Double(row, visible_column) < 0.95 * views.Double(row, footprint_column)) continue;
     const BoundingSlice slice{views.Double(row, u_r_column), views.Double(row, u_phi_column),
                               views.Double(row, s_r_column), views.Double(row, s_phi_column)};
-    if (slice.s_r_px < 8 || slice.s_phi_rad * (slice.u_r_px + 0.5 * slice.s_r_px) < 8) continue;
+    if (slice.s_r_px < 8 || SliceArcWidth(slice) < 8) continue;
     elongations[class_index].push_back(SliceElongation(slice));
   }
   // A floor: a rigid object's views vary at least this much with where it stands.
