@@ -446,4 +446,17 @@ std::vector<int> ReadAssociation(const std::string& path, size_t num_sightings) 
   return association;
 }
 
+std::optional<double> MeanMeasuredDiameter(const std::vector<LandmarkSighting>& sightings,
+                                           const std::vector<int>& indices) {
+  double sum = 0;
+  int count = 0;
+  for (int k : indices)
+    if (std::isfinite(sightings[k].diameter_m)) {
+      sum += sightings[k].diameter_m;
+      ++count;
+    }
+  if (count == 0) return std::nullopt;
+  return sum / count;
+}
+
 }  // namespace oslam

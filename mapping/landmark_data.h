@@ -19,6 +19,7 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,11 @@ struct LandmarkDataset {
   Eigen::Vector2d sensor_offset_m = Eigen::Vector2d::Zero();  // (forward, left) in the robot frame
   bool has_landmark_ids = false;
 };
+
+// Mean diameter of the sightings `indices` that measured one; nullopt when
+// none did.
+std::optional<double> MeanMeasuredDiameter(const std::vector<LandmarkSighting>& sightings,
+                                           const std::vector<int>& indices);
 
 // GTSAM text format. Pose ids may have gaps; they become indices 0, 1, ... in
 // the order the odometry reaches them (the first ODOMETRY line's i is pose 0).

@@ -124,17 +124,10 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
                                 : LandmarkFromRangeBearing(initial[first.pose], first.range_m,
                                                            first.bearing_rad, data.sensor_offset_m);
     LandmarkKeys keys{id, graph.AddVariable(start), -1, static_cast<int>(list.size())};
-    double diameter_sum = 0;
-    int diameters = 0;
-    for (int k : list)
-      if (std::isfinite(data.sightings[k].diameter_m)) {
-        diameter_sum += data.sightings[k].diameter_m;
-        ++diameters;
-      }
-    if (diameters > 0) {
+    if (const std::optional<double> measured = MeanMeasuredDiameter(data.sightings, list)) {
       const double d = found != previous.end() && std::isfinite(found->second->diameter_m)
                            ? found->second->diameter_m
-                           : diameter_sum / diameters;
+                           : *measured;
       keys.diameter = graph.AddVariable(Eigen::Matrix<double, 1, 1>(d));
     }
     landmarks.push_back(keys);

@@ -687,15 +687,9 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& input,
   if (options.diameter_per_track) {
     per_track = input;
     for (const auto& track : result.tracks) {
-      double sum = 0;
-      int count = 0;
-      for (int k : track)
-        if (std::isfinite(input.sightings[k].diameter_m)) {
-          sum += input.sightings[k].diameter_m;
-          ++count;
-        }
+      const std::optional<double> diameter = MeanMeasuredDiameter(input.sightings, track);
       for (int k : track) per_track.sightings[k].diameter_m = std::nan("");
-      if (count > 0) per_track.sightings[track.front()].diameter_m = sum / count;
+      if (diameter) per_track.sightings[track.front()].diameter_m = *diameter;
     }
   }
   const LandmarkDataset& data = options.diameter_per_track ? per_track : input;
