@@ -14,6 +14,11 @@ OSLAM_PACKAGES=(
   libeigen3-dev libopencv-dev libsuitesparse-dev
   libtinygltf-dev libstb-dev nlohmann-json3-dev libpcl-dev libvtk9-dev
   libgtest-dev libbenchmark-dev
+  # CHOLMOD's supernodal kernels run on the system BLAS. Debian otherwise
+  # picks ATLAS's generic build, which takes 2.7x as long per LPA-scale
+  # factorisation; the serial OpenBLAS because O-SLAM's chains already use
+  # every core (docs/benchmarks.md, "BLAS").
+  libopenblas0-serial
 )
 
 oslam_log() { printf '[oslam] %s\n' "$*" >&2; }
