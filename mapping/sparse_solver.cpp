@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numeric>
 
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 
@@ -62,9 +63,7 @@ double LogDetOfFactor(const cholmod_factor* factor) {
 // environment) and restored on exit, so nothing outside the solver changes.
 class SerialOpenMpScope {
  public:
-  SerialOpenMpScope() : saved_levels_(omp_get_max_active_levels()) {
-    omp_set_max_active_levels(0);
-  }
+  SerialOpenMpScope() : saved_levels_(omp_get_max_active_levels()) { omp_set_max_active_levels(0); }
   ~SerialOpenMpScope() { omp_set_max_active_levels(saved_levels_); }
   SerialOpenMpScope(const SerialOpenMpScope&) = delete;
   SerialOpenMpScope& operator=(const SerialOpenMpScope&) = delete;
@@ -112,12 +111,17 @@ bool SolverOptions::Validate(std::string* why) const {
 struct SparseSolver::Impl {
   // One (variable a, variable b) block of J^T J that a factor contributes to,
   // with a <= b in column order.
+  // 20 bytes, not 32: SetUp writes one per block of every factor, Assemble
+  // reads them all back, per proposal.
   struct BlockPair {
-    int a_column, a_dim, a_offset;  // column in the factor's Jacobian, size, offset in delta
-    int b_column, b_dim, b_offset;
-    int row_prefix;  // position of a's first row inside each column of b
+    int a_offset, b_offset;            // offsets in delta
+    int row_prefix;                    // position of a's first row inside each column of b
+    std::uint16_t a_column, b_column;  // columns in the factor's Jacobian
+    std::uint8_t a_dim, b_dim;         // variable sizes
     bool diagonal;
   };
+  // What BlockPair can hold (SetUp refuses larger factors or variables).
+  static constexpr int kMaxFactorColumns = 65535, kMaxVariableDim = 255;
 
   cholmod_common cc;
   cholmod_common cc_long;  // SPQR works with SuiteSparse_long indices
@@ -134,11 +138,11 @@ struct SparseSolver::Impl {
   // spares the transpose-and-permute copy that every cholmod_factorize of
   // an unpermuted matrix makes.
   cholmod_sparse* permuted = nullptr;
-  std::vector<int> permuted_entry;  // hessian entry -> permuted entry
+  std::vector<int> permuted_entry;       // hessian entry -> permuted entry
   std::vector<int> inverse_permutation;  // scalar column -> permuted position
   cholmod_factor* factor = nullptr;
   std::vector<int> diagonal_position;  // in hessian
-  bool factor_is_final = false;  // holds the undamped factor at the final point
+  bool factor_is_final = false;        // holds the undamped factor at the final point
 
   // ---- per solve ----
   std::vector<int> free_index;  // per key: free variable index or -1
@@ -157,8 +161,8 @@ struct SparseSolver::Impl {
   };
   Evaluation current, trial;
   Evaluation stretched;  // a line search's candidate (SolverOptions::max_step_extrapolation)
-  Eigen::MatrixXd local_hessian;  // scratch: J_f^T J_f
-  Eigen::VectorXd local_gradient;  // scratch: J_f^T e_f
+  Eigen::MatrixXd local_hessian;    // scratch: J_f^T J_f
+  Eigen::VectorXd local_gradient;   // scratch: J_f^T e_f
   std::vector<int> factor_columns;  // per factor: its Jacobian's column count
   OrderingType requested_ordering = OrderingType::kAutomatic;
   bool independent_of_history = false;  // SolverOptions::independent_of_history
@@ -168,9 +172,9 @@ struct SparseSolver::Impl {
   // and the winner (reused for similar problems, see Analyze).
   int compared_num_blocks = -1;
   OrderingType compared_choice = OrderingType::kAmd;
-  std::vector<int> factor_row;  // first row of each factor in J
+  std::vector<int> factor_row;                 // first row of each factor in J
   std::vector<std::vector<int>> scratch_rows;  // SetUp's block pattern, reused
-  std::vector<int> scratch_indices;  // SetUp: fill positions, then a factor's key columns
+  std::vector<int> scratch_indices;            // SetUp: fill positions, then a factor's key columns
   // SetUp: factors per free variable (start offsets, factor indices), and
   // the last column each variable was entered in.
   std::vector<int> scratch_variable_start, scratch_variable_factors, scratch_stamp;
@@ -234,6 +238,10 @@ struct SparseSolver::Impl {
       if (graph.IsFixed(key)) continue;
       free_index[key] = static_cast<int>(dims.size());
       dims.push_back(graph.values().Dim(key));
+      if (dims.back() > kMaxVariableDim) {
+        *why = "a variable has more than " + std::to_string(kMaxVariableDim) + " entries";
+        return false;
+      }
     }
     const int num_free = static_cast<int>(dims.size());
     if (num_free == 0) {
@@ -278,12 +286,15 @@ struct SparseSolver::Impl {
       for (int k = start[b]; k < start[b + 1]; ++k)
         for (int key : factors[of_variable[k]]->keys()) {
           const int a = free_index[key];
-          if (a >= 0 && a <= b && stamp[a] != b) {
+          if (a >= 0 && a < b && stamp[a] != b) {
             stamp[a] = b;
             column.push_back(a);
           }
         }
-      std::sort(column.begin(), column.end());
+      // Factors come in frame order, so an object's poses mostly arrive
+      // sorted already; the diagonal goes last.
+      if (!std::is_sorted(column.begin(), column.end())) std::sort(column.begin(), column.end());
+      column.push_back(b);
     }
 
     bool fits = allow_reuse && hessian && factor && dims == pattern_dims &&
@@ -317,7 +328,25 @@ struct SparseSolver::Impl {
     }
     factor_is_final = false;
 
-    // Where every factor's blocks go.
+    // Where every factor's blocks go. Consecutive factors of one variable
+    // mostly meet the next row of its column (an object's detections in
+    // frame order), so each column keeps a cursor at its last hit.
+    std::vector<int>& cursor = scratch_stamp;
+    cursor.assign(num_free, 0);
+    auto position_in_column = [&](int a, int b) {
+      const std::vector<int>& col_rows = pattern_rows[b];
+      const int size = static_cast<int>(col_rows.size());
+      // A column's rows are sorted and end with its own variable.
+      if (a == b) return size - 1;
+      int& at = cursor[b];
+      if (col_rows[at] == a) return at;
+      if (at + 1 < size && col_rows[at + 1] == a) return ++at;
+      // The row just above the diagonal (an object's base in its size column).
+      if (size >= 2 && col_rows[size - 2] == a) return size - 2;
+      at = static_cast<int>(std::lower_bound(col_rows.begin(), col_rows.end(), a) -
+                            col_rows.begin());
+      return at;
+    };
     pairs.clear();
     pair_begin.assign(factors.size() + 1, 0);
     current.Resize(factors.size());
@@ -334,9 +363,19 @@ struct SparseSolver::Impl {
         columns.push_back(total);
         total += graph.values().Dim(key);
       }
+      // Resized only when the shape changes: Eigen's resize checks for
+      // overflow with an integer division, a real cost at 2,000 factors per
+      // proposal.
+      const int rows = (f + 1 < factors.size() ? factor_row[f + 1] : m) - factor_row[f];
       for (Evaluation* evaluation : {&current, &trial}) {
-        evaluation->errors[f].resize(factors[f]->Dimension());
-        evaluation->jacobians[f].resize(factors[f]->Dimension(), total);
+        if (evaluation->errors[f].size() != rows) evaluation->errors[f].resize(rows);
+        Eigen::MatrixXd& jacobian = evaluation->jacobians[f];
+        if (jacobian.rows() != rows || jacobian.cols() != total) jacobian.resize(rows, total);
+      }
+      if (total > kMaxFactorColumns) {
+        *why = "a " + factors[f]->Name() + " factor has more than " +
+               std::to_string(kMaxFactorColumns) + " Jacobian columns";
+        return false;
       }
       factor_columns[f] = total;
       max_columns = std::max(max_columns, total);
@@ -344,13 +383,11 @@ struct SparseSolver::Impl {
         for (size_t j = 0; j < keys.size(); ++j) {
           int a = free_index[keys[i]], b = free_index[keys[j]];
           if (a < 0 || b < 0 || a > b || (a == b && i > j)) continue;
-          const auto& col_rows = pattern_rows[b];
-          // A column's rows are sorted and end with its own variable.
-          const size_t position =
-              a == b ? col_rows.size() - 1
-                     : std::lower_bound(col_rows.begin(), col_rows.end(), a) - col_rows.begin();
-          pairs.push_back({columns[i], pattern_dims[a], offsets[a], columns[j], pattern_dims[b],
-                           offsets[b], pattern_prefix[b][position], a == b});
+          pairs.push_back({offsets[a], offsets[b], pattern_prefix[b][position_in_column(a, b)],
+                           static_cast<std::uint16_t>(columns[i]),
+                           static_cast<std::uint16_t>(columns[j]),
+                           static_cast<std::uint8_t>(pattern_dims[a]),
+                           static_cast<std::uint8_t>(pattern_dims[b]), a == b});
         }
       }
     }
@@ -812,8 +849,8 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   // (a diagnostic for convergence work; off by default).
   const bool trace = std::getenv("OSLAM_SOLVER_TRACE") != nullptr;
   const auto t_first = Clock::now();
-  const bool first_ok = impl.Evaluate(*graph, values, true, &impl.current, &cost) &&
-                        impl.Assemble(impl.current);
+  const bool first_ok =
+      impl.Evaluate(*graph, values, true, &impl.current, &cost) && impl.Assemble(impl.current);
   summary.linearize_time_s += Seconds(t_first);
   if (!first_ok)
     return finish(TerminationType::kFailure,
