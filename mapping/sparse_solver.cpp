@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <numeric>
 
 #include <cstdint>
@@ -10,6 +11,7 @@
 #include <cstdlib>
 
 #include <cholmod.h>
+#include <dlfcn.h>
 #include <omp.h>
 #include <SuiteSparseQR.hpp>
 
@@ -71,6 +73,23 @@ class SerialOpenMpScope {
  private:
   int saved_levels_;
 };
+
+// CHOLMOD's dense kernels run on the system BLAS. A threaded BLAS splits
+// the larger supernodes over its own threads, so results would depend on
+// the machine's core count (summation order), and O-SLAM's chains already
+// occupy every core. OpenBLAS is therefore told, once per process, to run
+// on the calling thread; it is looked up by name, so any BLAS links. (Its
+// single-threaded build is not safe to call from two threads at once:
+// with it, long_loop's O-Map changed from run to run. The threaded build
+// limited to one thread is, and gives the same results as one chain thread.)
+void UseOneBlasThread() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    using SetNumThreads = void (*)(int);
+    if (auto set = reinterpret_cast<SetNumThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
+      set(1);
+  });
+}
 
 }  // namespace
 
@@ -184,6 +203,7 @@ struct SparseSolver::Impl {
   cholmod_dense *solution = nullptr, *work_y = nullptr, *work_e = nullptr;
 
   Impl() {
+    UseOneBlasThread();
     cholmod_start(&cc);
     // AMD only: METIS costs more than it saves at our sizes.
     cc.nmethods = 1;

@@ -16,9 +16,10 @@ OSLAM_PACKAGES=(
   libgtest-dev libbenchmark-dev
   # CHOLMOD's supernodal kernels run on the system BLAS. Debian otherwise
   # picks ATLAS's generic build, which takes 2.7x as long per LPA-scale
-  # factorisation; the serial OpenBLAS because O-SLAM's chains already use
-  # every core (docs/benchmarks.md, "BLAS").
-  libopenblas0-serial
+  # factorisation. The threaded OpenBLAS, which the solver limits to one
+  # thread: the single-threaded build is not safe to call from O-SLAM's
+  # parallel chains (docs/benchmarks.md, "BLAS").
+  libopenblas0-pthread
 )
 
 oslam_log() { printf '[oslam] %s\n' "$*" >&2; }
