@@ -63,10 +63,19 @@ double LogDetOfFactor(const cholmod_factor* factor) {
 // 2.5 M futex calls, a third of the run). Inside the solver, OpenMP regions
 // run on the calling thread; the setting is per thread (OpenMP 5 data
 // environment) and restored on exit, so nothing outside the solver changes.
+// The depth counter lets GOMP_parallel (below) skip libgomp altogether.
+thread_local int serial_openmp_depth = 0;
+
 class SerialOpenMpScope {
  public:
-  SerialOpenMpScope() : saved_levels_(omp_get_max_active_levels()) { omp_set_max_active_levels(0); }
-  ~SerialOpenMpScope() { omp_set_max_active_levels(saved_levels_); }
+  SerialOpenMpScope() : saved_levels_(omp_get_max_active_levels()) {
+    omp_set_max_active_levels(0);
+    ++serial_openmp_depth;
+  }
+  ~SerialOpenMpScope() {
+    --serial_openmp_depth;
+    omp_set_max_active_levels(saved_levels_);
+  }
   SerialOpenMpScope(const SerialOpenMpScope&) = delete;
   SerialOpenMpScope& operator=(const SerialOpenMpScope&) = delete;
 
@@ -92,6 +101,29 @@ void UseOneBlasThread() {
 }
 
 }  // namespace
+
+}  // namespace oslam
+
+// libgomp's entry point for `#pragma omp parallel`, interposed (the only
+// OpenMP entry point CHOLMOD uses; its loops are statically scheduled on
+// omp_get_num_threads / omp_get_thread_num). Even serialised, every region
+// of CHOLMOD's supernodal factorisation cost a futex system call in
+// libgomp's team hand-off: ~100 per LPA-scale factorisation, 163 k in 600
+// one-step proposals. Inside a SerialOpenMpScope and outside any OpenMP
+// region, the region's body runs directly on the calling thread, which is
+// what a team of one does (omp_get_num_threads() = 1, thread 0). Anything
+// else goes to libgomp.
+extern "C" void GOMP_parallel(void (*fn)(void*), void* data, unsigned num_threads, unsigned flags) {
+  using Real = void (*)(void (*)(void*), void*, unsigned, unsigned);
+  static const Real real = reinterpret_cast<Real>(dlvsym(RTLD_NEXT, "GOMP_parallel", "GOMP_4.0"));
+  if ((oslam::serial_openmp_depth > 0 && omp_get_level() == 0) || !real) {
+    fn(data);
+    return;
+  }
+  real(fn, data, num_threads, flags);
+}
+
+namespace oslam {
 
 const char* TerminationName(TerminationType type) {
   switch (type) {
