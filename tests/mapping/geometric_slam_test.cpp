@@ -358,6 +358,14 @@ TEST(GeometricSlamTest, SolvesOnTwoThreadsAtOnceEqualOneThreadBitForBit) {
       for (int k = 0; k < kSolves; ++k) results[t].push_back(slam.Solve(scene.problem));
     });
   for (auto& thread : threads) thread.join();
+  // From inside a user's OpenMP region too: there CHOLMOD's own regions must
+  // go through libgomp (a nested team of one), not run as members of the
+  // user's team (SparseSolver's GOMP_parallel interposition).
+  std::vector<GeometricSlamResult> from_openmp(kThreads);
+#pragma omp parallel for num_threads(kThreads)
+  for (int t = 0; t < kThreads; ++t)
+    from_openmp[t] = GeometricSlam(camera, options).Solve(scene.problem);
+  results.push_back(from_openmp);
   for (const auto& list : results)
     for (const GeometricSlamResult& result : list) {
       EXPECT_EQ(result.evidence.log_evidence, alone.evidence.log_evidence);
