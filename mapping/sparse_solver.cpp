@@ -418,16 +418,16 @@ struct SparseSolver::Impl {
       // Resized only when the shape changes: Eigen's resize checks for
       // overflow with an integer division, a real cost at 2,000 factors per
       // proposal.
+      if (total > kMaxFactorColumns) {
+        *why = "a " + factors[f]->Name() + " factor has more than " +
+               std::to_string(kMaxFactorColumns) + " Jacobian columns";
+        return false;
+      }
       const int rows = (f + 1 < factors.size() ? factor_row[f + 1] : m) - factor_row[f];
       for (Evaluation* evaluation : {&current, &trial}) {
         if (evaluation->errors[f].size() != rows) evaluation->errors[f].resize(rows);
         Eigen::MatrixXd& jacobian = evaluation->jacobians[f];
         if (jacobian.rows() != rows || jacobian.cols() != total) jacobian.resize(rows, total);
-      }
-      if (total > kMaxFactorColumns) {
-        *why = "a " + factors[f]->Name() + " factor has more than " +
-               std::to_string(kMaxFactorColumns) + " Jacobian columns";
-        return false;
       }
       factor_columns[f] = total;
       max_columns = std::max(max_columns, total);

@@ -15,8 +15,8 @@ OSLAM_PACKAGES=(
   libtinygltf-dev libstb-dev nlohmann-json3-dev libpcl-dev libvtk9-dev
   libgtest-dev libbenchmark-dev
   # CHOLMOD's supernodal kernels run on the system BLAS. Debian otherwise
-  # picks ATLAS's generic build, which takes 2.7x as long per LPA-scale
-  # factorisation. The threaded OpenBLAS, which the solver limits to one
+  # picks ATLAS's generic build, which takes about twice as long per
+  # LPA-scale factorisation. The threaded OpenBLAS, which the solver limits to one
   # thread: the single-threaded build is not safe to call from O-SLAM's
   # parallel chains (docs/benchmarks.md, "BLAS").
   libopenblas0-pthread

@@ -356,6 +356,15 @@ TEST(SolverTest, ReportsProblemsInTheSummaryInsteadOfThrowing) {
   const SolveResult invalid = bad_solver.Solve(&one);
   EXPECT_EQ(invalid.summary.termination, TerminationType::kFailure);
   EXPECT_NE(invalid.summary.message.find("initial_damping"), std::string::npos);
+
+  // The block bookkeeping holds variables of up to 255 entries.
+  FactorGraph wide;
+  const int big = wide.AddVariable(Eigen::VectorXd::Zero(256));
+  wide.Add(std::make_unique<PriorFactor>(big, Eigen::VectorXd::Ones(256),
+                                         Eigen::MatrixXd::Identity(256, 256)));
+  const SolveResult too_wide = solver.Solve(&wide);
+  EXPECT_EQ(too_wide.summary.termination, TerminationType::kFailure);
+  EXPECT_NE(too_wide.summary.message.find("more than 255 entries"), std::string::npos);
 }
 
 TEST(SolverTest, ReusesTheSymbolicAnalysisWhenThePatternFits) {
