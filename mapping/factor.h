@@ -16,7 +16,6 @@
 #include <array>
 #include <initializer_list>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include <Eigen/Core>

@@ -227,7 +227,8 @@ struct SparseSolver::Impl {
   std::vector<std::vector<int>> scratch_rows;  // SetUp's block pattern, reused
   std::vector<int> scratch_indices;            // SetUp: fill positions, then a factor's key columns
   // SetUp: factors per free variable (start offsets, factor indices), and
-  // the last column each variable was entered in.
+  // the last column each variable was entered in (later reused as each
+  // column's cursor when placing blocks).
   std::vector<int> scratch_variable_start, scratch_variable_factors, scratch_stamp;
   int m = 0;
   Eigen::VectorXd gradient, diagonal;
