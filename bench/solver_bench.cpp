@@ -92,15 +92,22 @@ BENCHMARK(BM_GrowthFromOdometryExtrapolated)->Arg(4)->Arg(6)->Arg(8)->Unit(bench
 
 // Times re-solves of `problem` by one solver (its symbolic analysis kept
 // between iterations, as in the MCMC), warm-started from `warm`.
+// Times re-solves of `problem` by one solver (its symbolic analysis kept
+// between iterations, as in the MCMC), warm-started from `warm`.
+// `forget_linearizations`: every solve starts without kept linearisations
+// (the first proposal from a newly accepted state).
 void TimeWarmSolves(benchmark::State& state, const testing::SyntheticScene& scene,
                     GeometricSlam* slam, const GeometricSlamProblem& problem,
-                    const GeometricSlamResult& warm) {
+                    const GeometricSlamResult& warm, bool forget_linearizations = false) {
   GeometricSlamResult result;
   for (auto _ : state) {
+    if (forget_linearizations) slam->solver().ClearLinearizations();
     result = slam->Solve(problem, &warm);
     benchmark::DoNotOptimize(result.evidence.log_evidence);
   }
   Report(state, scene, result);
+  state.counters["reused_linearizations"] = result.summary.reused_linearizations;
+  state.counters["computed_linearizations"] = result.summary.computed_linearizations;
 }
 
 // The problem after a split (what an MCMC proposal does): the last
@@ -134,6 +141,10 @@ BENCHMARK(BM_LpaWarmResolveAfterSplit)->Unit(benchmark::kMillisecond);
 // object takes the originating object's linearisation point, and the state
 // is solved with one linearised step (max_iterations = 0: the undamped
 // Gauss-Newton step of the system the evidence comes from).
+// Arg: 0 = every factor linearised afresh; 1 = linearisations kept from
+// the previous proposal (SolverOptions::reuse_linearizations: all proposals
+// from one state but the first); 2 = kept, but forgotten before each solve
+// (the first proposal from a state: the cost of keeping them).
 void BM_LpaWarmOneLinearStepAfterSplit(benchmark::State& state) {
   static const testing::SyntheticScene scene = Scene(300, 10, 6.0, 4.0, 5.0);
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
@@ -150,14 +161,74 @@ void BM_LpaWarmOneLinearStepAfterSplit(benchmark::State& state) {
       warm.objects.push_back(copy);
     }
   options.solver.max_iterations = 0;
+  options.solver.reuse_linearizations = state.range(0) > 0;
   GeometricSlam step(camera, options);
-  TimeWarmSolves(state, scene, &step, changed, warm);
+  TimeWarmSolves(state, scene, &step, changed, warm, state.range(0) == 2);
 }
-BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 // Fixed counts: their difference in `perf stat -e instructions:u` is the
 // cost of 400 proposals without the set-up (machine-speed independent).
-BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)->Unit(benchmark::kMillisecond)->Iterations(100);
-BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)->Unit(benchmark::kMillisecond)->Iterations(500);
+BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(100);
+BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(500);
+
+// What O-SLAM's sampler does between two accepted moves: different
+// proposals from one state, each solved with one linearised step from that
+// state's solution (the sampler's options: results independent of the
+// solves before, so each new block pattern gets its own symbolic analysis).
+// The proposals cycle through splitting off the last detection of each of
+// the 10 objects. Arg: SolverOptions::reuse_linearizations.
+void BM_LpaProposalsFromOneState(benchmark::State& state) {
+  static const testing::SyntheticScene scene = Scene(300, 10, 6.0, 4.0, 5.0);
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  GeometricSlamOptions options;
+  options.compute_object_covariances = false;
+  GeometricSlam full(camera, options);
+  const GeometricSlamResult base = full.Solve(scene.problem);
+  std::vector<GeometricSlamProblem> proposals;
+  std::vector<GeometricSlamResult> starts;
+  constexpr int kNewId = 99;
+  for (const MappedObject& object : base.objects) {
+    proposals.push_back(SplitLastDetection(scene.problem, object.id, kNewId));
+    GeometricSlamResult warm = base;
+    MappedObject copy = object;
+    copy.id = kNewId;
+    warm.objects.push_back(copy);
+    starts.push_back(warm);
+  }
+  options.solver.max_iterations = 0;
+  options.solver.independent_of_history = true;
+  options.solver.reuse_linearizations = state.range(0) > 0;
+  if (state.range(0) == 2) options.solver.ordering = OrderingType::kAmd;
+  GeometricSlam step(camera, options);
+  GeometricSlamResult result;
+  size_t next = 0;
+  int analyses = 0;
+  for (auto _ : state) {
+    result = step.Solve(proposals[next], &starts[next]);
+    next = (next + 1) % proposals.size();
+    analyses += !result.summary.reused_symbolic_analysis;
+    benchmark::DoNotOptimize(result.evidence.log_evidence);
+  }
+  Report(state, scene, result);
+  state.counters["analyses_per_solve"] = static_cast<double>(analyses) / state.iterations();
+  state.counters["reused_linearizations"] = result.summary.reused_linearizations;
+  state.counters["computed_linearizations"] = result.summary.computed_linearizations;
+}
+BENCHMARK(BM_LpaProposalsFromOneState)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LpaProposalsFromOneState)
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(100);
+BENCHMARK(BM_LpaProposalsFromOneState)
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(500);
 
 // The large problem started at the truth: the time per iteration without
 // the convergence trouble of a start from 2 km of raw odometry.

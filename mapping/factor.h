@@ -80,8 +80,18 @@ class Factor {
   // For messages and the O-Map summary.
   virtual std::string Name() const = 0;
 
+  // Linearisation reuse (SolverOptions::reuse_linearizations, spec §9.6).
+  // Factors given the same slot in the solves of one SparseSolver must be
+  // the same function of their keys' values (same kind, measurement, noise
+  // and model): the solver then reuses the slot's last error and Jacobian
+  // where the keys' values are bitwise equal to those it was linearised at.
+  // -1 (the default): never reused.
+  int linearization_slot() const { return linearization_slot_; }
+  void set_linearization_slot(int slot) { linearization_slot_ = slot; }
+
  private:
   FactorKeys keys_;
+  int linearization_slot_ = -1;
 };
 
 }  // namespace oslam

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <Eigen/Cholesky>
 
@@ -239,6 +240,45 @@ bool ObjectLogEvidenceWithPosesHeld(const CameraModel& camera, const std::vector
 GeometricSlam::GeometricSlam(const CameraModel& camera, const GeometricSlamOptions& options)
     : camera_(camera), options_(options), solver_(options.solver) {}
 
+bool GeometricSlam::CheckSlotMeasurements(const GeometricSlamProblem& problem) {
+  static_assert(sizeof(OdometryIncrement) == 2 * sizeof(double), "compared bitwise");
+  static_assert(sizeof(BoundingSlice) == 4 * sizeof(double), "compared bitwise");
+  auto same_bits = [](const auto& a, const auto& b) { return std::memcmp(&a, &b, sizeof(a)) == 0; };
+  auto same = [&](const SlottedDetection& seen, const SliceObservation& observation) {
+    return seen.frame == observation.frame && same_bits(seen.slice, observation.slice);
+  };
+  bool changed = slotted_increments_.size() != problem.increments.size();
+  for (size_t i = 0; !changed && i < problem.increments.size(); ++i)
+    changed = !same_bits(slotted_increments_[i], problem.increments[i]);
+  for (const SliceObservation& observation : problem.observations) {
+    if (changed) break;
+    const int id = observation.detection_id;
+    if (id >= 0 && id < static_cast<int>(slotted_detections_.size()) &&
+        slotted_detections_[id].frame >= 0)
+      changed = !same(slotted_detections_[id], observation);
+  }
+  if (changed) {
+    solver_.ClearLinearizations();
+    slotted_increments_ = problem.increments;
+    slotted_detections_.clear();
+  }
+  ++slot_check_;
+  for (const SliceObservation& observation : problem.observations) {
+    const int id = observation.detection_id;
+    if (id < 0) continue;
+    if (id >= static_cast<int>(slotted_detections_.size())) slotted_detections_.resize(id + 1);
+    SlottedDetection& seen = slotted_detections_[id];
+    if (seen.check == slot_check_ && !same(seen, observation)) {
+      // One id for two measurements in this problem: no reuse.
+      solver_.ClearLinearizations();
+      slotted_detections_.clear();
+      return false;
+    }
+    seen = {observation.frame, observation.slice, slot_check_};
+  }
+  return true;
+}
+
 GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
                                          const GeometricSlamResult* warm_start) {
   std::string why;
@@ -347,18 +387,25 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
   }
 
   // ---- factors ----
-  for (long i = 1; i < num_poses; ++i)
-    graph.Emplace<OdometryFactor>(pose_keys[i - 1], pose_keys[i], problem.increments[i],
-                                  options_.motion);
+  const bool slots = options_.solver.reuse_linearizations && CheckSlotMeasurements(problem);
+  for (long i = 1; i < num_poses; ++i) {
+    Factor* odometry = graph.Emplace<OdometryFactor>(pose_keys[i - 1], pose_keys[i],
+                                                     problem.increments[i], options_.motion);
+    if (slots) odometry->set_linearization_slot(OdometrySlot(i));
+  }
   // Detections first and the priors last: the factors of two similar
   // problems (an O-SLAM proposal and its parent) then have the same sizes at
   // the same positions, so the solver's per-factor buffers are not
   // reallocated.
   for (auto& object : objects) {
     object.first_factor = graph.factors().size();
-    for (const SliceObservation* observation : by_object[object.id])
-      graph.Emplace<BoundingSliceFactor>(&camera_, pose_keys[observation->frame], object.base,
-                                         object.size, observation->slice, options_.pixel_std_px);
+    for (const SliceObservation* observation : by_object[object.id]) {
+      Factor* slice = graph.Emplace<BoundingSliceFactor>(&camera_, pose_keys[observation->frame],
+                                                         object.base, object.size,
+                                                         observation->slice, options_.pixel_std_px);
+      if (slots && observation->detection_id >= 0)
+        slice->set_linearization_slot(DetectionSlot(observation->detection_id));
+    }
     object.end_factor = graph.factors().size();
   }
   for (const auto& object : objects) {

@@ -30,6 +30,11 @@ struct SliceObservation {
   long frame = 0;
   int object_id = 0;
   BoundingSlice slice;
+  // The detection's index in the caller's data (>= 0), the same in every
+  // problem one GeometricSlam solves: with the solver's
+  // reuse_linearizations, its linearisation is kept across solves under
+  // this id. -1: none.
+  int detection_id = -1;
 };
 
 // Class priors (spec §5.1): size g ~ N(size_mean, diag(size_std^2)),
@@ -133,9 +138,26 @@ class GeometricSlam {
   SparseSolver& solver() { return solver_; }
 
  private:
+  // Linearisation slots (SolverOptions::reuse_linearizations): odometry
+  // factor i gets 2 (i - 1), detection d gets 2 d + 1. A slot must keep its
+  // measurement across solves, so the measurements seen are recorded, and
+  // the kept linearisations are dropped when a problem changes one. False
+  // (no slots for this problem) when it gives one id to two measurements.
+  int OdometrySlot(long frame) const { return static_cast<int>(2 * (frame - 1)); }
+  int DetectionSlot(int detection_id) const { return 2 * detection_id + 1; }
+  bool CheckSlotMeasurements(const GeometricSlamProblem& problem);
+
   const CameraModel& camera_;
   GeometricSlamOptions options_;
   SparseSolver solver_;
+  std::vector<OdometryIncrement> slotted_increments_;
+  struct SlottedDetection {
+    long frame = -1;  // -1: no detection with this id yet
+    BoundingSlice slice;
+    long check = 0;  // the CheckSlotMeasurements call that last saw it
+  };
+  std::vector<SlottedDetection> slotted_detections_;
+  long slot_check_ = 0;
 };
 
 // Odometry composed from `first` (the initial trajectory, spec §5.4).

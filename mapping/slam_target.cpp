@@ -18,6 +18,14 @@ GeometricSlamOptions StepOptions(const SlamTargetOptions& options) {
   // A proposal's value is then a function of (state, from) alone, so a
   // speculative chain can undo evaluations and redo them (SupportsRollBack).
   step.solver.independent_of_history = true;
+  // Proposals from one state share its solution as their linearisation
+  // point: all but the first reuse most factors' Jacobians (spec §9.6).
+  step.solver.reuse_linearizations = true;
+  // Every proposal changes the block pattern, so each is analysed afresh;
+  // comparing AMD with objects-last orderings each time cost 10 % of a
+  // proposal (LPA scale), while AMD's factorisation flops were within 5 %
+  // of the better one in 99 % of long_loop's proposals.
+  step.solver.ordering = OrderingType::kAmd;
   return step;
 }
 
@@ -82,7 +90,7 @@ void SlamEvaluator::AddObservations(const std::vector<int>& block,
   const int id = block.front();
   for (int t : block)
     for (int d : data_.tracks[t].detections)
-      observations->push_back({data_.detections[d].frame, id, data_.detections[d].slice});
+      observations->push_back({data_.detections[d].frame, id, data_.detections[d].slice, d});
 }
 
 double SlamEvaluator::ClassTerm(const std::vector<int>& block, int class_index) const {

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 
 #include <cholmod.h>
 #include <dlfcn.h>
@@ -211,6 +212,17 @@ struct SparseSolver::Impl {
     }
   };
   Evaluation current, trial;
+  // A slot's last linearisation (SolverOptions::reuse_linearizations): the
+  // values of the factor's variables it was made at, its error and Jacobian.
+  struct KeptLinearization {
+    std::vector<double> at;
+    Eigen::VectorXd error;
+    Eigen::MatrixXd jacobian;
+    bool valid = false;
+  };
+  std::vector<KeptLinearization> kept;
+  bool reuse_linearizations = false;
+  int reused_linearizations = 0, computed_linearizations = 0;  // this solve's counts
   Evaluation stretched;  // a line search's candidate (SolverOptions::max_step_extrapolation)
   Eigen::MatrixXd local_hessian;    // scratch: J_f^T J_f
   Eigen::VectorXd local_gradient;   // scratch: J_f^T e_f
@@ -649,14 +661,59 @@ struct SparseSolver::Impl {
                 Evaluation* out, double* cost) {
     double sum = 0.0;
     const auto& factors = graph.factors();
+    const bool keep = with_jacobians && reuse_linearizations;
     for (size_t f = 0; f < factors.size(); ++f) {
-      if (!factors[f]->Linearize(values, out->errors[f],
-                                 with_jacobians ? &out->jacobians[f] : nullptr))
-        return false;
+      const Factor& factor = *factors[f];
+      const int slot = keep ? factor.linearization_slot() : -1;
+      if (slot >= 0 && Reuse(slot, factor, values, out->errors[f], &out->jacobians[f])) {
+        ++reused_linearizations;
+      } else {
+        if (!factor.Linearize(values, out->errors[f],
+                              with_jacobians ? &out->jacobians[f] : nullptr))
+          return false;
+        if (with_jacobians) ++computed_linearizations;
+        if (slot >= 0) Keep(slot, factor, values, out->errors[f], out->jacobians[f]);
+      }
       sum += SquaredNorm(out->errors[f]);
     }
     *cost = 0.5 * sum;
     return std::isfinite(*cost);
+  }
+
+  // Copies slot's kept linearisation into error and jacobian if it was made
+  // at the factor's current values (bitwise: the same inputs give the same
+  // outputs) and has their shapes.
+  bool Reuse(int slot, const Factor& factor, const Values& values, Eigen::VectorXd& error,
+             Eigen::MatrixXd* jacobian) const {
+    if (slot >= static_cast<int>(kept.size())) return false;
+    const KeptLinearization& entry = kept[slot];
+    if (!entry.valid || entry.error.size() != error.size() ||
+        entry.jacobian.rows() != jacobian->rows() || entry.jacobian.cols() != jacobian->cols())
+      return false;
+    size_t at = 0;
+    for (int key : factor.keys()) {
+      const size_t dim = static_cast<size_t>(values.Dim(key));
+      if (at + dim > entry.at.size() ||
+          std::memcmp(values.Data(key), entry.at.data() + at, dim * sizeof(double)) != 0)
+        return false;
+      at += dim;
+    }
+    if (at != entry.at.size()) return false;
+    error = entry.error;
+    *jacobian = entry.jacobian;
+    return true;
+  }
+
+  void Keep(int slot, const Factor& factor, const Values& values, const Eigen::VectorXd& error,
+            const Eigen::MatrixXd& jacobian) {
+    if (slot >= static_cast<int>(kept.size())) kept.resize(slot + 1);
+    KeptLinearization& entry = kept[slot];
+    entry.at.clear();
+    for (int key : factor.keys())
+      entry.at.insert(entry.at.end(), values.Data(key), values.Data(key) + values.Dim(key));
+    entry.error = error;
+    entry.jacobian = jacobian;
+    entry.valid = true;
   }
 
   // ||e||^2 with Eigen's fixed-size reduction for the common factor sizes:
@@ -880,6 +937,12 @@ SparseSolver::~SparseSolver() = default;
 void SparseSolver::ClearCache() {
   impl_->FreeStructure();
   impl_->compared_num_blocks = -1;
+  impl_->kept.clear();
+}
+
+void SparseSolver::ClearLinearizations() {
+  // Storage kept: the next linearisations refill it in place.
+  for (auto& entry : impl_->kept) entry.valid = false;
 }
 
 SolveResult SparseSolver::Solve(FactorGraph* graph) {
@@ -888,9 +951,12 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   SolveResult result;
   SolverSummary& summary = result.summary;
   Impl& impl = *impl_;
+  impl.reused_linearizations = impl.computed_linearizations = 0;
   auto finish = [&](TerminationType type, const std::string& message) {
     summary.termination = type;
     summary.message = message;
+    summary.reused_linearizations = impl.reused_linearizations;
+    summary.computed_linearizations = impl.computed_linearizations;
     summary.total_time_s = Seconds(start);
     return result;
   };
@@ -902,6 +968,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   double analyze_s = 0.0;
   impl.requested_ordering = options_.ordering;
   impl.independent_of_history = options_.independent_of_history;
+  impl.reuse_linearizations = options_.reuse_linearizations;
   if (!impl.SetUp(*graph, options_.reuse_symbolic_analysis, &summary.reused_symbolic_analysis,
                   &analyze_s, &why))
     return finish(TerminationType::kFailure, why);

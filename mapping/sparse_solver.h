@@ -71,6 +71,15 @@ struct SolverOptions {
   // (long_loop: +3 % instructions). For solves that may be undone and done
   // again in another order (speculative MC3 chains).
   bool independent_of_history = false;
+  // Keep the error and Jacobian of every factor with a linearisation slot
+  // (Factor::linearization_slot) from one solve's linearisations to the
+  // next, and reuse them where the factor's variables are bitwise
+  // unchanged: spec §9.6's Jacobian reuse. An O-SLAM proposal is
+  // linearised at its parent state's solution, so all proposals from one
+  // state but the first share nearly all their linearisations. The results
+  // are the same bit for bit; a linearisation costs one more copy, so this
+  // pays only where solves start from the same point (one-step proposals).
+  bool reuse_linearizations = false;
   bool compute_evidence = true;
   // Algorithm 1 steps 4-5: end with the undamped Gauss-Newton step of the
   // final linear system (the one the evidence comes from), if it does not
@@ -92,6 +101,10 @@ struct SolverSummary {
   std::string message;
   int iterations = 0;        // linear solves attempted
   int successful_steps = 0;  // accepted steps
+  // Factors whose error and Jacobian were reused (reuse_linearizations)
+  // and factors linearised, over all linearisations of this solve.
+  int reused_linearizations = 0;
+  int computed_linearizations = 0;
   int step_extrapolations = 0;  // line-search stretches (max_step_extrapolation)
   double initial_cost = 0;   // 1/2 sum ||e||^2 at the start
   double final_cost = 0;
@@ -152,8 +165,12 @@ class SparseSolver {
   bool MarginalCovariances(const std::vector<std::vector<int>>& key_groups,
                            std::vector<Eigen::MatrixXd>* blocks, std::string* why = nullptr);
 
-  // Forget the cached symbolic analysis (the next Solve analyses afresh).
+  // Forget the cached symbolic analysis (the next Solve analyses afresh)
+  // and the kept linearisations.
   void ClearCache();
+  // Forget only the kept linearisations (SolverOptions::reuse_linearizations),
+  // e.g. when a slot is given to another measurement.
+  void ClearLinearizations();
 
  private:
   struct Impl;

@@ -144,7 +144,8 @@ inline SyntheticScene MakeSyntheticScene(const CameraModel& camera,
         slice.s_phi_rad += e2 / slice.u_r_px * normal(rng);
         if (slice.u_r_px <= 1.0) continue;
       }
-      problem.observations.push_back({static_cast<long>(i), j, slice});
+      problem.observations.push_back(
+          {static_cast<long>(i), j, slice, static_cast<int>(problem.observations.size())});
     }
   }
   return scene;
