@@ -3,6 +3,8 @@
 #include "mapping/sparse_solver.h"
 
 #include <cmath>
+#include <cstdlib>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
@@ -331,6 +333,40 @@ TEST(SolverTest, EveryOrderingGivesTheSameSolutionEvidenceAndCovariance) {
     const DenseReference dense = DenseEvidence(graph);
     EXPECT_NEAR(result.evidence.log_evidence, dense.log_evidence, 1e-7);
   }
+}
+
+// The solver derives L's elimination tree and column counts from the block
+// pattern instead of running cholmod_analyze on the scalar matrix; with
+// OSLAM_SOLVER_CHECK_ANALYSIS it compares every analysis with CHOLMOD's
+// (supernodal and simplicial factors, every ordering).
+TEST(SolverTest, BlockSymbolicAnalysisEqualsCholmodsAnalysis) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  ASSERT_EQ(setenv("OSLAM_SOLVER_CHECK_ANALYSIS", "1", 1), 0);
+  ::testing::internal::CaptureStderr();
+  int solves = 0;
+  for (const OrderingType ordering :
+       {OrderingType::kAmd, OrderingType::kHighDegreeLast, OrderingType::kMetis}) {
+    SolverOptions options;
+    options.ordering = ordering;
+    options.max_iterations = 1;
+    FactorGraph large = SmallSlamGraph(camera, 4, 120, 14);  // supernodal
+    FactorGraph small = SmallSlamGraph(camera, 1, 40);       // simplicial
+    for (FactorGraph* graph : {&large, &small}) {
+      SparseSolver solver(options);
+      EXPECT_TRUE(solver.Solve(graph).summary.IsUsable());
+      ++solves;
+    }
+  }
+  const std::string report = ::testing::internal::GetCapturedStderr();
+  unsetenv("OSLAM_SOLVER_CHECK_ANALYSIS");
+  size_t same = 0;
+  for (size_t at = report.find("analysis check: same"); at != std::string::npos;
+       at = report.find("analysis check: same", at + 1))
+    ++same;
+  EXPECT_EQ(same, static_cast<size_t>(solves)) << report;
+  EXPECT_EQ(report.find("DIFFERENT"), std::string::npos) << report;
+  EXPECT_NE(report.find("super 1"), std::string::npos) << "no supernodal case: " << report;
+  EXPECT_NE(report.find("super 0"), std::string::npos) << "no simplicial case: " << report;
 }
 
 TEST(SolverTest, ReportsProblemsInTheSummaryInsteadOfThrowing) {
