@@ -238,6 +238,9 @@ struct SparseSolver::Impl {
   // BuildPermuted's block pattern below the diagonal: per variable, the
   // variables after it in the permutation that share a factor with it.
   std::vector<int> block_below_begin, block_below;
+  // StructureOf the graph the last successful set-up was for (empty if
+  // none), and scratch for the next one's.
+  std::vector<int> set_up_structure, scratch_structure;
   std::vector<int> factor_row;                 // first row of each factor in J
   std::vector<std::vector<int>> scratch_rows;  // SetUp's block pattern, reused
   std::vector<int> scratch_indices;            // SetUp: fill positions, then a factor's key columns
@@ -291,6 +294,7 @@ struct SparseSolver::Impl {
     pattern_dims.clear();
     pattern_rows.clear();
     pattern_prefix.clear();
+    set_up_structure.clear();
     factor_is_final = false;
   }
 
@@ -299,6 +303,43 @@ struct SparseSolver::Impl {
   // Returns false with `why` for a graph that cannot be solved.
   bool SetUp(const FactorGraph& graph, bool allow_reuse, bool* reused, double* analyze_s,
              std::string* why) {
+    // The same structure as the last set-up (a re-solve of the same
+    // association, a class switch, a proposal made again): everything
+    // below would come out the same.
+    StructureOf(graph, &scratch_structure);
+    const bool same_structure = allow_reuse && hessian && factor &&
+                                analysed_ordering == requested_ordering &&
+                                scratch_structure == set_up_structure;
+    if (same_structure) {
+      *reused = true;
+      factor_is_final = false;
+      return true;
+    }
+    set_up_structure.clear();  // until this set-up succeeds
+    if (!FullSetUp(graph, allow_reuse, reused, analyze_s, why)) return false;
+    std::swap(set_up_structure, scratch_structure);
+    return true;
+  }
+
+  // What a set-up depends on: each variable's size and whether it is
+  // fixed, each factor's rows and keys, and whether a larger cached pattern
+  // may serve (independent_of_history).
+  void StructureOf(const FactorGraph& graph, std::vector<int>* structure) const {
+    structure->clear();
+    structure->push_back(independent_of_history ? 1 : 0);
+    const int num_keys = graph.num_variables();
+    structure->reserve(num_keys + 5 * graph.factors().size() + 1);
+    for (int key = 0; key < num_keys; ++key)
+      structure->push_back(graph.IsFixed(key) ? -graph.values().Dim(key) - 1
+                                              : graph.values().Dim(key));
+    for (const auto& factor : graph.factors()) {
+      structure->push_back(-factor->Dimension() - 1);
+      structure->insert(structure->end(), factor->keys().begin(), factor->keys().end());
+    }
+  }
+
+  bool FullSetUp(const FactorGraph& graph, bool allow_reuse, bool* reused, double* analyze_s,
+                 std::string* why) {
     const int num_keys = graph.num_variables();
     free_index.assign(num_keys, -1);
     std::vector<int> dims;

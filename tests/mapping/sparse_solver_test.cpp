@@ -449,5 +449,48 @@ TEST(SolverTest, IndependentOfHistoryGivesAFreshSolversNumbersExactly) {
   EXPECT_TRUE(reusing.Solve(&sparser_again).summary.reused_symbolic_analysis);
 }
 
+// A graph with the last set-up's structure skips the set-up; one with the
+// same sizes but other keys must not. Both give a fresh solver's numbers.
+TEST(SolverTest, SameStructureAsTheLastSolveGivesAFreshSolversNumbers) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  SolverOptions options;
+  options.independent_of_history = true;
+  SparseSolver used(options);
+  FactorGraph first = SmallSlamGraph(camera, 5, 25);
+  used.Solve(&first);
+  auto moved = [&] {
+    FactorGraph graph = SmallSlamGraph(camera, 5, 25);
+    graph.mutable_values().MutableData(7)[0] += 0.05;
+    return graph;
+  };
+  FactorGraph again = moved(), reference_graph = moved();
+  const SolveResult after = used.Solve(&again);
+  const SolveResult reference = SparseSolver(options).Solve(&reference_graph);
+  EXPECT_TRUE(after.summary.reused_symbolic_analysis);
+  EXPECT_EQ(after.evidence.log_evidence, reference.evidence.log_evidence);
+  for (int key = 0; key < again.num_variables(); ++key)
+    EXPECT_EQ(again.values().Get(key), reference_graph.values().Get(key)) << key;
+
+  // Three poses, two odometry factors: a chain, then a star of the same sizes.
+  auto poses = [](bool star) {
+    FactorGraph graph;
+    for (int i = 0; i < 3; ++i) graph.AddPose(0.2 * i, 0.01 * i * i, 0.1 * i, i == 0);
+    const OdometryIncrement step{0.2, 0.05};
+    graph.Emplace<OdometryFactor>(0, 1, step, MotionNoiseOptions());
+    graph.Emplace<OdometryFactor>(star ? 0 : 1, 2, step, MotionNoiseOptions());
+    return graph;
+  };
+  SparseSolver small(options);
+  FactorGraph chain = poses(false), star = poses(true), star_reference = poses(true);
+  small.Solve(&chain);
+  const SolveResult star_result = small.Solve(&star);
+  const SolveResult star_fresh = SparseSolver(options).Solve(&star_reference);
+  EXPECT_FALSE(star_result.summary.reused_symbolic_analysis);
+  EXPECT_EQ(star_result.summary.final_cost, star_fresh.summary.final_cost);
+  EXPECT_EQ(star_result.evidence.log_evidence, star_fresh.evidence.log_evidence);
+  for (int key = 0; key < 3; ++key)
+    EXPECT_EQ(star.values().Get(key), star_reference.values().Get(key)) << key;
+}
+
 }  // namespace
 }  // namespace oslam
