@@ -279,6 +279,55 @@ bool GeometricSlam::CheckSlotMeasurements(const GeometricSlamProblem& problem) {
   return true;
 }
 
+// A new object's start (spec §5.4 leaves it open): candidates start at the
+// first detection, then at detections spread over the object's track; the
+// first one from which every detection of the object can be predicted wins
+// (else the one with the fewest failures), so the solve never starts where a
+// factor cannot be evaluated (e.g. the robot inside the cylinder).
+CylinderGeometry GeometricSlam::InitialObject(const std::vector<Pose2>& poses,
+                                              const std::vector<const SliceObservation*>& list,
+                                              const ClassPrior& prior) const {
+  CylinderGeometry initial;
+  auto unpredictable = [&](const CylinderGeometry& candidate) {
+    int failures = 0;
+    BoundingSlice predicted;
+    for (const SliceObservation* observation : list)
+      if (!PredictSlice(camera_, poses[observation->frame], candidate, &predicted)) ++failures;
+    return failures;
+  };
+  int best_failures = -1;
+  constexpr int kStarts = 5;
+  for (int attempt = 0; attempt < kStarts && best_failures != 0; ++attempt) {
+    const size_t start = attempt * list.size() / kStarts;
+    if (attempt > 0 && start == (attempt - 1) * list.size() / kStarts) continue;
+    const SliceObservation& first = *list[start];
+    CylinderGeometry candidate;
+    if (!InitialObjectFromDetection(camera_, poses[first.frame], first.slice, prior, &candidate)) {
+      // A slice with no ray: start at the prior, the solver will report.
+      candidate.base_world = prior.location_mean_m;
+      candidate.diameter_m = prior.size_mean_m.x();
+      candidate.height_m = prior.size_mean_m.y();
+    }
+    // Refine with the detections from there on, the poses held: a single
+    // detection fixes the range only through s_phi and u_r, both noisy at
+    // E = 30 px, and a far-off start costs the joint solve many steps.
+    if (options_.initial_refinement_detections > 0) {
+      const size_t count = std::min(list.size() - start,
+                                    static_cast<size_t>(options_.initial_refinement_detections));
+      const std::vector<const SliceObservation*> detections(list.begin() + start,
+                                                            list.begin() + start + count);
+      RefineObjectFromDetections(camera_, poses, detections, prior, options_.pixel_std_px,
+                                 &candidate);
+    }
+    const int failures = unpredictable(candidate);
+    if (best_failures < 0 || failures < best_failures) {
+      best_failures = failures;
+      initial = candidate;
+    }
+  }
+  return initial;
+}
+
 GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
                                          const GeometricSlamResult* warm_start) {
   std::string why;
@@ -335,51 +384,7 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     if (found != previous.end() && found->second->class_index == class_index) {
       initial = found->second->geometry;
     } else {
-      // Candidates start at the first detection, then at detections spread
-      // over the object's track; the first one from which every detection
-      // of the object can be predicted wins (else the one with the fewest
-      // failures), so the solve never starts where a factor cannot be
-      // evaluated (e.g. the robot inside the cylinder).
-      auto unpredictable = [&](const CylinderGeometry& candidate) {
-        int failures = 0;
-        BoundingSlice predicted;
-        for (const SliceObservation* observation : list)
-          if (!PredictSlice(camera_, initial_poses[observation->frame], candidate, &predicted))
-            ++failures;
-        return failures;
-      };
-      int best_failures = -1;
-      constexpr int kStarts = 5;
-      for (int attempt = 0; attempt < kStarts && best_failures != 0; ++attempt) {
-        const size_t start = attempt * list.size() / kStarts;
-        if (attempt > 0 && start == (attempt - 1) * list.size() / kStarts) continue;
-        const SliceObservation& first = *list[start];
-        CylinderGeometry candidate;
-        if (!InitialObjectFromDetection(camera_, initial_poses[first.frame], first.slice, prior,
-                                        &candidate)) {
-          // A slice with no ray: start at the prior, the solver will report.
-          candidate.base_world = prior.location_mean_m;
-          candidate.diameter_m = prior.size_mean_m.x();
-          candidate.height_m = prior.size_mean_m.y();
-        }
-        // Refine with the detections from there on, the poses held at their
-        // initial values (spec §5.4 leaves the initialisation open): a single
-        // detection fixes the range only through s_phi and u_r, both noisy at
-        // E = 30 px, and a far-off start costs the joint solve many steps.
-        if (options_.initial_refinement_detections > 0) {
-          const size_t count = std::min(
-              list.size() - start, static_cast<size_t>(options_.initial_refinement_detections));
-          const std::vector<const SliceObservation*> detections(list.begin() + start,
-                                                                list.begin() + start + count);
-          RefineObjectFromDetections(camera_, initial_poses, detections, prior,
-                                     options_.pixel_std_px, &candidate);
-        }
-        const int failures = unpredictable(candidate);
-        if (best_failures < 0 || failures < best_failures) {
-          best_failures = failures;
-          initial = candidate;
-        }
-      }
+      initial = InitialObject(initial_poses, list, prior);
     }
     const int base = graph.AddVariable(initial.base_world);
     const int size = graph.AddVariable(Eigen::Vector2d(initial.diameter_m, initial.height_m));

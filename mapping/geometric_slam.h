@@ -146,6 +146,11 @@ class GeometricSlam {
   int OdometrySlot(long frame) const { return static_cast<int>(2 * (frame - 1)); }
   int DetectionSlot(int detection_id) const { return 2 * detection_id + 1; }
   bool CheckSlotMeasurements(const GeometricSlamProblem& problem);
+  // A new object's initial geometry from its (frame-ordered) detections,
+  // seen from `poses` (indexed by frame).
+  CylinderGeometry InitialObject(const std::vector<Pose2>& poses,
+                                 const std::vector<const SliceObservation*>& list,
+                                 const ClassPrior& prior) const;
 
   const CameraModel& camera_;
   GeometricSlamOptions options_;
