@@ -110,19 +110,6 @@ void TimeWarmSolves(benchmark::State& state, const testing::SyntheticScene& scen
   state.counters["computed_linearizations"] = result.summary.computed_linearizations;
 }
 
-// The problem after a split (what an MCMC proposal does): the last
-// detection of object `from` becomes a new object `to` of the same class.
-GeometricSlamProblem SplitLastDetection(const GeometricSlamProblem& problem, int from, int to) {
-  GeometricSlamProblem changed = problem;
-  for (auto it = changed.observations.rbegin(); it != changed.observations.rend(); ++it)
-    if (it->object_id == from) {
-      it->object_id = to;
-      break;
-    }
-  changed.object_class[to] = changed.object_class[from];
-  return changed;
-}
-
 // What the MCMC does per proposal: re-solve after moving one detection to a
 // new object, warm-started from the previous state's solution.
 void BM_LpaWarmResolveAfterSplit(benchmark::State& state) {
@@ -132,10 +119,45 @@ void BM_LpaWarmResolveAfterSplit(benchmark::State& state) {
   options.compute_object_covariances = false;
   GeometricSlam slam(camera, options);
   const GeometricSlamResult base = slam.Solve(scene.problem);
-  const GeometricSlamProblem changed = SplitLastDetection(scene.problem, 3, 99);
+  const GeometricSlamProblem changed = testing::SplitLastDetection(scene.problem, 3, 99);
   TimeWarmSolves(state, scene, &slam, changed, base);
 }
 BENCHMARK(BM_LpaWarmResolveAfterSplit)->Unit(benchmark::kMillisecond);
+
+// The state after splitting off the last detection of object `from` as a
+// new object `to`, and its start as the thesis linearises it (spec §9.6):
+// the solved `base`, with the new object at `from`'s point.
+struct SplitProposal {
+  GeometricSlamProblem problem;
+  GeometricSlamResult start;
+};
+SplitProposal MakeSplitProposal(const GeometricSlamProblem& problem,
+                                const GeometricSlamResult& base, int from, int to) {
+  SplitProposal proposal{testing::SplitLastDetection(problem, from, to), base};
+  for (const MappedObject& object : base.objects)
+    if (object.id == from) {
+      MappedObject copy = object;
+      copy.id = to;
+      proposal.start.objects.push_back(copy);
+    }
+  return proposal;
+}
+
+// Registers `function` for args 0..last_arg, timed, and again at fixed
+// counts of 100 and 500 iterations: their difference in `perf stat -e
+// instructions:u` is the cost of 400 solves without the set-up
+// (independent of the machine's speed).
+bool RegisterWithFixedCounts(const char* name, void (*function)(benchmark::State&), int last_arg) {
+  benchmark::RegisterBenchmark(name, function)
+      ->DenseRange(0, last_arg)
+      ->Unit(benchmark::kMillisecond);
+  for (int count : {100, 500})
+    benchmark::RegisterBenchmark(name, function)
+        ->DenseRange(0, last_arg)
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(count);
+  return true;
+}
 
 // The thesis's proposal evaluation (spec §9.6): after the split the new
 // object takes the originating object's linearisation point, and the state
@@ -150,57 +172,33 @@ void BM_LpaWarmOneLinearStepAfterSplit(benchmark::State& state) {
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
   GeometricSlamOptions options;
   options.compute_object_covariances = false;
-  GeometricSlam full(camera, options);
-  const GeometricSlamResult base = full.Solve(scene.problem);
-  const GeometricSlamProblem changed = SplitLastDetection(scene.problem, 3, 99);
-  GeometricSlamResult warm = base;
-  for (const MappedObject& object : base.objects)
-    if (object.id == 3) {
-      MappedObject copy = object;
-      copy.id = 99;
-      warm.objects.push_back(copy);
-    }
+  const GeometricSlamResult base = GeometricSlam(camera, options).Solve(scene.problem);
+  const SplitProposal proposal = MakeSplitProposal(scene.problem, base, 3, 99);
   options.solver.max_iterations = 0;
   options.solver.reuse_linearizations = state.range(0) > 0;
   GeometricSlam step(camera, options);
-  TimeWarmSolves(state, scene, &step, changed, warm, state.range(0) == 2);
+  TimeWarmSolves(state, scene, &step, proposal.problem, proposal.start, state.range(0) == 2);
 }
-BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
-// Fixed counts: their difference in `perf stat -e instructions:u` is the
-// cost of 400 proposals without the set-up (machine-speed independent).
-BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)
-    ->DenseRange(0, 2)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(100);
-BENCHMARK(BM_LpaWarmOneLinearStepAfterSplit)
-    ->DenseRange(0, 2)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(500);
+const bool kOneLinearStepRegistered = RegisterWithFixedCounts("BM_LpaWarmOneLinearStepAfterSplit",
+                                                              BM_LpaWarmOneLinearStepAfterSplit, 2);
 
 // What O-SLAM's sampler does between two accepted moves: different
 // proposals from one state, each solved with one linearised step from that
-// state's solution (the sampler's options: results independent of the
-// solves before, so each new block pattern gets its own symbolic analysis).
-// The proposals cycle through splitting off the last detection of each of
-// the 10 objects. Arg: SolverOptions::reuse_linearizations.
+// state's solution, results independent of the solves before (so each new
+// block pattern gets its own symbolic analysis). The proposals cycle
+// through splitting off the last detection of each of the 10 objects.
+// Arg: 0 = automatic ordering, every factor linearised afresh; 1 = with
+// reused linearisations; 2 = reused linearisations and AMD, the sampler's
+// settings (mapping/slam_target.cpp).
 void BM_LpaProposalsFromOneState(benchmark::State& state) {
   static const testing::SyntheticScene scene = Scene(300, 10, 6.0, 4.0, 5.0);
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
   GeometricSlamOptions options;
   options.compute_object_covariances = false;
-  GeometricSlam full(camera, options);
-  const GeometricSlamResult base = full.Solve(scene.problem);
-  std::vector<GeometricSlamProblem> proposals;
-  std::vector<GeometricSlamResult> starts;
-  constexpr int kNewId = 99;
-  for (const MappedObject& object : base.objects) {
-    proposals.push_back(SplitLastDetection(scene.problem, object.id, kNewId));
-    GeometricSlamResult warm = base;
-    MappedObject copy = object;
-    copy.id = kNewId;
-    warm.objects.push_back(copy);
-    starts.push_back(warm);
-  }
+  const GeometricSlamResult base = GeometricSlam(camera, options).Solve(scene.problem);
+  std::vector<SplitProposal> proposals;
+  for (const MappedObject& object : base.objects)
+    proposals.push_back(MakeSplitProposal(scene.problem, base, object.id, 99));
   options.solver.max_iterations = 0;
   options.solver.independent_of_history = true;
   options.solver.reuse_linearizations = state.range(0) > 0;
@@ -210,7 +208,7 @@ void BM_LpaProposalsFromOneState(benchmark::State& state) {
   size_t next = 0;
   int analyses = 0;
   for (auto _ : state) {
-    result = step.Solve(proposals[next], &starts[next]);
+    result = step.Solve(proposals[next].problem, &proposals[next].start);
     next = (next + 1) % proposals.size();
     analyses += !result.summary.reused_symbolic_analysis;
     benchmark::DoNotOptimize(result.evidence.log_evidence);
@@ -220,15 +218,8 @@ void BM_LpaProposalsFromOneState(benchmark::State& state) {
   state.counters["reused_linearizations"] = result.summary.reused_linearizations;
   state.counters["computed_linearizations"] = result.summary.computed_linearizations;
 }
-BENCHMARK(BM_LpaProposalsFromOneState)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LpaProposalsFromOneState)
-    ->DenseRange(0, 2)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(100);
-BENCHMARK(BM_LpaProposalsFromOneState)
-    ->DenseRange(0, 2)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(500);
+const bool kProposalsRegistered =
+    RegisterWithFixedCounts("BM_LpaProposalsFromOneState", BM_LpaProposalsFromOneState, 2);
 
 // The large problem started at the truth: the time per iteration without
 // the convergence trouble of a start from 2 km of raw odometry.

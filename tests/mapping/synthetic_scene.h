@@ -151,4 +151,18 @@ inline SyntheticScene MakeSyntheticScene(const CameraModel& camera,
   return scene;
 }
 
+// The problem after a split (what an MCMC proposal does): the last
+// detection of object `from` becomes a new object `to` of the same class.
+inline GeometricSlamProblem SplitLastDetection(const GeometricSlamProblem& problem, int from,
+                                               int to) {
+  GeometricSlamProblem changed = problem;
+  for (auto it = changed.observations.rbegin(); it != changed.observations.rend(); ++it)
+    if (it->object_id == from) {
+      it->object_id = to;
+      break;
+    }
+  changed.object_class[to] = changed.object_class[from];
+  return changed;
+}
+
 }  // namespace oslam::testing
