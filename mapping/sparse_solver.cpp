@@ -773,8 +773,9 @@ struct SparseSolver::Impl {
   // permutation `block_order` applied, as the lower triangle `permuted`,
   // and each hessian entry's position in it (permuted_entry). Built block
   // by block: every variable's scalars stay together, so a pair of
-  // variables is one dense block in either matrix (a per-entry counting
-  // sort scattered 50k entries twice per proposal, 8 % of its time).
+  // variables is one dense block in either matrix (per-entry counting
+  // sorts, scattering every entry twice, were 8 % of an O-SLAM proposal's
+  // time).
   bool BuildPermuted(const std::vector<int>& block_order) {
     const int num_free = static_cast<int>(pattern_dims.size());
     const std::vector<int>& dims = pattern_dims;
