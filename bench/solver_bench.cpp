@@ -37,6 +37,12 @@ void Report(benchmark::State& state, const testing::SyntheticScene& scene,
   state.counters["analyze_ms"] = 1e3 * result.summary.analyze_time_s;
   state.counters["evidence_ms"] = 1e3 * result.summary.evidence_time_s;
   state.counters["solver_ms"] = 1e3 * result.summary.total_time_s;
+  if (result.keyframe_start.used) {
+    state.counters["start_ms"] = 1e3 * result.keyframe_start.time_s;
+    state.counters["start_stage_solves"] = result.keyframe_start.stage_solves;
+    state.counters["start_iterations"] =
+        result.keyframe_start.stage_iterations + result.keyframe_start.final_iterations;
+  }
 }
 
 // `extrapolation`: SolverOptions::max_step_extrapolation (0: off, the default).

@@ -12,10 +12,32 @@
 
 namespace oslam {
 
+bool KeyframeStartOptions::Validate(std::string* why) const {
+  auto fail = [why](const char* message) {
+    if (why) *why = message;
+    return false;
+  };
+  if (min_poses < 0) return fail("min_poses must be >= 0");
+  if (spacing < 1 || stage < 1 || window < stage)
+    return fail("need spacing >= 1, stage >= 1 and window >= stage");
+  if (stage_iterations < 1 || resolve_iterations < 1 || final_iterations < 1)
+    return fail("the iteration counts must be >= 1");
+  if (!(max_cost_per_row > 0.0)) return fail("max_cost_per_row must be positive");
+  if (!(stage_tolerance >= 0.0)) return fail("stage_tolerance must be >= 0");
+  if (min_detections < 1) return fail("min_detections must be >= 1");
+  if (!(initial_damping > 0.0)) return fail("initial_damping must be positive");
+  if (!(step_extrapolation >= 0.0)) return fail("step_extrapolation must be >= 0");
+  return true;
+}
+
 bool GeometricSlamOptions::Validate(std::string* why) const {
   if (!motion.Validate(why)) return false;
   if (!(pixel_std_px > 0.0) || !std::isfinite(pixel_std_px)) {
     if (why) *why = "pixel_std_px (E) must be positive";
+    return false;
+  }
+  if (!keyframe_start.Validate(why)) {
+    if (why) *why = "keyframe_start: " + *why;
     return false;
   }
   return solver.Validate(why);
@@ -353,6 +375,16 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     std::stable_sort(list.begin(), list.end(),
                      [](const auto* a, const auto* b) { return a->frame < b->frame; });
 
+  GeometricSlamResult keyframe_start;
+  SolverOptions solver_options = options_.solver;
+  const KeyframeStartOptions& keyframe_options = options_.keyframe_start;
+  if (!warm_start && keyframe_options.min_poses > 0 && num_poses > keyframe_options.min_poses) {
+    keyframe_start = KeyframeStart(problem, by_object);
+    warm_start = &keyframe_start;
+    solver_options.initial_damping =
+        std::min(solver_options.initial_damping, keyframe_options.initial_damping);
+  }
+
   // ---- variables and initial values ----
   FactorGraph graph;
   const int num_objects = static_cast<int>(by_object.size());
@@ -420,9 +452,10 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
   }
 
   // ---- solve and read out ----
-  solver_.set_options(options_.solver);
+  solver_.set_options(solver_options);
   const SolveResult solved = solver_.Solve(&graph);
   GeometricSlamResult result;
+  result.keyframe_start = keyframe_start.keyframe_start;
   result.summary = solved.summary;
   result.evidence = solved.evidence;
   const Values& values = graph.values();

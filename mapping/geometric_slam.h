@@ -57,6 +57,45 @@ struct GeometricSlamProblem {
   Pose2 first_pose;                 // x_1, clamped (spec §3.4)
 };
 
+// The initial estimate of a long run (GeometricSlam::KeyframeStart): a batch
+// solve from raw odometry cannot undo laps of drift, so the run is first
+// solved as it grows, on every `spacing`-th pose.
+struct KeyframeStartOptions {
+  // Used without a warm start for runs of more poses than this (0: never).
+  long min_poses = 2000;
+  int spacing = 10;  // poses per keyframe
+  int stage = 10;    // keyframes added per stage
+  int window = 20;   // the latest keyframes free in a stage (>= stage)
+  // A stage whose 2 cost / rows stays above this (a loop closed after a long
+  // drift) is solved again with twice the keyframes free, up to all.
+  double max_cost_per_row = 1.5;
+  int stage_iterations = 10;     // LM iterations of a stage
+  int resolve_iterations = 30;   // ... of a stage solved again
+  int final_iterations = 50;     // ... of the last solve, all keyframes free
+  double stage_tolerance = 0.1;  // nats: the stages need not fit finely
+  // An object joins the stages once detected from this many keyframes.
+  int min_detections = 3;
+  // LM's initial damping in the stages and in the solve from their result:
+  // Marquardt damping of 1e-4 diag(J'J) holds back the slow whole-map
+  // corrections of a long run for ~10 iterations (as in LandmarkSlamOptions).
+  double initial_damping = 1e-8;
+  // SolverOptions::max_step_extrapolation of the stages and the final
+  // keyframe solve (weakly seen objects crawl without it).
+  double step_extrapolation = 16.0;
+
+  bool Validate(std::string* why) const;
+};
+
+// What the keyframe start did (GeometricSlamResult::keyframe_start).
+struct KeyframeStartSummary {
+  bool used = false;
+  int num_keyframes = 0;
+  int stage_solves = 0;      // including stages solved again
+  int stage_iterations = 0;  // LM iterations over all stage solves
+  int final_iterations = 0;  // of the last keyframe solve
+  double time_s = 0.0;
+};
+
 struct GeometricSlamOptions {
   MotionNoiseOptions motion;
   double pixel_std_px = 30.0;  // E of spec §4.2 (thesis: 30 px)
@@ -65,6 +104,7 @@ struct GeometricSlamOptions {
   // and is then refined, alone and with the poses held, on up to this many
   // of its first detections (0: no refinement).
   int initial_refinement_detections = 20;
+  KeyframeStartOptions keyframe_start;
   bool compute_object_covariances = true;
   bool compute_pose_covariances = false;
 
@@ -91,6 +131,7 @@ struct GeometricSlamResult {
   Evidence evidence;
   std::string covariance_message;  // why covariances are missing, if they are
   bool has_object_covariances = false;  // objects[].covariance were computed
+  KeyframeStartSummary keyframe_start;
 };
 
 // Objects' initial geometry from a first detection (spec §5.4): bearing from
@@ -151,6 +192,13 @@ class GeometricSlam {
   CylinderGeometry InitialObject(const std::vector<Pose2>& poses,
                                  const std::vector<const SliceObservation*>& list,
                                  const ClassPrior& prior) const;
+  // The initial trajectory and objects of a long run (keyframe_start.cpp):
+  // every spacing-th pose with its composed odometry and its detections,
+  // solved as the run grows, then every pose placed from its keyframe by
+  // odometry. Objects never in a stage are left out (Solve places them).
+  GeometricSlamResult KeyframeStart(
+      const GeometricSlamProblem& problem,
+      const std::map<int, std::vector<const SliceObservation*>>& by_object) const;
 
   const CameraModel& camera_;
   GeometricSlamOptions options_;
