@@ -3,6 +3,8 @@
 // change, and CHOLMOD's numeric factorisation per iteration as the floor.
 // Problems come from tests/mapping/synthetic_scene.h (thesis noise levels).
 #include <benchmark/benchmark.h>
+#include <cstdio>
+#include <cstdlib>
 
 #include "calib/hyperbolic_camera.h"
 #include "mapping/geometric_slam.h"
@@ -21,6 +23,7 @@ testing::SyntheticScene Scene(int poses, int objects, double length, double widt
   options.max_range_m = range;
   options.pixel_std_px = 30.0;
   options.odometry_noise = true;
+  if (const char* v = std::getenv("SCRATCH_SEED")) options.seed = std::atoi(v);
   return testing::MakeSyntheticScene(camera, options);
 }
 
@@ -37,6 +40,9 @@ void Report(benchmark::State& state, const testing::SyntheticScene& scene,
   state.counters["analyze_ms"] = 1e3 * result.summary.analyze_time_s;
   state.counters["evidence_ms"] = 1e3 * result.summary.evidence_time_s;
   state.counters["solver_ms"] = 1e3 * result.summary.total_time_s;
+  if (std::getenv("SCRATCH_OBJECTS"))
+    for (const auto& o : result.objects)
+      std::fprintf(stderr, "object %d n %d r2 %.1f err %.2f\n", o.id, o.num_observations, o.squared_residual, (o.geometry.base_world - scene.true_objects[o.id].base_world).norm());
   if (result.keyframe_start.used) {
     state.counters["start_ms"] = 1e3 * result.keyframe_start.time_s;
     state.counters["start_stage_solves"] = result.keyframe_start.stage_solves;
@@ -52,6 +58,7 @@ void ColdSolve(benchmark::State& state, const testing::SyntheticScene& scene,
   GeometricSlamOptions options;
   options.compute_object_covariances = false;
   options.solver.max_step_extrapolation = extrapolation;
+  if (const char* v = std::getenv("KF_MINPOSES")) options.keyframe_start.min_poses = std::atol(v);
   GeometricSlamResult result;
   for (auto _ : state) {
     GeometricSlam slam(camera, options);  // fresh: no cached analysis

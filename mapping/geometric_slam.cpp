@@ -22,7 +22,7 @@ bool KeyframeStartOptions::Validate(std::string* why) const {
     return fail("need spacing >= 1, stage >= 1 and window >= stage");
   if (stage_iterations < 1 || resolve_iterations < 1 || final_iterations < 1)
     return fail("the iteration counts must be >= 1");
-  if (!(max_cost_per_row > 0.0)) return fail("max_cost_per_row must be positive");
+  if (!(max_reduced_chi_square > 0.0)) return fail("max_reduced_chi_square must be positive");
   if (!(stage_tolerance >= 0.0)) return fail("stage_tolerance must be >= 0");
   if (min_detections < 1) return fail("min_detections must be >= 1");
   if (!(initial_damping > 0.0)) return fail("initial_damping must be positive");

@@ -66,9 +66,11 @@ struct KeyframeStartOptions {
   int spacing = 10;  // poses per keyframe
   int stage = 10;    // keyframes added per stage
   int window = 20;   // the latest keyframes free in a stage (>= stage)
-  // A stage whose 2 cost / rows stays above this (a loop closed after a long
-  // drift) is solved again with twice the keyframes free, up to all.
-  double max_cost_per_row = 1.5;
+  // A stage whose reduced chi-square ||e||^2 / (rows - free parameters)
+  // stays above this (a loop closed after a long drift) is solved again with
+  // all keyframes free. Raised to 1.1 times what such a solve reaches, when
+  // that is more (a model that fits real data no better).
+  double max_reduced_chi_square = 1.5;
   int stage_iterations = 10;     // LM iterations of a stage
   int resolve_iterations = 30;   // ... of a stage solved again
   int final_iterations = 50;     // ... of the last solve, all keyframes free
@@ -91,6 +93,7 @@ struct KeyframeStartSummary {
   bool used = false;
   int num_keyframes = 0;
   int stage_solves = 0;      // including stages solved again
+  int closures = 0;          // stages solved again with every keyframe free
   int stage_iterations = 0;  // LM iterations over all stage solves
   int final_iterations = 0;  // of the last keyframe solve
   double time_s = 0.0;
