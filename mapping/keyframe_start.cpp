@@ -25,6 +25,7 @@
 #include "mapping/factor_graph.h"
 #include "mapping/factors.h"
 #include "mapping/geometric_slam.h"
+#include "mapping/keyframe_start.h"
 #include "mapping/landmark_factors.h"
 
 namespace oslam {
@@ -34,26 +35,6 @@ namespace {
 Pose2 Between(const Pose2& a, const Pose2& b) {
   const Eigen::Vector3d local = a.WorldToRobot(Eigen::Vector3d(b.x, b.y, 0.0));
   return {local.x(), local.y(), WrapAngle(b.theta - a.theta)};
-}
-
-struct KeyframeLink {
-  Pose2 relative;             // the next keyframe in this one's frame
-  Eigen::Matrix3d covariance;  // of `relative`, propagated through the steps
-};
-
-// The odometry of frames (first, last] composed in `first`'s frame, with the
-// covariance of the composition (P <- F P F' + Q_i per step, spec §4.1's Q_i).
-KeyframeLink ComposeSteps(const std::vector<OdometryIncrement>& increments, long first, long last,
-                          const MotionNoiseOptions& motion) {
-  KeyframeLink link{Pose2{}, Eigen::Matrix3d::Zero()};
-  for (long i = first + 1; i <= last; ++i) {
-    Eigen::Matrix3d jacobian;
-    const Pose2 next = ApplyIncrement(link.relative, increments[i], &jacobian);
-    link.covariance = jacobian * link.covariance * jacobian.transpose() +
-                      MotionCovariance(link.relative.theta, increments[i], motion);
-    link.relative = next;
-  }
-  return link;
 }
 
 // The run reduced to keyframes.
@@ -74,7 +55,8 @@ void BuildKeyframes(const GeometricSlamProblem& problem,
   if (frames.back() != num_poses - 1) frames.push_back(num_poses - 1);
   keyframes->links.resize(frames.size());
   for (size_t j = 1; j < frames.size(); ++j)
-    keyframes->links[j] = ComposeSteps(problem.increments, frames[j - 1], frames[j], motion);
+    keyframes->links[j] =
+        ComposeOdometrySteps(problem.increments, frames[j - 1], frames[j], motion);
   for (const auto& [id, list] : by_object)
     for (const SliceObservation* observation : list) {
       const auto keyframe = std::lower_bound(frames.begin(), frames.end(), observation->frame);
@@ -170,6 +152,19 @@ StageFit SolveStage(const StageContext& context, int first_free, int end, Sparse
 }
 
 }  // namespace
+
+KeyframeLink ComposeOdometrySteps(const std::vector<OdometryIncrement>& increments, long first,
+                                  long last, const MotionNoiseOptions& motion) {
+  KeyframeLink link;
+  for (long i = first + 1; i <= last; ++i) {
+    Eigen::Matrix3d jacobian;
+    const Pose2 next = ApplyIncrement(link.relative, increments[i], &jacobian);
+    link.covariance = jacobian * link.covariance * jacobian.transpose() +
+                      MotionCovariance(link.relative.theta, increments[i], motion);
+    link.relative = next;
+  }
+  return link;
+}
 
 GeometricSlamResult GeometricSlam::KeyframeStart(
     const GeometricSlamProblem& problem,

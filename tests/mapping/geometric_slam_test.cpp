@@ -106,15 +106,7 @@ TEST(GeometricSlamTest, ThesisNoiseGivesObjectsWithinTolerance) {
     // truth it reaches the same minimum.
     EXPECT_LT(errors.median_position, 0.5);
     EXPECT_LT(errors.max_position, 1.0);
-    GeometricSlamResult truth;
-    truth.trajectory = scene.true_trajectory;
-    for (size_t j = 0; j < scene.true_objects.size(); ++j) {
-      MappedObject object;
-      object.id = static_cast<int>(j);
-      object.class_index = scene.problem.object_class.at(object.id);
-      object.geometry = scene.true_objects[j];
-      truth.objects.push_back(object);
-    }
+    const GeometricSlamResult truth = testing::TruthAsResult(scene);
     const GeometricSlamResult from_truth = slam.Solve(scene.problem, &truth);
     EXPECT_NEAR(result.summary.final_cost, from_truth.summary.final_cost,
                 1e-4 * from_truth.summary.final_cost);

@@ -151,6 +151,20 @@ inline SyntheticScene MakeSyntheticScene(const CameraModel& camera,
   return scene;
 }
 
+// The scene's truth as a solve's result, to warm-start a solve from it.
+inline GeometricSlamResult TruthAsResult(const SyntheticScene& scene) {
+  GeometricSlamResult truth;
+  truth.trajectory = scene.true_trajectory;
+  for (size_t j = 0; j < scene.true_objects.size(); ++j) {
+    MappedObject object;
+    object.id = static_cast<int>(j);
+    object.class_index = scene.problem.object_class.at(object.id);
+    object.geometry = scene.true_objects[j];
+    truth.objects.push_back(object);
+  }
+  return truth;
+}
+
 // The problem after a split (what an MCMC proposal does): the last
 // detection of object `from` becomes a new object `to` of the same class.
 inline GeometricSlamProblem SplitLastDetection(const GeometricSlamProblem& problem, int from,
