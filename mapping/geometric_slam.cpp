@@ -383,6 +383,8 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     warm_start = &keyframe_start;
     solver_options.initial_damping =
         std::min(solver_options.initial_damping, keyframe_options.initial_damping);
+    solver_options.max_step_extrapolation =
+        std::max(solver_options.max_step_extrapolation, keyframe_options.step_extrapolation);
   }
 
   // ---- variables and initial values ----

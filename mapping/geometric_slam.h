@@ -77,12 +77,13 @@ struct KeyframeStartOptions {
   double stage_tolerance = 0.1;  // nats: the stages need not fit finely
   // An object joins the stages once detected from this many keyframes.
   int min_detections = 3;
-  // LM's initial damping in the stages and in the solve from their result:
+  // LM's initial damping (at most) in the stages and the solve from their result:
   // Marquardt damping of 1e-4 diag(J'J) holds back the slow whole-map
   // corrections of a long run for ~10 iterations (as in LandmarkSlamOptions).
   double initial_damping = 1e-8;
-  // SolverOptions::max_step_extrapolation of the stages and the final
-  // keyframe solve (weakly seen objects crawl without it).
+  // SolverOptions::max_step_extrapolation (at least) of the stages and of
+  // the solve from their result: weakly seen objects crawl without it
+  // (10,000 poses, seed 2: 42 iterations instead of 24).
   double step_extrapolation = 16.0;
 
   bool Validate(std::string* why) const;
