@@ -11,8 +11,7 @@
 namespace oslam {
 namespace {
 
-testing::SyntheticScene Scene(int poses, int objects, double length, double width, double range,
-                              unsigned seed = 1) {
+testing::SyntheticScene Scene(int poses, int objects, double length, double width, double range) {
   static const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
   testing::SyntheticSceneOptions options;
   options.num_poses = poses;
@@ -22,8 +21,12 @@ testing::SyntheticScene Scene(int poses, int objects, double length, double widt
   options.max_range_m = range;
   options.pixel_std_px = 30.0;
   options.odometry_noise = true;
-  options.seed = seed;
   return testing::MakeSyntheticScene(camera, options);
+}
+
+testing::SyntheticScene LargeScene(unsigned seed = 1) {
+  static const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  return testing::MakeSyntheticScene(camera, testing::LargeLoop(seed));
 }
 
 void Report(benchmark::State& state, const testing::SyntheticScene& scene,
@@ -75,8 +78,7 @@ BENCHMARK(BM_LpaScaleFromOdometry)->Unit(benchmark::kMillisecond);
 // 10 laps of a 60 m x 40 m loop; Arg: the scene's seed. From raw odometry
 // through the keyframe start (GeometricSlamOptions::keyframe_start).
 void BM_LargeFromOdometry(benchmark::State& state) {
-  const testing::SyntheticScene scene =
-      Scene(10000, 200, 60.0, 40.0, 3.5, static_cast<unsigned>(state.range(0)));
+  const testing::SyntheticScene scene = LargeScene(static_cast<unsigned>(state.range(0)));
   ColdSolve(state, scene);
 }
 BENCHMARK(BM_LargeFromOdometry)->DenseRange(1, 5)->Unit(benchmark::kMillisecond)->Iterations(2);
@@ -84,7 +86,7 @@ BENCHMARK(BM_LargeFromOdometry)->DenseRange(1, 5)->Unit(benchmark::kMillisecond)
 // Seed 1 with the batch started at raw odometry itself (the keyframe start
 // off): it does not converge in 50 iterations.
 void BM_LargeFromRawOdometry(benchmark::State& state) {
-  static const testing::SyntheticScene scene = Scene(10000, 200, 60.0, 40.0, 3.5);
+  static const testing::SyntheticScene scene = LargeScene();
   ColdSolve(state, scene, 0.0, /*keyframe_start=*/false);
 }
 BENCHMARK(BM_LargeFromRawOdometry)->Unit(benchmark::kMillisecond)->Iterations(2);
@@ -92,7 +94,7 @@ BENCHMARK(BM_LargeFromRawOdometry)->Unit(benchmark::kMillisecond)->Iterations(2)
 // The same with the line search beyond steps whose gain ratio shows J^T J
 // overstating the curvature (SolverOptions::max_step_extrapolation = 16).
 void BM_LargeFromOdometryExtrapolated(benchmark::State& state) {
-  static const testing::SyntheticScene scene = Scene(10000, 200, 60.0, 40.0, 3.5);
+  static const testing::SyntheticScene scene = LargeScene();
   ColdSolve(state, scene, 16.0);
 }
 BENCHMARK(BM_LargeFromOdometryExtrapolated)->Unit(benchmark::kMillisecond)->Iterations(2);
@@ -247,7 +249,7 @@ const bool kProposalsRegistered =
 // the convergence trouble of a start from 2 km of raw odometry.
 // Arg: SolverOptions::max_step_extrapolation (0: off, the default; 16).
 void BM_LargeFromTruth(benchmark::State& state) {
-  static const testing::SyntheticScene scene = Scene(10000, 200, 60.0, 40.0, 3.5);
+  static const testing::SyntheticScene scene = LargeScene();
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
   GeometricSlamOptions options;
   options.compute_object_covariances = false;

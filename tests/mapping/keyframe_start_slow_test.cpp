@@ -17,16 +17,8 @@ class LargeScene : public ::testing::TestWithParam<unsigned> {};
 
 TEST_P(LargeScene, ConvergesFromOdometryNoHigherThanFromTheTruth) {
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
-  testing::SyntheticSceneOptions scene_options;
-  scene_options.num_poses = 10000;
-  scene_options.num_objects = 200;
-  scene_options.loop_length_m = 60.0;
-  scene_options.loop_width_m = 40.0;
-  scene_options.max_range_m = 3.5;
-  scene_options.pixel_std_px = 30.0;
-  scene_options.odometry_noise = true;
-  scene_options.seed = GetParam();
-  const testing::SyntheticScene scene = testing::MakeSyntheticScene(camera, scene_options);
+  const testing::SyntheticScene scene =
+      testing::MakeSyntheticScene(camera, testing::LargeLoop(GetParam()));
   GeometricSlamOptions options;
   options.compute_object_covariances = false;
   const GeometricSlamResult started = GeometricSlam(camera, options).Solve(scene.problem);

@@ -50,6 +50,22 @@ inline SyntheticSceneOptions GrownLpaLoop(int k) {
   return options;
 }
 
+// The benchmarks' large problem: 10 laps of a 60 m x 40 m loop, 10,000
+// poses, 200 objects seen up to 3.5 m (~67,000 detections), E = 30 px, noisy
+// odometry.
+inline SyntheticSceneOptions LargeLoop(unsigned seed = 1) {
+  SyntheticSceneOptions options;
+  options.num_poses = 10000;
+  options.num_objects = 200;
+  options.loop_length_m = 60.0;
+  options.loop_width_m = 40.0;
+  options.max_range_m = 3.5;
+  options.pixel_std_px = 30.0;
+  options.odometry_noise = true;
+  options.seed = seed;
+  return options;
+}
+
 inline SyntheticScene MakeSyntheticScene(const CameraModel& camera,
                                          const SyntheticSceneOptions& options) {
   std::mt19937 rng(options.seed);
