@@ -39,9 +39,9 @@ Pose2 Between(const Pose2& a, const Pose2& b) {
 
 // The run reduced to keyframes.
 struct KeyframeProblem {
-  std::vector<long> frames;                    // keyframe -> frame
-  std::vector<KeyframeLink> links;             // links[j]: keyframe j-1 -> j
-  std::vector<SliceObservation> detections;    // frame = keyframe index
+  std::vector<long> frames;                                       // keyframe -> frame
+  std::vector<KeyframeLink> links;                                // links[j]: keyframe j-1 -> j
+  std::vector<SliceObservation> detections;                       // frame = keyframe index
   std::map<int, std::vector<const SliceObservation*>> by_object;  // in keyframe order
 };
 
@@ -112,8 +112,8 @@ StageFit SolveStage(const StageContext& context, int first_free, int end, Sparse
   for (const auto& [id, list] : context.keyframes.by_object) {
     const auto seen_end =
         std::find_if(list.begin(), list.end(), [&](const auto* o) { return o->frame >= end; });
-    const bool in_stage = std::any_of(list.begin(), seen_end,
-                                      [&](const auto* o) { return o->frame >= first_free; });
+    const bool in_stage =
+        std::any_of(list.begin(), seen_end, [&](const auto* o) { return o->frame >= first_free; });
     // From fewer keyframes the range rests on the size prior alone, and a
     // stage's steps throw the object far along its viewing ray.
     if (!in_stage || seen_end - list.begin() < context.min_detections) continue;
@@ -136,8 +136,9 @@ StageFit SolveStage(const StageContext& context, int first_free, int end, Sparse
   fit.usable = solved.summary.IsUsable();
   fit.iterations = solved.summary.iterations;
   if (!fit.usable) return fit;
-  fit.reduced_chi_square = 2.0 * solved.summary.final_cost /
-                     std::max(1, solved.summary.num_residuals - solved.summary.num_parameters);
+  fit.reduced_chi_square =
+      2.0 * solved.summary.final_cost /
+      std::max(1, solved.summary.num_residuals - solved.summary.num_parameters);
   for (int j = first_free; j < end; ++j) {
     const double* p = graph.values().Data(pose_keys.at(j));
     (*poses)[j] = {p[0], p[1], p[2]};
@@ -188,13 +189,14 @@ GeometricSlamResult GeometricSlam::KeyframeStart(
   stage_options.max_iterations = options.stage_iterations;
   SparseSolver solver(stage_options);
 
-  const StageContext context{problem, keyframes, camera_, options_.pixel_std_px,
-                             options.min_detections,
-                             [this](const std::vector<Pose2>& poses,
-                                    const std::vector<const SliceObservation*>& list,
-                                    const ClassPrior& prior) {
-                               return InitialObject(poses, list, prior);
-                             }};
+  const StageContext context{
+      problem,
+      keyframes,
+      camera_,
+      options_.pixel_std_px,
+      options.min_detections,
+      [this](const std::vector<Pose2>& poses, const std::vector<const SliceObservation*>& list,
+             const ClassPrior& prior) { return InitialObject(poses, list, prior); }};
   GeometricSlamResult start;
   KeyframeStartSummary& summary = start.keyframe_start;
   summary.used = true;
@@ -212,8 +214,8 @@ GeometricSlamResult GeometricSlam::KeyframeStart(
     // the closure spreads over the whole loop, as the odometry's covariance
     // says. Doubling the free span instead left kinks that ended the final
     // solve in worse minima (10,000 poses, seed 3: 138.4 k against 135.5 k).
-    StageFit fit = SolveStage(context, std::max(1, end - options.window), end, &solver, &poses,
-                              &objects);
+    StageFit fit =
+        SolveStage(context, std::max(1, end - options.window), end, &solver, &poses, &objects);
     ++summary.stage_solves;
     summary.stage_iterations += fit.iterations;
     if (end - options.window > 1 &&
@@ -245,8 +247,8 @@ GeometricSlamResult GeometricSlam::KeyframeStart(
   start.trajectory.resize(num_poses);
   for (long i = 0; i < num_poses; ++i) {
     const long j = i / options.spacing;
-    start.trajectory[i] = ComposePose(
-        poses[j], Between(dead_reckoning[keyframes.frames[j]], dead_reckoning[i]));
+    start.trajectory[i] =
+        ComposePose(poses[j], Between(dead_reckoning[keyframes.frames[j]], dead_reckoning[i]));
   }
   start.trajectory[0] = problem.first_pose;
   for (const auto& [id, geometry] : objects) {

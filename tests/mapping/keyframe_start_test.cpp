@@ -6,8 +6,8 @@
 #include <random>
 #include <string>
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 #include "calib/hyperbolic_camera.h"
 #include "core/angles.h"
@@ -63,16 +63,16 @@ TEST(KeyframeStartTest, ComposedOdometryIsTheDriveAndItsCovarianceTheSampledSpre
   // 20,000 drives estimate a variance to ~1 %; first order is good to ~1 %
   // at these noise levels.
   EXPECT_LT((spread - link.covariance).norm(), 0.05 * link.covariance.norm())
-      << "sampled\n" << spread << "\npropagated\n" << link.covariance;
+      << "sampled\n"
+      << spread << "\npropagated\n"
+      << link.covariance;
 
   // Composing in two parts and chaining gives the same relative pose.
   const KeyframeLink first = ComposeOdometrySteps(increments, 0, 6, motion);
   const KeyframeLink second = ComposeOdometrySteps(increments, 6, last, motion);
   const double c = std::cos(first.relative.theta), s = std::sin(first.relative.theta);
-  EXPECT_NEAR(first.relative.x + c * second.relative.x - s * second.relative.y, expected.x,
-              1e-12);
-  EXPECT_NEAR(first.relative.y + s * second.relative.x + c * second.relative.y, expected.y,
-              1e-12);
+  EXPECT_NEAR(first.relative.x + c * second.relative.x - s * second.relative.y, expected.x, 1e-12);
+  EXPECT_NEAR(first.relative.y + s * second.relative.x + c * second.relative.y, expected.y, 1e-12);
 }
 
 TEST(KeyframeStartTest, UsedOnlyForLongRunsWithoutAWarmStart) {
@@ -108,19 +108,21 @@ TEST(KeyframeStartTest, InvalidOptionsAreRejectedWithTheirName) {
     EXPECT_THROW(GeometricSlam(camera, options).Solve(scene.problem), Error);
     return why;
   };
-  EXPECT_NE(why_rejected([](KeyframeStartOptions* o) { o->window = o->stage - 1; })
-                .find("keyframe_start: need spacing >= 1, stage >= 1 and window >= stage"),
+  EXPECT_NE(why_rejected([](KeyframeStartOptions* o) {
+              o->window = o->stage - 1;
+            }).find("keyframe_start: need spacing >= 1, stage >= 1 and window >= stage"),
             std::string::npos);
   EXPECT_NE(why_rejected([](KeyframeStartOptions* o) { o->spacing = 0; }).find("keyframe_start"),
             std::string::npos);
-  EXPECT_NE(why_rejected([](KeyframeStartOptions* o) { o->max_reduced_chi_square = NAN; })
-                .find("max_reduced_chi_square"),
+  EXPECT_NE(why_rejected([](KeyframeStartOptions* o) {
+              o->max_reduced_chi_square = NAN;
+            }).find("max_reduced_chi_square"),
             std::string::npos);
   EXPECT_NE(why_rejected([](KeyframeStartOptions* o) { o->min_poses = -1; }).find("min_poses"),
             std::string::npos);
-  EXPECT_NE(why_rejected([](KeyframeStartOptions* o) { o->final_iterations = 0; })
-                .find("iteration"),
-            std::string::npos);
+  EXPECT_NE(
+      why_rejected([](KeyframeStartOptions* o) { o->final_iterations = 0; }).find("iteration"),
+      std::string::npos);
 }
 
 // Three laps of a 48 m x 32 m loop (2,400 poses, 80 objects) whose raw
