@@ -2,6 +2,7 @@
 // the composed odometry's covariance against sampled drives, when the start
 // is used, and that a multi-lap run whose raw-odometry solve does not
 // converge converges from it.
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
@@ -94,6 +95,29 @@ TEST(KeyframeStartTest, UsedOnlyForLongRunsWithoutAWarmStart) {
   EXPECT_NEAR(started.summary.final_cost, cold.summary.final_cost, 1e-2);
   const GeometricSlamResult warm = keyframed.Solve(scene.problem, &cold);
   EXPECT_FALSE(warm.keyframe_start.used);
+}
+
+// Odometry only (no object ever seen from enough keyframes): the start is
+// dead reckoning and the solve keeps it.
+TEST(KeyframeStartTest, ARunWithoutObjectsKeepsItsOdometry) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  testing::SyntheticSceneOptions scene_options = testing::GrownLpaLoop(8);
+  scene_options.num_objects = 0;
+  const testing::SyntheticScene scene = testing::MakeSyntheticScene(camera, scene_options);
+  ASSERT_TRUE(scene.problem.observations.empty());
+  const GeometricSlamResult result =
+      GeometricSlam(camera, GeometricSlamOptions()).Solve(scene.problem);
+  ASSERT_TRUE(result.keyframe_start.used);
+  EXPECT_EQ(result.keyframe_start.closures, 0);
+  EXPECT_EQ(result.summary.termination, TerminationType::kConverged);
+  const std::vector<Pose2> odometry =
+      ComposeOdometry(scene.problem.first_pose, scene.problem.increments);
+  ASSERT_EQ(result.trajectory.size(), odometry.size());
+  double worst = 0.0;
+  for (size_t i = 0; i < odometry.size(); ++i)
+    worst = std::max(worst, std::hypot(result.trajectory[i].x - odometry[i].x,
+                                       result.trajectory[i].y - odometry[i].y));
+  EXPECT_LT(worst, 1e-6);
 }
 
 TEST(KeyframeStartTest, InvalidOptionsAreRejectedWithTheirName) {
