@@ -25,8 +25,10 @@ bool KeyframeStartOptions::Validate(std::string* why) const {
   if (!(max_reduced_chi_square > 0.0)) return fail("max_reduced_chi_square must be positive");
   if (!(stage_tolerance >= 0.0)) return fail("stage_tolerance must be >= 0");
   if (min_detections < 1) return fail("min_detections must be >= 1");
-  if (!(initial_damping > 0.0)) return fail("initial_damping must be positive");
-  if (!(step_extrapolation >= 0.0)) return fail("step_extrapolation must be >= 0");
+  if (!(initial_damping > 0.0) || !std::isfinite(initial_damping))
+    return fail("initial_damping must be positive and finite");
+  if (!(step_extrapolation >= 0.0) || !std::isfinite(step_extrapolation))
+    return fail("step_extrapolation must be >= 0 and finite");
   return true;
 }
 

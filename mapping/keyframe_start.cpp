@@ -5,7 +5,7 @@
 // Levenberg-Marquardt then wanders (10,000 poses, 10 laps: not converged
 // after 50 iterations). Here the run is solved as it grows, so each
 // re-observation corrects the drift of one short stage only:
-// - a problem ten times smaller: every keyframe_spacing-th pose, linked by
+// - a problem ten times smaller: every `spacing`-th pose, linked by
 //   its composed odometry with the propagated covariance, and only the
 //   keyframes' detections;
 // - each stage adds a few keyframes by odometry and solves the recent ones

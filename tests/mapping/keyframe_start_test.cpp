@@ -144,6 +144,10 @@ TEST(KeyframeStartTest, InvalidOptionsAreRejectedWithTheirName) {
             std::string::npos);
   EXPECT_NE(why_rejected([](KeyframeStartOptions* o) { o->min_poses = -1; }).find("min_poses"),
             std::string::npos);
+  EXPECT_NE(why_rejected([](KeyframeStartOptions* o) {
+              o->initial_damping = INFINITY;
+            }).find("initial_damping"),
+            std::string::npos);
   EXPECT_NE(
       why_rejected([](KeyframeStartOptions* o) { o->final_iterations = 0; }).find("iteration"),
       std::string::npos);
