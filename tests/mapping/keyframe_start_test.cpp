@@ -155,9 +155,9 @@ TEST(KeyframeStartTest, InvalidOptionsAreRejectedWithTheirName) {
 
 // Three laps of a 48 m x 32 m loop (2,400 poses, 80 objects) whose raw
 // odometry start does not converge in 50 iterations (seed 2 of the growth
-// benchmark's scene): from the keyframe start the solve converges, one loop
-// closure is found, and the cost is no higher than the solve started at the
-// truth reaches.
+// benchmark's scene): from the keyframe start the solve converges, at least
+// one loop closure is solved whole, and the cost is no higher than the solve
+// started at the truth reaches.
 TEST(KeyframeStartTest, MultiLapRunConvergesFromTheKeyframeStart) {
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
   testing::SyntheticSceneOptions scene_options = testing::GrownLpaLoop(8);
