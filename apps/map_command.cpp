@@ -30,6 +30,10 @@ int RunMapCommand(const std::vector<std::string>& args) {
                       "drop sightings whose unoccluded share is below this", "0.5");
   arguments.AddOption("location-std-xy", "", "M", "class location prior std, x and y", "10");
   arguments.AddOption("location-std-z", "", "M", "class location prior std, z", "2");
+  arguments.AddOption("keyframe-start", "", "POSES",
+                      "runs of more poses than this start from a keyframe solve grown stage "
+                      "by stage instead of raw odometry (0: always raw odometry)",
+                      "2000");
   arguments.AddFlag("pose-covariances", "also compute every pose's covariance (slower)");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
@@ -37,6 +41,7 @@ int RunMapCommand(const std::vector<std::string>& args) {
     throw UsageError("only --known-association is implemented so far (spec setup 1)");
   if (!arguments.Has("output")) throw UsageError("give the output file with -o OMAP.json");
   if (arguments.GetInt("seed") < 0) throw UsageError("--seed must be >= 0");
+  if (arguments.GetInt("keyframe-start") < 0) throw UsageError("--keyframe-start must be >= 0");
 
   const std::string run_dir = arguments.Get("RUN_DIR");
   KnownAssociationOptions input_options;
@@ -55,6 +60,7 @@ int RunMapCommand(const std::vector<std::string>& args) {
   // The factor's E: with no added noise keep the thesis value rather than 0.
   options.pixel_std_px = input_options.pixel_noise_px > 0 ? input_options.pixel_noise_px : 30.0;
   options.compute_pose_covariances = arguments.Flag("pose-covariances");
+  options.keyframe_start.min_poses = arguments.GetInt("keyframe-start");
   GeometricSlam slam(*camera, options);
   const GeometricSlamResult result = slam.Solve(input.problem);
 
@@ -67,6 +73,12 @@ int RunMapCommand(const std::vector<std::string>& args) {
     std::printf("%zu objects from %zu detections (%d sightings skipped), %zu poses\n",
                 result.objects.size(), input.problem.observations.size(), input.skipped_sightings,
                 result.trajectory.size());
+    const KeyframeStartSummary& start = result.keyframe_start;
+    if (start.used)
+      std::printf(
+          "start: %d keyframes, %d stage solves (%d of them loop closures, all keyframes free), "
+          "%.1f ms\n",
+          start.num_keyframes, start.stage_solves, start.closures, 1e3 * start.time_s);
     std::printf("solver: %s (%s), %d iterations, cost %.6g -> %.6g, %.1f ms\n",
                 TerminationName(s.termination), s.message.c_str(), s.iterations, s.initial_cost,
                 s.final_cost, 1e3 * s.total_time_s);

@@ -70,6 +70,14 @@ std::string OMapToJson(const GeometricSlamResult& result,
                     {"num_residuals", s.num_residuals},
                     {"num_parameters", s.num_parameters},
                     {"total_time_s", Number(s.total_time_s)}};
+  const KeyframeStartSummary& start = result.keyframe_start;
+  if (start.used)
+    root["solver"]["keyframe_start"] = {{"keyframes", start.num_keyframes},
+                                        {"stage_solves", start.stage_solves},
+                                        {"closures", start.closures},
+                                        {"stage_iterations", start.stage_iterations},
+                                        {"final_iterations", start.final_iterations},
+                                        {"time_s", Number(start.time_s)}};
   const Evidence& e = result.evidence;
   root["evidence"] = {{"valid", e.valid},
                       {"log_evidence", e.valid ? Number(e.log_evidence) : Json(nullptr)},

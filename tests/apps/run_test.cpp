@@ -243,5 +243,34 @@ TEST(Interrupt, SigintLeavesNoHalfWrittenFiles) {
   EXPECT_FALSE(fs::exists(run + "/odometry.csv"));  // written last: the run is visibly unfinished
 }
 
+// `oslam map --known-association` on the same run: with --keyframe-start
+// below its 16 frames the solve starts from the keyframe solve, says so and
+// records it in the O-Map; with 0 it starts from raw odometry and reaches
+// the same map.
+TEST_F(RunCommand, MapReportsTheKeyframeStartOfALongRun) {
+  testing::TempDir dir;
+  const std::string common = "map " + Run() + " --known-association --seed 2 ";
+  const Result keyframed = Oslam(common + "--keyframe-start 5 -o " + dir.Path("keyframed.json"));
+  ASSERT_EQ(keyframed.exit_code, 0) << keyframed.err;
+  EXPECT_NE(keyframed.out.find("start: 3 keyframes, "), std::string::npos)
+      << keyframed.out;  // frames 0, 10 and 15
+  const nlohmann::json with = nlohmann::json::parse(ReadFile(dir.Path("keyframed.json")));
+  ASSERT_TRUE(with["solver"].contains("keyframe_start")) << with["solver"].dump();
+  EXPECT_EQ(with["solver"]["keyframe_start"]["keyframes"], 3);
+
+  const Result raw = Oslam(common + "--keyframe-start 0 -o " + dir.Path("raw.json"));
+  ASSERT_EQ(raw.exit_code, 0) << raw.err;
+  EXPECT_EQ(raw.out.find("start:"), std::string::npos) << raw.out;
+  const nlohmann::json without = nlohmann::json::parse(ReadFile(dir.Path("raw.json")));
+  EXPECT_FALSE(without["solver"].contains("keyframe_start"));
+  EXPECT_NEAR(with["solver"]["final_cost"].get<double>(),
+              without["solver"]["final_cost"].get<double>(), 1e-2);
+
+  const Result bad = Oslam(common + "--keyframe-start -1 -o " + dir.Path("bad.json"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("--keyframe-start must be >= 0"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir.Path("bad.json")));
+}
+
 }  // namespace
 }  // namespace oslam
