@@ -32,6 +32,12 @@ bool KeyframeStartOptions::Validate(std::string* why) const {
   return true;
 }
 
+SolverOptions KeyframeStartOptions::ForSolver(SolverOptions solver) const {
+  solver.initial_damping = std::min(solver.initial_damping, initial_damping);
+  solver.max_step_extrapolation = std::max(solver.max_step_extrapolation, step_extrapolation);
+  return solver;
+}
+
 bool GeometricSlamOptions::Validate(std::string* why) const {
   if (!motion.Validate(why)) return false;
   if (!(pixel_std_px > 0.0) || !std::isfinite(pixel_std_px)) {
@@ -383,10 +389,7 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
   if (!warm_start && keyframe_options.min_poses > 0 && num_poses > keyframe_options.min_poses) {
     keyframe_start = KeyframeStart(problem, by_object);
     warm_start = &keyframe_start;
-    solver_options.initial_damping =
-        std::min(solver_options.initial_damping, keyframe_options.initial_damping);
-    solver_options.max_step_extrapolation =
-        std::max(solver_options.max_step_extrapolation, keyframe_options.step_extrapolation);
+    solver_options = keyframe_options.ForSolver(solver_options);
   }
 
   // ---- variables and initial values ----

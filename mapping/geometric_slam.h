@@ -87,6 +87,9 @@ struct KeyframeStartOptions {
   double step_extrapolation = 16.0;
 
   bool Validate(std::string* why) const;
+  // `solver` with the damping and line search above, for the stages and the
+  // solve from their result.
+  SolverOptions ForSolver(SolverOptions solver) const;
 };
 
 // What the keyframe start did (GeometricSlamResult::keyframe_start).

@@ -31,12 +31,6 @@
 namespace oslam {
 namespace {
 
-// Pose b in the frame of pose a.
-Pose2 Between(const Pose2& a, const Pose2& b) {
-  const Eigen::Vector3d local = a.WorldToRobot(Eigen::Vector3d(b.x, b.y, 0.0));
-  return {local.x(), local.y(), WrapAngle(b.theta - a.theta)};
-}
-
 // The run reduced to keyframes.
 struct KeyframeProblem {
   std::vector<long> frames;                                       // keyframe -> frame
@@ -177,9 +171,7 @@ GeometricSlamResult GeometricSlam::KeyframeStart(
   BuildKeyframes(problem, by_object, options.spacing, options_.motion, &keyframes);
   const int num_keyframes = static_cast<int>(keyframes.frames.size());
 
-  SolverOptions stage_options = options_.solver;
-  stage_options.initial_damping = options.initial_damping;
-  stage_options.max_step_extrapolation = options.step_extrapolation;
+  SolverOptions stage_options = options.ForSolver(options_.solver);
   stage_options.compute_evidence = false;
   stage_options.reuse_linearizations = false;
   stage_options.absolute_function_tolerance =
@@ -248,7 +240,7 @@ GeometricSlamResult GeometricSlam::KeyframeStart(
   for (long i = 0; i < num_poses; ++i) {
     const long j = i / options.spacing;
     start.trajectory[i] =
-        ComposePose(poses[j], Between(dead_reckoning[keyframes.frames[j]], dead_reckoning[i]));
+        ComposePose(poses[j], BetweenPoses(dead_reckoning[keyframes.frames[j]], dead_reckoning[i]));
   }
   start.trajectory[0] = problem.first_pose;
   for (const auto& [id, geometry] : objects) {

@@ -121,4 +121,9 @@ Pose2 ComposePose(const Pose2& a, const Pose2& z) {
   return {a.x + c * z.x - s * z.y, a.y + s * z.x + c * z.y, WrapAngle(a.theta + z.theta)};
 }
 
+Pose2 BetweenPoses(const Pose2& a, const Pose2& b) {
+  const Eigen::Vector3d local = a.WorldToRobot(Eigen::Vector3d(b.x, b.y, 0.0));
+  return {local.x(), local.y(), WrapAngle(b.theta - a.theta)};
+}
+
 }  // namespace oslam

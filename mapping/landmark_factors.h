@@ -89,4 +89,7 @@ class RelativePoseFactor final : public Factor {
 // a (+) z: the pose reached from a by the relative pose z (in a's frame).
 Pose2 ComposePose(const Pose2& a, const Pose2& z);
 
+// Pose b seen from pose a (in a's frame): the z with ComposePose(a, z) = b.
+Pose2 BetweenPoses(const Pose2& a, const Pose2& b);
+
 }  // namespace oslam

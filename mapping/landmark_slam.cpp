@@ -18,12 +18,8 @@ std::vector<Pose2> ExtendByOdometry(const std::vector<Pose2>& solved,
   if (solved.empty()) return dead_reckoning;
   const size_t k = solved.size() - 1;
   const Pose2& anchor = dead_reckoning[k];
-  for (size_t j = solved.size(); j < dead_reckoning.size(); ++j) {
-    const Eigen::Vector3d r =
-        anchor.WorldToRobot(Eigen::Vector3d(dead_reckoning[j].x, dead_reckoning[j].y, 0));
-    poses.push_back(
-        ComposePose(solved[k], {r.x(), r.y(), WrapAngle(dead_reckoning[j].theta - anchor.theta)}));
-  }
+  for (size_t j = solved.size(); j < dead_reckoning.size(); ++j)
+    poses.push_back(ComposePose(solved[k], BetweenPoses(anchor, dead_reckoning[j])));
   return poses;
 }
 
