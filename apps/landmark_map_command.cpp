@@ -13,10 +13,10 @@
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
-#include "mapping/landmark_data.h"
-#include "mapping/landmark_slam.h"
-#include "mapping/landmark_target.h"
-#include "mapping/omap_json.h"
+#include "slam/landmark_data.h"
+#include "slam/landmark_slam.h"
+#include "association/landmark_target.h"
+#include "slam/omap_json.h"
 
 namespace oslam {
 

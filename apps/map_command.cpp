@@ -8,9 +8,9 @@
 #include "calib/camera_io.h"
 #include "core/error.h"
 #include "core/run_folder.h"
-#include "mapping/geometric_slam.h"
-#include "mapping/known_association.h"
-#include "mapping/omap_json.h"
+#include "slam/geometric_slam.h"
+#include "pipeline/known_association.h"
+#include "slam/omap_json.h"
 
 namespace oslam {
 

@@ -18,8 +18,8 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/run_folder.h"
-#include "mapping/map_metrics.h"
-#include "mapping/omap.h"
+#include "omap/map_metrics.h"
+#include "omap/omap.h"
 
 namespace oslam {
 namespace {

@@ -20,13 +20,13 @@
 #include "core/progress.h"
 #include "core/run_folder.h"
 #include "detect/blob_detector.h"
-#include "mapping/nn_baseline.h"
-#include "mapping/omap_evaluation.h"
-#include "mapping/omap_fusion.h"
-#include "mapping/sampled_omap_json.h"
-#include "mapping/sampler.h"
-#include "mapping/slam_target.h"
-#include "mapping/tracks.h"
+#include "association/nn_baseline.h"
+#include "omap/omap_evaluation.h"
+#include "association/omap_fusion.h"
+#include "association/sampled_omap_json.h"
+#include "association/sampler.h"
+#include "association/slam_target.h"
+#include "association/tracks.h"
 
 namespace oslam {
 namespace {

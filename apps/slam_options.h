@@ -6,11 +6,11 @@
 #pragma once
 
 #include "apps/arguments.h"
-#include "mapping/nn_baseline.h"
-#include "mapping/omap_fusion.h"
-#include "mapping/sampler.h"
-#include "mapping/slam_target.h"
-#include "mapping/tracks.h"
+#include "association/nn_baseline.h"
+#include "association/omap_fusion.h"
+#include "association/sampler.h"
+#include "association/slam_target.h"
+#include "association/tracks.h"
 
 namespace oslam {
 

@@ -4,7 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "calib/hyperbolic_camera.h"
-#include "mapping/observation_model.h"
+#include "calib/observation_model.h"
 
 namespace oslam {
 namespace {

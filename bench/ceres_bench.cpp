@@ -17,9 +17,9 @@
 #include <ceres/ceres.h>
 
 #include "calib/hyperbolic_camera.h"
-#include "mapping/factors.h"
-#include "mapping/geometric_slam.h"
-#include "tests/mapping/synthetic_scene.h"
+#include "slam/factors.h"
+#include "slam/geometric_slam.h"
+#include "tests/slam/synthetic_scene.h"
 
 namespace oslam {
 namespace {

@@ -13,7 +13,7 @@
 #include <benchmark/benchmark.h>
 
 #include "bench/victoria_park_data.h"
-#include "mapping/landmark_target.h"
+#include "association/landmark_target.h"
 
 namespace oslam {
 namespace {

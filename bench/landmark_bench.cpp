@@ -12,7 +12,7 @@
 #include <benchmark/benchmark.h>
 
 #include "bench/victoria_park_data.h"
-#include "mapping/landmark_slam.h"
+#include "slam/landmark_slam.h"
 
 namespace oslam {
 namespace {

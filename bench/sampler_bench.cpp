@@ -1,5 +1,5 @@
 // O-SLAM sampler speed (issue 7): MC3 over the tracks of a synthetic LPA-like
-// loop (tests/mapping/synthetic_scene.h, E = 30 px, noisy odometry) grown k
+// loop (tests/slam/synthetic_scene.h, E = 30 px, noisy odometry) grown k
 // times (300 k poses, 10 k objects), started from the true association so
 // that every size samples around its posterior. Reports time per proposal and
 // per solve, and MC3 with the chains on threads (running ahead of the swaps)
@@ -11,9 +11,9 @@
 #include <benchmark/benchmark.h>
 
 #include "calib/hyperbolic_camera.h"
-#include "mapping/sampler.h"
-#include "mapping/slam_target.h"
-#include "tests/mapping/synthetic_scene.h"
+#include "association/sampler.h"
+#include "association/slam_target.h"
+#include "tests/slam/synthetic_scene.h"
 
 namespace oslam {
 namespace {

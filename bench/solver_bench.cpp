@@ -1,12 +1,12 @@
 // Geometric solver speed (issue 6): a cold solve from raw odometry at LPA
 // scale and at 10,000 poses, a warm re-solve after a small association
 // change, and CHOLMOD's numeric factorisation per iteration as the floor.
-// Problems come from tests/mapping/synthetic_scene.h (thesis noise levels).
+// Problems come from tests/slam/synthetic_scene.h (thesis noise levels).
 #include <benchmark/benchmark.h>
 
 #include "calib/hyperbolic_camera.h"
-#include "mapping/geometric_slam.h"
-#include "tests/mapping/synthetic_scene.h"
+#include "slam/geometric_slam.h"
+#include "tests/slam/synthetic_scene.h"
 
 namespace oslam {
 namespace {
@@ -213,7 +213,7 @@ const bool kOneLinearStepRegistered = RegisterWithFixedCounts("BM_LpaWarmOneLine
 // through splitting off the last detection of each of the 10 objects.
 // Arg: 0 = automatic ordering, every factor linearised afresh; 1 = with
 // reused linearisations; 2 = reused linearisations and AMD, the sampler's
-// settings (mapping/slam_target.cpp).
+// settings (association/slam_target.cpp).
 void BM_LpaProposalsFromOneState(benchmark::State& state) {
   static const testing::SyntheticScene scene = Scene(300, 10, 6.0, 4.0, 5.0);
   const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");

@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "mapping/landmark_data.h"
+#include "slam/landmark_data.h"
 
 namespace oslam {
 

@@ -13,7 +13,7 @@
 
 #include "core/pose2.h"
 #include "core/run_folder.h"
-#include "mapping/omap.h"
+#include "omap/omap.h"
 
 namespace oslam {
 

@@ -4,7 +4,7 @@
 
 #include "core/error.h"
 #include "export/raster.h"
-#include "mapping/observation_model.h"
+#include "calib/observation_model.h"
 
 namespace oslam {
 namespace {

@@ -15,7 +15,7 @@
 #include "core/csv.h"
 #include "core/error.h"
 #include "core/run_folder.h"
-#include "mapping/observation_model.h"
+#include "calib/observation_model.h"
 #include "samples/renderer.h"
 #include "samples/robot_path.h"
 #include "samples/texture.h"

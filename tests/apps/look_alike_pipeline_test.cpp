@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "core/run_folder.h"
-#include "mapping/omap.h"
+#include "omap/omap.h"
 #include "test_util.h"
 
 namespace oslam {

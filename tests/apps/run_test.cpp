@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "mapping/omap.h"
+#include "omap/omap.h"
 #include "test_util.h"
 
 namespace oslam {

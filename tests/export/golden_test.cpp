@@ -16,7 +16,7 @@
 #include "export/export_fixture.h"
 #include "export/figures.h"
 #include "export/overlay.h"
-#include "mapping/observation_model.h"
+#include "calib/observation_model.h"
 
 namespace oslam {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "calib/calibration.h"
 #include "core/bounding_slice.h"
-#include "mapping/observation_model.h"
+#include "calib/observation_model.h"
 #include "samples/simulator.h"
 #include "test_util.h"
 

@@ -1,0 +1,1344 @@
+#include "association/landmark_target.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <set>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+#include "core/angles.h"
+#include "core/error.h"
+#include "solver/factor_graph.h"
+#include "slam/factors.h"
+#include "slam/landmark_factors.h"
+
+namespace oslam {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+const MappedLandmark* FindLandmark(const LandmarkSlamResult& result, int id) {
+  const auto it = std::lower_bound(result.landmarks.begin(), result.landmarks.end(), id,
+                                   [](const MappedLandmark& l, int v) { return l.id < v; });
+  return it != result.landmarks.end() && it->id == id ? &*it : nullptr;
+}
+
+std::string Format(const char* format, double a, double b = 0, double c = 0, double d = 0,
+                   double e = 0, double f = 0, double g = 0) {
+  char line[256];
+  std::snprintf(line, sizeof(line), format, a, b, c, d, e, f, g);
+  return line;
+}
+
+// A rigid planar transform x -> R(angle) x + t.
+struct Rigid2 {
+  double angle = 0;
+  Eigen::Vector2d t = Eigen::Vector2d::Zero();
+  Eigen::Vector2d operator()(const Eigen::Vector2d& x) const {
+    return Eigen::Rotation2Dd(angle) * x + t;
+  }
+};
+
+// The least-squares rigid transform taking from[i] onto to[i].
+Rigid2 FitRigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
+  Eigen::Vector2d cf = Eigen::Vector2d::Zero(), ct = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < from.size(); ++i) {
+    cf += from[i];
+    ct += to[i];
+  }
+  cf /= double(from.size());
+  ct /= double(to.size());
+  double dot = 0, cross = 0;
+  for (size_t i = 0; i < from.size(); ++i) {
+    const Eigen::Vector2d a = from[i] - cf, b = to[i] - ct;
+    dot += a.dot(b);
+    cross += a.x() * b.y() - a.y() * b.x();
+  }
+  Rigid2 rigid;
+  rigid.angle = std::atan2(cross, dot);
+  rigid.t = ct - Eigen::Rotation2Dd(rigid.angle) * cf;
+  return rigid;
+}
+
+// The part `fraction` of `rigid` about `pivot`: at 0 the identity, at 1
+// `rigid` itself, rotating by fraction * angle about pivot in between.
+Rigid2 PartOf(const Rigid2& rigid, const Eigen::Vector2d& pivot, double fraction) {
+  Rigid2 part;
+  part.angle = fraction * rigid.angle;
+  const Eigen::Vector2d shift = rigid(pivot) - pivot;
+  part.t = pivot + fraction * shift - Eigen::Rotation2Dd(part.angle) * pivot;
+  return part;
+}
+
+}  // namespace
+
+bool LandmarkTrackOptions::Validate(std::string* why) const {
+  if (!(gate_m > 0) || !std::isfinite(gate_m)) {
+    if (why) *why = "the track gate must be > 0 m and finite";
+    return false;
+  }
+  if (max_pose_gap < 1) {
+    if (why) *why = "the track's pose gap must be >= 1";
+    return false;
+  }
+  return true;
+}
+
+std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
+                                                  const std::vector<Pose2>& trajectory,
+                                                  const LandmarkTrackOptions& options) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("landmark tracks: " + why);
+  if (static_cast<int>(trajectory.size()) != data.num_poses)
+    throw Error("landmark tracks: the trajectory has " + std::to_string(trajectory.size()) +
+                " poses for " + std::to_string(data.num_poses));
+  std::vector<int> order;
+  for (size_t k = 0; k < data.sightings.size(); ++k)
+    if (data.sightings[k].range_m > 0) order.push_back(static_cast<int>(k));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return data.sightings[a].pose < data.sightings[b].pose; });
+  struct Active {
+    int track, last_pose;
+    Eigen::Vector2d last_m;
+  };
+  std::vector<std::vector<int>> tracks;
+  std::vector<Active> active;
+  const double gate2 = options.gate_m * options.gate_m;
+  for (size_t begin = 0; begin < order.size();) {
+    const int pose = data.sightings[order[begin]].pose;
+    size_t end = begin;
+    while (end < order.size() && data.sightings[order[end]].pose == pose) ++end;
+    active.erase(
+        std::remove_if(active.begin(), active.end(),
+                       [&](const Active& a) { return pose - a.last_pose > options.max_pose_gap; }),
+        active.end());
+    const size_t n = end - begin;
+    std::vector<Eigen::Vector2d> world(n);
+    std::vector<int> claim(n, -1);  // index into `active`
+    std::vector<int> claims(active.size(), 0);
+    for (size_t i = 0; i < n; ++i) {
+      const LandmarkSighting& s = data.sightings[order[begin + i]];
+      world[i] = LandmarkFromRangeBearing(trajectory[pose], s.range_m, s.bearing_rad,
+                                          data.sensor_offset_m);
+      int candidates = 0;
+      for (size_t a = 0; a < active.size(); ++a)
+        if ((active[a].last_m - world[i]).squaredNorm() <= gate2) {
+          ++candidates;
+          claim[i] = static_cast<int>(a);
+        }
+      if (candidates != 1) claim[i] = -1;  // none, or ambiguous
+      if (claim[i] >= 0) ++claims[claim[i]];
+    }
+    std::vector<Active> next;
+    for (size_t i = 0; i < n; ++i) {
+      const int k = order[begin + i];
+      if (claim[i] >= 0 && claims[claim[i]] == 1) {
+        Active& a = active[claim[i]];
+        tracks[a.track].push_back(k);
+        a.last_pose = pose;
+        a.last_m = world[i];
+      } else {
+        tracks.push_back({k});
+        next.push_back({static_cast<int>(tracks.size()) - 1, pose, world[i]});
+      }
+    }
+    active.insert(active.end(), next.begin(), next.end());
+    begin = end;
+  }
+  return tracks;
+}
+
+bool LandmarkTargetOptions::Validate(std::string* why) const {
+  if (!(slam.landmark_prior_std_m > 0)) {
+    if (why)
+      *why =
+          "the landmark location prior std must be > 0 (a flat prior makes the evidence "
+          "improper across landmark counts)";
+    return false;
+  }
+  if (proposal_iterations < 1 || local_iterations < 1) {
+    if (why) *why = "the solver iterations per proposal must be >= 1";
+    return false;
+  }
+  if (max_cache_entries < 1) {
+    if (why) *why = "the state cache needs room for at least one entry";
+    return false;
+  }
+  return slam.Validate(why);
+}
+
+size_t LandmarkEvaluator::BlockHash::operator()(const std::vector<int>& block) const {
+  size_t h = block.size();
+  for (int t : block) h ^= std::hash<int>()(t) + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+  return h;
+}
+
+namespace {
+
+LandmarkSlamOptions FullOptions(const LandmarkTargetOptions& options) {
+  LandmarkSlamOptions full = options.slam;
+  full.compute_landmark_covariances = false;  // Solve() adds them for the output only
+  full.compute_pose_covariances = false;
+  return full;
+}
+
+LandmarkSlamOptions StepOptions(const LandmarkTargetOptions& options) {
+  LandmarkSlamOptions step = FullOptions(options);
+  step.solver.max_iterations = options.proposal_iterations;
+  return step;
+}
+
+}  // namespace
+
+LandmarkEvaluator::LandmarkEvaluator(const LandmarkTargetData& data,
+                                     const LandmarkTargetOptions& options)
+    : data_(data),
+      options_(options),
+      full_(FullOptions(options)),
+      step_(StepOptions(options)),
+      trial_(FullOptions(options)) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("landmark O-SLAM target options: " + why);
+  if (!data.data) throw Error("landmark O-SLAM target: no data set");
+  SolverOptions local = options.slam.solver;
+  local.max_iterations = options.local_iterations;
+  local.reuse_symbolic_analysis = false;
+  local_solver_.set_options(local);
+}
+
+std::vector<int> LandmarkEvaluator::Association(const AssociationState& state) const {
+  std::vector<int> association(data_.data->sightings.size(), -1);
+  for (const auto& block : state.blocks)
+    for (int t : block)
+      for (int k : data_.tracks.at(t)) association[k] = block.front();
+  return association;
+}
+
+LandmarkSlamResult LandmarkEvaluator::WarmStart(const StateEvaluation& from) const {
+  LandmarkSlamResult warm;
+  if (from.solution) warm.trajectory = from.solution->trajectory;
+  for (size_t j = 0; j < from.state.blocks.size() && j < from.locations.size(); ++j) {
+    MappedLandmark l;
+    l.id = from.state.blocks[j].front();
+    l.position_m = from.locations[j].head<2>();
+    warm.landmarks.push_back(l);
+  }
+  std::sort(warm.landmarks.begin(), warm.landmarks.end(),
+            [](const MappedLandmark& a, const MappedLandmark& b) { return a.id < b.id; });
+  return warm;
+}
+
+double SightingResidual2(const LandmarkDataset& data, const std::vector<Pose2>& trajectory,
+                         const std::vector<int>& sightings, const Eigen::Vector2d& landmark_m) {
+  double sum = 0;
+  for (int k : sightings) {
+    const LandmarkSighting& s = data.sightings[k];
+    const Pose2& pose = trajectory[s.pose];
+    const Eigen::Vector3d sensor =
+        pose.RobotToWorld(Eigen::Vector3d(data.sensor_offset_m.x(), data.sensor_offset_m.y(), 0.0));
+    const Eigen::Vector2d d = landmark_m - sensor.head<2>();
+    const double range_error = (d.norm() - s.range_m) / s.range_std_m;
+    const double bearing_error =
+        WrapAngle(std::atan2(d.y(), d.x()) - pose.theta - s.bearing_rad) / s.bearing_std_rad;
+    sum += range_error * range_error + bearing_error * bearing_error;
+  }
+  return sum;
+}
+
+bool LandmarkEvaluator::SharesAScan(const std::vector<int>& block) const {
+  if (!options_.one_sighting_per_scan || block.size() < 2) return false;
+  std::vector<int> poses;
+  for (int t : block)
+    for (int k : data_.tracks[t]) poses.push_back(data_.data->sightings[k].pose);
+  std::sort(poses.begin(), poses.end());
+  return std::adjacent_find(poses.begin(), poses.end()) != poses.end();
+}
+
+EvaluationPtr LandmarkEvaluator::FullEvaluation(const AssociationState& state,
+                                                const StateEvaluation* from, Solver solver) {
+  const auto start = std::chrono::steady_clock::now();
+  const bool refine = solver == Solver::kRefine;
+  const LandmarkDataset& data = *data_.data;
+  if (solver == Solver::kStep)
+    for (const auto& block : state.blocks)
+      if (SharesAScan(block)) {
+        auto invalid = std::make_shared<StateEvaluation>();
+        invalid->state = state;
+        return invalid;  // valid = false: rejected
+      }
+  LandmarkSlamResult warm;
+  const bool use_warm = from != nullptr;
+  if (use_warm) warm = WarmStart(*from);
+  LandmarkSlam& slam = refine ? full_ : solver == Solver::kStep ? step_ : trial_;
+  const LandmarkSlamResult result =
+      slam.Solve(data, Association(state), use_warm ? &warm : nullptr);
+  ++solves_;
+  auto evaluation = std::make_shared<StateEvaluation>();
+  evaluation->state = state;
+  evaluation->valid = result.summary.IsUsable() && result.evidence.valid &&
+                      std::isfinite(result.evidence.log_evidence);
+  evaluation->log_target = result.evidence.log_evidence;
+  auto solution = std::make_shared<GeometricSlamResult>();
+  solution->trajectory = result.trajectory;
+  solution->summary = result.summary;
+  solution->evidence = result.evidence;
+  evaluation->solution = std::move(solution);
+  if (refine) last_refine_keys_.clear();
+  for (const auto& block : state.blocks) {
+    const MappedLandmark* l = FindLandmark(result, block.front());
+    if (refine)
+      last_refine_keys_.push_back(l ? result.landmark_position_keys[l - result.landmarks.data()]
+                                    : -1);
+    const Eigen::Vector2d p = l ? l->position_m : Eigen::Vector2d::Zero();
+    evaluation->locations.push_back(Eigen::Vector3d(p.x(), p.y(), 0));
+    std::vector<int> sightings;
+    for (int t : block)
+      sightings.insert(sightings.end(), data_.tracks[t].begin(), data_.tracks[t].end());
+    evaluation->residual2.push_back(SightingResidual2(data, result.trajectory, sightings, p));
+  }
+  evaluation->evaluation_time_s = SecondsSince(start);
+  return evaluation;
+}
+
+const LandmarkEvaluator::BlockValue& LandmarkEvaluator::LocalBlock(const std::vector<int>& block,
+                                                                   const StateEvaluation* from) {
+  const auto found = block_cache_.find(block);
+  if (found != block_cache_.end()) return found->second;
+  const LandmarkDataset& data = *data_.data;
+  const std::vector<Pose2>& trajectory = reference_->solution->trajectory;
+  std::vector<int> sightings;
+  for (int t : block)
+    sightings.insert(sightings.end(), data_.tracks[t].begin(), data_.tracks[t].end());
+  // Start where `from` has the block of the earliest track, else at the
+  // first sighting with a bearing.
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();
+  bool placed = false;
+  if (from) {
+    const int j = from->state.BlockOf(block.front());
+    if (j >= 0 && j < static_cast<int>(from->locations.size())) {
+      start = from->locations[j].head<2>();
+      placed = true;
+    }
+  }
+  double diameter_sum = 0;
+  int diameters = 0;
+  for (int k : sightings) {
+    const LandmarkSighting& s = data.sightings[k];
+    if (!placed && s.range_m > 0) {
+      start = LandmarkFromRangeBearing(trajectory[s.pose], s.range_m, s.bearing_rad,
+                                       data.sensor_offset_m);
+      placed = true;
+    }
+    if (std::isfinite(s.diameter_m)) {
+      diameter_sum += s.diameter_m;
+      ++diameters;
+    }
+  }
+  FactorGraph graph;
+  const int landmark = graph.AddVariable(start);
+  const int diameter =
+      diameters > 0 ? graph.AddVariable(Eigen::Matrix<double, 1, 1>(diameter_sum / diameters)) : -1;
+  const double prior_var = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
+  graph.Emplace<PriorFactor>(landmark, Eigen::VectorXd(options_.slam.landmark_prior_mean_m),
+                             Eigen::MatrixXd(Eigen::Matrix2d::Identity() * prior_var),
+                             "landmark prior");
+  const Eigen::Matrix<double, 1, 1> diameter_var(options_.slam.diameter_std_m *
+                                                 options_.slam.diameter_std_m);
+  std::map<int, int> pose_keys;
+  for (int k : sightings) {
+    const LandmarkSighting& s = data.sightings[k];
+    auto it = pose_keys.find(s.pose);
+    if (it == pose_keys.end()) {
+      const Pose2& p = trajectory[s.pose];
+      it = pose_keys.emplace(s.pose, graph.AddPose(p.x, p.y, p.theta, /*fixed=*/true)).first;
+    }
+    graph.Emplace<RangeBearingFactor>(it->second, landmark, s.range_m, s.bearing_rad, s.range_std_m,
+                                      s.bearing_std_rad, data.sensor_offset_m);
+    if (diameter >= 0 && std::isfinite(s.diameter_m))
+      graph.Emplace<PriorFactor>(diameter, Eigen::Matrix<double, 1, 1>(s.diameter_m), diameter_var,
+                                 "diameter");
+  }
+  const SolveResult solved = local_solver_.Solve(&graph);
+  ++solves_;
+  BlockValue value;
+  value.log_evidence = solved.summary.IsUsable() && solved.evidence.valid
+                           ? solved.evidence.log_evidence
+                           : -std::numeric_limits<double>::infinity();
+  value.position_m = graph.values().Get(landmark);
+  value.residual2 = SightingResidual2(data, trajectory, sightings, value.position_m);
+  return block_cache_.emplace(block, value).first->second;
+}
+
+EvaluationPtr LandmarkEvaluator::LocalEvaluation(const AssociationState& state,
+                                                 const StateEvaluation* from) {
+  const auto start = std::chrono::steady_clock::now();
+  auto evaluation = std::make_shared<StateEvaluation>();
+  evaluation->state = state;
+  evaluation->solution = reference_->solution;
+  for (const auto& block : state.blocks)
+    if (!reference_blocks_.count(block) && SharesAScan(block)) return evaluation;  // invalid
+  if (options_.mode == LandmarkEvaluationMode::kMarginal &&
+      state.blocks.size() + 1 == reference_->state.blocks.size()) {
+    // One merge of two reference blocks? Then every other block is unchanged.
+    int added = -1, others = 0;
+    for (size_t j = 0; j < state.blocks.size(); ++j)
+      if (!reference_blocks_.count(state.blocks[j])) {
+        added = static_cast<int>(j);
+        ++others;
+      }
+    const int ja = added >= 0 ? reference_->state.BlockOf(state.blocks[added].front()) : -1;
+    const int jb = ja >= 0 && others == 1
+                       ? [&] {
+                           for (int t : state.blocks[added]) {
+                             const int j = reference_->state.BlockOf(t);
+                             if (j != ja) return j;
+                           }
+                           return -1;
+                         }()
+                       : -1;
+    double delta = 0;
+    Eigen::Vector2d mean;
+    if (jb >= 0 &&
+        reference_->state.blocks[ja].size() + reference_->state.blocks[jb].size() ==
+            state.blocks[added].size() &&
+        MergeDelta(ja, jb, &delta, &mean)) {
+      std::vector<int> sightings;
+      for (int t : state.blocks[added])
+        sightings.insert(sightings.end(), data_.tracks[t].begin(), data_.tracks[t].end());
+      for (size_t j = 0; j < state.blocks.size(); ++j) {
+        if (static_cast<int>(j) == added) {
+          evaluation->locations.push_back(Eigen::Vector3d(mean.x(), mean.y(), 0));
+          evaluation->residual2.push_back(
+              SightingResidual2(*data_.data, reference_->solution->trajectory, sightings, mean));
+          continue;
+        }
+        const int r = reference_blocks_.at(state.blocks[j]);
+        evaluation->locations.push_back(reference_->locations[r]);
+        evaluation->residual2.push_back(reference_->residual2[r]);
+      }
+      evaluation->log_target = reference_->log_target + delta;
+      evaluation->valid = true;
+      evaluation->evaluation_time_s = SecondsSince(start);
+      return evaluation;
+    }
+  }
+  std::vector<char> kept(reference_->state.blocks.size(), 0);
+  double log_target = reference_->log_target;
+  for (const auto& block : state.blocks) {
+    const auto in_reference = reference_blocks_.find(block);
+    if (in_reference != reference_blocks_.end()) {
+      const int j = in_reference->second;
+      kept[j] = 1;
+      evaluation->locations.push_back(reference_->locations[j]);
+      evaluation->residual2.push_back(reference_->residual2[j]);
+      continue;
+    }
+    const BlockValue& value = LocalBlock(block, from);
+    log_target += value.log_evidence;
+    evaluation->locations.push_back(Eigen::Vector3d(value.position_m.x(), value.position_m.y(), 0));
+    evaluation->residual2.push_back(value.residual2);
+  }
+  for (size_t j = 0; j < kept.size(); ++j)
+    if (!kept[j])
+      log_target -= LocalBlock(reference_->state.blocks[j], reference_.get()).log_evidence;
+  evaluation->log_target = log_target;
+  evaluation->valid = std::isfinite(log_target);
+  evaluation->evaluation_time_s = SecondsSince(start);
+  return evaluation;
+}
+
+void LandmarkEvaluator::Store(const EvaluationPtr& evaluation) {
+  if (cache_.size() >= options_.max_cache_entries) cache_.clear();
+  cache_[evaluation->state] = evaluation;
+}
+
+EvaluationPtr LandmarkEvaluator::Evaluate(const AssociationState& state,
+                                          const StateEvaluation* from) {
+  const auto found = cache_.find(state);
+  if (found != cache_.end()) {
+    ++hits_;
+    return found->second;
+  }
+  if (options_.mode != LandmarkEvaluationMode::kExact && !reference_) return Refine(state, from);
+  EvaluationPtr evaluation = options_.mode == LandmarkEvaluationMode::kExact
+                                 ? FullEvaluation(state, from, Solver::kStep)
+                                 : LocalEvaluation(state, from);
+  Store(evaluation);
+  return evaluation;
+}
+
+EvaluationPtr LandmarkEvaluator::Refine(const AssociationState& state,
+                                        const StateEvaluation* from) {
+  EvaluationPtr evaluation = FullEvaluation(state, from, Solver::kRefine);
+  if (options_.mode != LandmarkEvaluationMode::kExact && evaluation->valid) {
+    SetReference(evaluation);
+    reference_factorised_ = true;
+    reference_position_keys_ = last_refine_keys_;
+  }
+  Store(evaluation);
+  return evaluation;
+}
+
+EvaluationPtr LandmarkEvaluator::Trial(const AssociationState& state, const StateEvaluation* from) {
+  for (const auto& block : state.blocks)
+    if (!reference_blocks_.count(block) && SharesAScan(block)) {
+      auto invalid = std::make_shared<StateEvaluation>();
+      invalid->state = state;
+      return invalid;  // valid = false
+    }
+  return FullEvaluation(state, from, Solver::kTrial);
+}
+
+bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean) {
+  if (!reference_factorised_) return false;
+  const int ka = reference_position_keys_[ja], kb = reference_position_keys_[jb];
+  if (ka < 0 || kb < 0) return false;
+  std::vector<Eigen::MatrixXd> blocks;
+  std::string why;
+  if (!full_.solver().MarginalCovariances({{ka, kb}}, &blocks, &why) || blocks.size() != 1 ||
+      blocks[0].rows() != 4)
+    return false;
+  ++marginal_merges_;
+  // Laplace evidence ratio of "l_a = l_b = l" (one location prior N(m, s^2 I)
+  // instead of two): with the reference's Gaussian N(mu, Sigma) over
+  // (l_a, l_b) and H = [I; I],
+  //   log int N(H l; mu, Sigma) / N(l; m, s^2 I) dl
+  //   = -1/2 log|Sigma| + 2 log s - 1/2 log|P| + 1/2 b'P^-1 b - 1/2 mu'Lambda mu + |m|^2 / (2 s^2)
+  // with Lambda = Sigma^-1, P = H'Lambda H - I / s^2, b = H'Lambda mu - m / s^2.
+  const Eigen::Matrix4d sigma = blocks[0];
+  Eigen::Vector4d mu;
+  mu << reference_->locations[ja].head<2>(), reference_->locations[jb].head<2>();
+  const Eigen::LLT<Eigen::Matrix4d> sigma_llt(sigma);
+  if (sigma_llt.info() != Eigen::Success) return false;
+  const Eigen::Matrix4d lambda = sigma_llt.solve(Eigen::Matrix4d::Identity());
+  Eigen::Matrix<double, 4, 2> h;
+  h << Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity();
+  const double s2 = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
+  const Eigen::Vector2d m = options_.slam.landmark_prior_mean_m;
+  const Eigen::Matrix2d p = h.transpose() * lambda * h - Eigen::Matrix2d::Identity() / s2;
+  const Eigen::Vector2d b = h.transpose() * lambda * mu - m / s2;
+  const Eigen::LLT<Eigen::Matrix2d> p_llt(p);
+  if (p_llt.info() != Eigen::Success) return false;
+  const Eigen::Vector2d l = p_llt.solve(b);
+  double log_det_sigma = 0, log_det_p = 0;
+  for (int i = 0; i < 4; ++i) log_det_sigma += 2 * std::log(sigma_llt.matrixL()(i, i));
+  for (int i = 0; i < 2; ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
+  *delta = -0.5 * log_det_sigma + std::log(s2) - 0.5 * log_det_p + 0.5 * b.dot(l) -
+           0.5 * mu.dot(lambda * mu) + 0.5 * m.squaredNorm() / s2;
+  // The trunk diameters: a variable per landmark (flat prior) tied only to
+  // its own measurements, so its part of the evidence is separate and exact:
+  // merging blocks with n_a, n_b measurements of means d_a, d_b adds
+  //   -n_a n_b / (2 n sigma^2) (d_a - d_b)^2 + 1/2 log(n_a n_b / (2 pi sigma^2 n)).
+  auto diameters = [&](int j, double* sum) {
+    int count = 0;
+    *sum = 0;
+    for (int t : reference_->state.blocks[j])
+      for (int k : data_.tracks[t]) {
+        const double d = data_.data->sightings[k].diameter_m;
+        if (!std::isfinite(d)) continue;
+        *sum += d;
+        ++count;
+      }
+    return count;
+  };
+  double sum_a = 0, sum_b = 0;
+  const int na = diameters(ja, &sum_a), nb = diameters(jb, &sum_b);
+  if (na > 0 && nb > 0) {
+    const double var = options_.slam.diameter_std_m * options_.slam.diameter_std_m;
+    const double n = na + nb, gap = sum_a / na - sum_b / nb;
+    *delta += -double(na) * nb / (2 * n * var) * gap * gap +
+              0.5 * std::log(double(na) * nb / (2 * kPi * var * n));
+  }
+  *mean = l;
+  return std::isfinite(*delta);
+}
+
+void LandmarkEvaluator::SetReference(const EvaluationPtr& evaluation) {
+  // A new linearisation point: values computed at the old one are stale.
+  reference_ = evaluation;
+  reference_factorised_ = false;
+  reference_blocks_.clear();
+  for (size_t j = 0; j < evaluation->state.blocks.size(); ++j)
+    reference_blocks_[evaluation->state.blocks[j]] = static_cast<int>(j);
+  block_cache_.clear();
+  cache_.clear();
+}
+
+void LandmarkEvaluator::Remember(const EvaluationPtr& evaluation) {
+  Store(evaluation);
+}
+
+LandmarkSlamResult LandmarkEvaluator::Solve(const AssociationState& state,
+                                            const StateEvaluation* from) {
+  LandmarkSlamOptions options = options_.slam;
+  options.compute_landmark_covariances = true;
+  options.held_poses = 0;
+  LandmarkSlam slam(options);
+  LandmarkSlamResult warm;
+  if (from) warm = WarmStart(*from);
+  return slam.Solve(*data_.data, Association(state), from ? &warm : nullptr);
+}
+
+PairwiseAgreement ComparePairwise(const std::vector<int>& estimate, const std::vector<int>& truth) {
+  if (estimate.size() != truth.size())
+    throw Error("pairwise comparison: " + std::to_string(estimate.size()) + " vs " +
+                std::to_string(truth.size()) + " sightings");
+  // -1 becomes a label of its own per sighting.
+  const long long n = static_cast<long long>(estimate.size());
+  auto label = [](int id, long long k) { return id >= 0 ? static_cast<long long>(id) : -1 - k; };
+  std::map<long long, long long> count_e, count_t;
+  std::map<std::pair<long long, long long>, long long> count_both;
+  for (long long k = 0; k < n; ++k) {
+    const long long e = label(estimate[k], k), t = label(truth[k], k);
+    ++count_e[e];
+    ++count_t[t];
+    ++count_both[{e, t}];
+  }
+  auto pairs = [](long long c) { return c * (c - 1) / 2; };
+  PairwiseAgreement a;
+  a.pairs = pairs(n);
+  for (const auto& [key, c] : count_e) a.same_estimate += pairs(c);
+  for (const auto& [key, c] : count_t) a.same_truth += pairs(c);
+  for (const auto& [key, c] : count_both) a.same_both += pairs(c);
+  const long long disagree = a.same_estimate + a.same_truth - 2 * a.same_both;
+  a.agreement = a.pairs > 0 ? 1.0 - double(disagree) / double(a.pairs) : 1.0;
+  a.precision = a.same_estimate > 0 ? double(a.same_both) / double(a.same_estimate) : 1.0;
+  a.recall = a.same_truth > 0 ? double(a.same_both) / double(a.same_truth) : 1.0;
+  return a;
+}
+
+double TrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b) {
+  if (a.size() != b.size() || a.empty())
+    throw Error("trajectory RMSE: " + std::to_string(a.size()) + " vs " + std::to_string(b.size()) +
+                " poses");
+  double sum = 0;
+  for (size_t i = 0; i < a.size(); ++i)
+    sum += (a[i].x - b[i].x) * (a[i].x - b[i].x) + (a[i].y - b[i].y) * (a[i].y - b[i].y);
+  return std::sqrt(sum / double(a.size()));
+}
+
+bool UnknownAssociationOptions::Validate(std::string* why) const {
+  if (!tracks.Validate(why) || !target.Validate(why) || !moves.Validate(why)) return false;
+  if (targeted_radius_m > 0 && target.mode != LandmarkEvaluationMode::kMarginal) {
+    if (why) *why = "targeted merges need the marginal evaluation";
+    return false;
+  }
+  if (sweep_radius_m > 0 && target.mode != LandmarkEvaluationMode::kMarginal) {
+    if (why) *why = "the duplicate sweep needs the marginal evaluation";
+    return false;
+  }
+  if (min_track_sightings < 1 || targeted_max_candidates < 0 || !(sweep_radius_m >= 0)) {
+    if (why) *why = "tracks need >= 1 sighting and the candidate cap must be >= 0 (0: none)";
+    return false;
+  }
+  if (window_poses < 0 || free_poses < 0 || !(targeted_radius_m >= 0) ||
+      !(hill_climb_steps_per_track >= 0) || final_hill_climb_steps < 0 || refine_every < 1 ||
+      samples < 0 || num_chains < 1 || burn_in < 0 || (samples > 0 && burn_in >= samples)) {
+    if (why)
+      *why =
+          "windows, steps and samples must be >= 0, refine_every and chains >= 1, burn-in "
+          "below the samples";
+    return false;
+  }
+  if (joint_min_inliers < 0 ||
+      (joint_min_inliers > 0 &&
+       (joint_min_inliers < 3 || joint_recent_poses < 1 || !(joint_search_m > 0) ||
+        !(joint_inlier_m > 0) || !(joint_max_rotation_rad >= 0) || joint_ransac_iterations < 1 ||
+        joint_anchors < 1 || joint_retry_inliers < 0 || joint_every_poses < 1 ||
+        !(joint_max_shift_m >= 0)))) {
+    if (why)
+      *why =
+          "joint merges need >= 3 inliers (0: off), recent poses, RANSAC samples, anchors "
+          "and a pose spacing >= 1, distances > 0";
+    return false;
+  }
+  return true;
+}
+
+UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& input,
+                                                 const UnknownAssociationOptions& options_in,
+                                                 const LandmarkProgress& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options_in.Validate(&why)) throw Error("unknown-association landmark SLAM: " + why);
+  UnknownAssociationOptions options = options_in;
+  auto say = [&](const std::string& line) {
+    if (progress) progress(line);
+  };
+  UnknownAssociationResult result;
+  for (auto& track : BuildLandmarkTracks(input, input.dead_reckoning, options.tracks)) {
+    if (static_cast<int>(track.size()) >= options.min_track_sightings) {
+      result.tracks.push_back(std::move(track));
+      continue;
+    }
+    ++result.clutter_tracks;
+    result.clutter_sightings += static_cast<long>(track.size());
+  }
+  // Per-track diameters: the track's mean on its first sighting, the others
+  // unmeasured (same sightings, same order, so every index stays valid).
+  LandmarkDataset per_track;
+  if (options.diameter_per_track) {
+    per_track = input;
+    for (const auto& track : result.tracks) {
+      const std::optional<double> diameter = MeanMeasuredDiameter(input.sightings, track);
+      for (int k : track) per_track.sightings[k].diameter_m = std::nan("");
+      if (diameter) per_track.sightings[track.front()].diameter_m = *diameter;
+    }
+  }
+  const LandmarkDataset& data = options.diameter_per_track ? per_track : input;
+  const int num_tracks = static_cast<int>(result.tracks.size());
+  if (num_tracks == 0)
+    throw Error::InFile(data.path, "no track of at least " +
+                                       std::to_string(options.min_track_sightings) +
+                                       " sightings with a range > 0");
+  // The prior's centre: the mean of the dead-reckoned sightings.
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  int placed = 0;
+  std::vector<int> first_pose(num_tracks), track_size(num_tracks);
+  for (int t = 0; t < num_tracks; ++t) {
+    first_pose[t] = data.sightings[result.tracks[t].front()].pose;
+    track_size[t] = static_cast<int>(result.tracks[t].size());
+    for (int k : result.tracks[t]) {
+      const LandmarkSighting& s = data.sightings[k];
+      centre += LandmarkFromRangeBearing(data.dead_reckoning[s.pose], s.range_m, s.bearing_rad,
+                                         data.sensor_offset_m);
+      ++placed;
+    }
+  }
+  options.target.slam.landmark_prior_mean_m = centre / placed;
+  result.track_time_s = SecondsSince(start);
+  say(Format("tracks: %.0f sightings -> %.0f tracks (gate %.2f m, pose gap %.0f), %.2f s",
+             double(placed), double(num_tracks), options.tracks.gate_m,
+             double(options.tracks.max_pose_gap), result.track_time_s) +
+      (result.clutter_tracks > 0
+           ? Format("; %.0f shorter tracks (%.0f sightings) left to clutter",
+                    double(result.clutter_tracks), double(result.clutter_sightings))
+           : std::string()));
+
+  const ClassConfusionModel model =
+      ClassConfusionModel::Identity(1, 1e-3, std::vector<int>(num_tracks, 0), track_size);
+  std::vector<int> ends;
+  if (options.window_poses > 0)
+    for (int n = options.window_poses; n < data.num_poses; n += options.window_poses)
+      ends.push_back(n);
+  ends.push_back(data.num_poses);
+
+  // ---- hill climbing in growing windows ----
+  const auto climb_start = std::chrono::steady_clock::now();
+  Rng rng(options.seed);
+  AssociationState state;
+  EvaluationPtr previous;  // last window's final full solve
+  int tracks_before = 0;
+  std::array<MoveStatistics, 3> stats{};
+  std::unique_ptr<LandmarkDataset> window_dataset;  // kept alive with the evaluator
+  std::unique_ptr<LandmarkTargetData> window_data;
+  std::unique_ptr<LandmarkEvaluator> evaluator;
+  EvaluationPtr current;
+  // The window's full solves, timed (they dominate a window's cost).
+  auto refine = [&](const AssociationState& s, const StateEvaluation* from) {
+    const auto t = std::chrono::steady_clock::now();
+    EvaluationPtr e = evaluator->Refine(s, from);
+    result.refine_time_s += SecondsSince(t);
+    ++result.refines;
+    return e;
+  };
+  auto climb = [&](long steps) {
+    long accepted = 0;
+    for (long step = 1; step <= steps; ++step) {
+      const EvaluationPtr before = current;
+      StepRule climb;
+      climb.greedy = true;
+      current = MetropolisStep(current, climb, *evaluator, model, options.moves,
+                               options.hill_climb_moves, rng, &stats);
+      if (current != before) ++accepted;
+      const bool resolve =
+          current != before && options.target.mode == LandmarkEvaluationMode::kMarginal;
+      if (resolve || step % options.refine_every == 0 || step == steps) {
+        const EvaluationPtr refined = refine(current->state, current.get());
+        if (refined->valid) current = refined;
+      }
+    }
+    result.proposals += steps;
+    result.accepted += accepted;
+    return accepted;
+  };
+  // Targeted merges of the blocks holding tracks >= first_new (see the options).
+  // With sweep_m > 0 instead: every pair of landmarks within sweep_m (see
+  // UnknownAssociationOptions::sweep_radius_m).
+  auto targeted = [&](int first_new, double sweep_m = 0) {
+    long merges = 0;
+    for (int round = 0; round < 1000; ++round) {
+      const AssociationState& s = current->state;
+      const double base = current->log_target;
+      struct Candidate {
+        double delta;
+        int a, b;
+        EvaluationPtr evaluation;
+      };
+      std::vector<Candidate> best;
+      for (size_t j = 0; j < s.blocks.size(); ++j) {
+        if (sweep_m <= 0 && s.blocks[j].back() < first_new) continue;  // no new track
+        Candidate c{0, -1, -1, nullptr};
+        std::vector<std::pair<double, int>> candidates;  // (distance, block)
+        for (size_t k = sweep_m > 0 ? j + 1 : 0; k < s.blocks.size(); ++k) {
+          if (k == j || (sweep_m <= 0 && s.blocks[k].back() >= first_new && k < j))
+            continue;  // each pair once
+          const double d = (current->locations[j] - current->locations[k]).norm();
+          if (d <= (sweep_m > 0 ? sweep_m : options.targeted_radius_m))
+            candidates.push_back({d, static_cast<int>(k)});
+        }
+        const size_t cap = static_cast<size_t>(options.targeted_max_candidates);
+        if (cap > 0 && candidates.size() > cap) {
+          std::nth_element(candidates.begin(), candidates.begin() + cap, candidates.end());
+          candidates.resize(cap);
+          std::sort(candidates.begin(), candidates.end(),
+                    [](const auto& x, const auto& y) { return x.second < y.second; });
+        }
+        for (const auto& [distance, kk] : candidates) {
+          const size_t k = static_cast<size_t>(kk);
+          AssociationState merged = s;
+          merged.blocks[j].insert(merged.blocks[j].end(), s.blocks[k].begin(), s.blocks[k].end());
+          std::sort(merged.blocks[j].begin(), merged.blocks[j].end());
+          merged.blocks.erase(merged.blocks.begin() + k);
+          merged.classes.pop_back();
+          merged.Canonicalize();
+          const auto t = std::chrono::steady_clock::now();
+          const EvaluationPtr e = evaluator->Evaluate(merged, current.get());
+          result.targeted_time_s += SecondsSince(t);
+          ++result.proposals;
+          if (e->valid && e->log_target - base > c.delta)
+            c = {e->log_target - base, static_cast<int>(j), static_cast<int>(k), e};
+        }
+        if (c.evaluation) best.push_back(c);
+      }
+      if (best.empty()) break;
+      std::sort(best.begin(), best.end(),
+                [](const Candidate& x, const Candidate& y) { return x.delta > y.delta; });
+      // All non-conflicting best merges at once.
+      AssociationState merged = s;
+      std::vector<char> used(s.blocks.size(), 0);
+      int made = 0;
+      for (const Candidate& c : best) {
+        if (used[c.a] || used[c.b]) continue;
+        used[c.a] = used[c.b] = 1;
+        merged.blocks[c.a].insert(merged.blocks[c.a].end(), s.blocks[c.b].begin(),
+                                  s.blocks[c.b].end());
+        merged.blocks[c.b].clear();
+        ++made;
+      }
+      merged.blocks.erase(std::remove_if(merged.blocks.begin(), merged.blocks.end(),
+                                         [](const std::vector<int>& b) { return b.empty(); }),
+                          merged.blocks.end());
+      merged.classes.assign(merged.blocks.size(), 0);
+      for (auto& b : merged.blocks) std::sort(b.begin(), b.end());
+      merged.Canonicalize();
+      const EvaluationPtr before = current;
+      EvaluationPtr refined = refine(merged, best.front().evaluation.get());
+      auto fell = [&] { return !refined->valid || refined->log_target <= base; };
+      if (fell() && made > 1) {  // only the single best merge
+        refined = refine(best.front().evaluation->state, best.front().evaluation.get());
+        made = 1;
+      }
+      if (fell() && best.front().delta > options.cold_retry_gain) {
+        // A strong loop closure the warm re-solve could not pull in: solve
+        // from dead reckoning (staged), away from the unclosed trajectory.
+        ++result.cold_retries;
+        refined = refine(best.front().evaluation->state, nullptr);
+      }
+      if (sweep_m > 0)
+        say(Format("sweep: %.0f landmarks with a paying merge, %.0f made, log target %.1f -> %.1f",
+                   double(best.size()), double(made), base,
+                   refined->valid ? refined->log_target : -1e300));
+      if (fell()) {
+        // The linearised gain did not hold: back to the state before.
+        current = refine(before->state, before.get());
+        break;
+      }
+      current = refined;
+      merges += made;
+      result.accepted += made;
+    }
+    return merges;
+  };
+  // Joint re-entry merges (see the options).
+  std::vector<int> last_pose(num_tracks);
+  for (int t = 0; t < num_tracks; ++t) last_pose[t] = data.sightings[result.tracks[t].back()].pose;
+  int last_ransac = std::numeric_limits<int>::min() / 2;
+  int held_poses = 0;  // the current window's (free_poses)
+  int joint_needed = options.joint_min_inliers, last_failure = 0;
+  auto joint = [&](int n) -> long {
+    if (options.joint_min_inliers <= 0 || n - last_ransac < options.joint_every_poses) return 0;
+    last_ransac = n;
+    const auto joint_start = std::chrono::steady_clock::now();
+    struct AddTime {
+      std::chrono::steady_clock::time_point start;
+      double* total;
+      ~AddTime() { *total += SecondsSince(start); }
+    } add_time{joint_start, &result.joint_time_s};
+    if (n - last_failure > options.joint_recent_poses) joint_needed = options.joint_min_inliers;
+    const int recent_from = n - options.joint_recent_poses;
+    if (recent_from <= 0) return 0;
+    const EvaluationPtr before = current;
+    const AssociationState& s = before->state;
+    const std::vector<Pose2>& trajectory = before->solution->trajectory;
+    // Where the sightings of `tracks` (in the window) put their landmark.
+    auto placed = [&](const std::vector<int>& tracks, const std::vector<Pose2>& poses) {
+      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+      int count = 0;
+      for (int t : tracks)
+        for (int k : result.tracks[t]) {
+          const LandmarkSighting& z = data.sightings[k];
+          if (z.pose >= n) break;
+          sum += LandmarkFromRangeBearing(poses[z.pose], z.range_m, z.bearing_rad,
+                                          data.sensor_offset_m);
+          ++count;
+        }
+      return Eigen::Vector2d(count > 0 ? Eigen::Vector2d(sum / count) : sum);
+    };
+    // The units aligned: the recent part of each landmark (its tracks first
+    // seen since recent_from, placed by their own sightings: a merge made
+    // under the drift may be wrong) and the old part (tracks last seen
+    // before recent_from, at the landmark's position).
+    struct Unit {
+      std::vector<int> tracks;
+      Eigen::Vector2d position_m;
+    };
+    std::vector<Unit> recent, old;
+    for (size_t j = 0; j < s.blocks.size(); ++j) {
+      Unit r, o;
+      for (int t : s.blocks[j]) {
+        if (first_pose[t] >= recent_from) r.tracks.push_back(t);
+        if (last_pose[t] < recent_from) o.tracks.push_back(t);
+      }
+      if (!r.tracks.empty()) {
+        r.position_m = placed(r.tracks, trajectory);
+        recent.push_back(r);
+      }
+      if (!o.tracks.empty()) {
+        o.position_m = before->locations[j].head<2>();
+        old.push_back(o);
+      }
+    }
+    if (static_cast<int>(recent.size()) < joint_needed) return 0;
+    const double inlier_m = options.joint_inlier_m, inlier2 = inlier_m * inlier_m;
+    const double reach = options.joint_search_m + inlier_m;
+    std::vector<std::vector<int>> near(recent.size());  // old units within reach
+    int with_candidates = 0;
+    for (size_t i = 0; i < recent.size(); ++i) {
+      for (size_t o = 0; o < old.size(); ++o)
+        if ((old[o].position_m - recent[i].position_m).squaredNorm() <= reach * reach)
+          near[i].push_back(static_cast<int>(o));
+      with_candidates += !near[i].empty();
+    }
+    if (with_candidates < joint_needed) return 0;
+    // Inliers of an alignment: mutually nearest (recent, old) pairs within
+    // joint_inlier_m of each other once the recent unit is moved.
+    // The old units on a grid of joint_inlier_m cells: an alignment's inliers
+    // are then found in the 3 x 3 cells around each moved recent unit instead
+    // of among all its old units in reach (thousands with clutter); the same
+    // pairs as a scan of near[i] (ties to the higher index, as that scan).
+    auto cell_of = [&](const Eigen::Vector2d& p) {
+      return std::make_pair(static_cast<long>(std::floor(p.x() / inlier_m)),
+                            static_cast<long>(std::floor(p.y() / inlier_m)));
+    };
+    std::map<std::pair<long, long>, std::vector<int>> grid;
+    for (size_t o = 0; o < old.size(); ++o)
+      grid[cell_of(old[o].position_m)].push_back(static_cast<int>(o));
+    auto inliers = [&](const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) {
+      std::map<int, std::pair<double, int>> by_old;  // old unit -> (distance², recent unit)
+      for (size_t i = 0; i < recent.size(); ++i) {
+        if (near[i].empty()) continue;
+        const Eigen::Vector2d p = rigid(recent[i].position_m);
+        const auto [cx, cy] = cell_of(p);
+        int nearest = -1;
+        double best = inlier2;
+        for (long x = cx - 1; x <= cx + 1; ++x)
+          for (long y = cy - 1; y <= cy + 1; ++y) {
+            const auto cell = grid.find({x, y});
+            if (cell == grid.end()) continue;
+            for (int o : cell->second) {
+              if ((old[o].position_m - recent[i].position_m).squaredNorm() > reach * reach)
+                continue;  // not in near[i]
+              const double d2 = (old[o].position_m - p).squaredNorm();
+              if (d2 < best || (d2 == best && o > nearest)) {
+                best = d2;
+                nearest = o;
+              }
+            }
+          }
+        if (nearest < 0) continue;
+        const auto it = by_old.find(nearest);
+        if (it == by_old.end() || best < it->second.first)
+          by_old[nearest] = {best, static_cast<int>(i)};
+      }
+      if (pairs) {
+        pairs->clear();
+        for (const auto& [o, value] : by_old) pairs->push_back({value.second, o});
+      }
+      return static_cast<int>(by_old.size());
+    };
+    std::uniform_int_distribution<size_t> pick(0, recent.size() - 1);
+    Rigid2 best_rigid;
+    int best_count = 0;
+    for (int sample = 0; sample < options.joint_ransac_iterations; ++sample) {
+      const size_t a = pick(rng), b = pick(rng);
+      if (a == b || near[a].empty() || near[b].empty()) continue;
+      const Eigen::Vector2d ra = recent[a].position_m, rb = recent[b].position_m;
+      const double d = (rb - ra).norm();
+      if (d < 2 * inlier_m) continue;
+      const double heading = std::atan2(rb.y() - ra.y(), rb.x() - ra.x());
+      for (int oa : near[a])
+        for (int ob : near[b]) {
+          if (oa == ob) continue;
+          const Eigen::Vector2d v = old[ob].position_m - old[oa].position_m;
+          if (std::abs(v.norm() - d) > inlier_m) continue;
+          const double angle = WrapAngle(std::atan2(v.y(), v.x()) - heading);
+          if (std::abs(angle) > options.joint_max_rotation_rad) continue;
+          if (options.joint_max_shift_m > 0 &&
+              (0.5 * (old[oa].position_m + old[ob].position_m - ra - rb)).norm() >
+                  options.joint_max_shift_m)
+            continue;
+          Rigid2 rigid;
+          rigid.angle = angle;
+          rigid.t = 0.5 * (old[oa].position_m + old[ob].position_m) -
+                    Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
+          const int count = inliers(rigid, nullptr);
+          if (count > best_count) {
+            best_count = count;
+            best_rigid = rigid;
+          }
+        }
+    }
+    if (best_count < joint_needed) return 0;
+    std::vector<std::pair<int, int>> pairs;
+    for (int refit = 0; refit < 2; ++refit) {
+      inliers(best_rigid, &pairs);
+      std::vector<Eigen::Vector2d> from, to;
+      for (const auto& [r, o] : pairs) {
+        from.push_back(recent[r].position_m);
+        to.push_back(old[o].position_m);
+      }
+      const Rigid2 fitted = FitRigid(from, to);
+      if (inliers(fitted, nullptr) < static_cast<int>(pairs.size())) break;
+      best_rigid = fitted;
+    }
+    inliers(best_rigid, &pairs);
+    if (static_cast<int>(pairs.size()) < joint_needed ||
+        std::abs(best_rigid.angle) > options.joint_max_rotation_rad)
+      return 0;
+    // Nothing for a joint merge when the alignment hardly moves the recent
+    // landmarks (the single merges can make the pairs) or the pairs are
+    // already merged.
+    Eigen::Vector2d pivot = Eigen::Vector2d::Zero();
+    double largest_move = 0;
+    int unmerged = 0;
+    for (const auto& [r, o] : pairs) {
+      pivot += recent[r].position_m / double(pairs.size());
+      largest_move =
+          std::max(largest_move, (best_rigid(recent[r].position_m) - recent[r].position_m).norm());
+      unmerged += s.BlockOf(recent[r].tracks.front()) != s.BlockOf(old[o].tracks.front());
+    }
+    if (largest_move < inlier_m || unmerged == 0) return 0;
+    if (options.joint_max_shift_m > 0 &&
+        (best_rigid(pivot) - pivot).norm() > options.joint_max_shift_m)
+      return 0;
+    // Per anchor pose: the merges made since it are undone (they were made
+    // under the drift), every pair merged, and the state solved from the
+    // trajectory with the correction spread along the drive since the anchor.
+    std::vector<double> driven(trajectory.size(), 0.0);
+    for (size_t i = 1; i < trajectory.size(); ++i)
+      driven[i] = driven[i - 1] + std::hypot(trajectory[i].x - trajectory[i - 1].x,
+                                             trajectory[i].y - trajectory[i - 1].y);
+    const double base = before->log_target;
+    EvaluationPtr best;
+    int best_anchor = 0;
+    for (int k = 0, previous_anchor = -1; k < options.joint_anchors; ++k) {
+      const int anchor = std::max(0, n - 1 - (options.joint_recent_poses << k));
+      if (anchor == previous_anchor) break;
+      previous_anchor = anchor;
+      // The correction moves every pose after the anchor: poses held in the
+      // window's solves would stay bent, their odometry broken.
+      if (anchor + 1 < held_poses) break;
+      const double span = driven.back() - driven[anchor];
+      if (!(span > 0)) continue;
+      auto fraction = [&](int pose) {
+        return pose <= anchor ? 0.0 : (driven[pose] - driven[anchor]) / span;
+      };
+      std::vector<std::vector<int>> blocks;
+      std::vector<int> where(num_tracks, -1);
+      for (const auto& block : s.blocks)
+        for (int part = 0; part < 2; ++part) {
+          std::vector<int> tracks;
+          for (int t : block)
+            if ((first_pose[t] > anchor) == (part == 1)) tracks.push_back(t);
+          if (tracks.empty()) continue;
+          for (int t : tracks) where[t] = static_cast<int>(blocks.size());
+          blocks.push_back(tracks);
+        }
+      for (const auto& [r, o] : pairs) {
+        const int to = where[old[o].tracks.front()];
+        for (int t : recent[r].tracks) {
+          auto& from = blocks[where[t]];
+          from.erase(std::find(from.begin(), from.end(), t));
+          blocks[to].push_back(t);
+          where[t] = to;
+        }
+      }
+      AssociationState merged;
+      for (auto& b : blocks)
+        if (!b.empty()) {
+          std::sort(b.begin(), b.end());
+          merged.blocks.push_back(b);
+        }
+      merged.classes.assign(merged.blocks.size(), 0);
+      merged.Canonicalize();
+      StateEvaluation seed;
+      seed.state = merged;
+      auto moved = std::make_shared<GeometricSlamResult>();
+      moved->trajectory = trajectory;
+      for (size_t i = anchor + 1; i < trajectory.size(); ++i) {
+        const Rigid2 part = PartOf(best_rigid, pivot, fraction(static_cast<int>(i)));
+        Pose2& p = moved->trajectory[i];
+        const Eigen::Vector2d q = part(Eigen::Vector2d(p.x, p.y));
+        p = {q.x(), q.y(), WrapAngle(p.theta + part.angle)};
+      }
+      for (const auto& block : merged.blocks) {
+        // Where the block's earliest track was, when it is from before the
+        // anchor; else where the moved trajectory puts its sightings.
+        seed.locations.push_back(Eigen::Vector3d::Zero());
+        seed.locations.back().head<2>() =
+            first_pose[block.front()] <= anchor
+                ? Eigen::Vector2d(before->locations[s.BlockOf(block.front())].head<2>())
+                : placed(block, moved->trajectory);
+      }
+      seed.solution = std::move(moved);
+      const EvaluationPtr e = evaluator->Trial(merged, &seed);
+      ++result.joint_tries;
+      say(Format("joint merge at %.0f poses: %.0f of %.0f recent landmarks onto old ones "
+                 "(rotation %.3f rad, shift %.1f m),",
+                 double(n), double(pairs.size()), double(recent.size()), best_rigid.angle,
+                 (best_rigid(pivot) - pivot).norm()) +
+          Format(" correction from pose %.0f: log target %.1f -> %.1f", double(anchor), base,
+                 e->valid ? e->log_target : -std::numeric_limits<double>::infinity()));
+      if (e->valid && (!best || e->log_target > best->log_target)) {
+        best = e;
+        best_anchor = anchor;
+      }
+    }
+    if (best) {
+      // The merges undone since the anchor may be redone (right this time)
+      // by the targeted merges: the try is judged after them.
+      current = refine(best->state, best.get());
+      if (current->valid && current->log_target <= base && options.targeted_radius_m > 0) {
+        const int first_released = static_cast<int>(
+            std::upper_bound(first_pose.begin(), first_pose.begin() + num_tracks, best_anchor) -
+            first_pose.begin());
+        targeted(first_released);
+        say(Format("joint merge at %.0f poses: after the targeted merges %.1f (before %.1f)",
+                   double(n), current->log_target, base));
+      }
+      if (current->valid && current->log_target > base) {
+        joint_needed = options.joint_min_inliers;
+        result.joint_merges += static_cast<long>(pairs.size());
+        return static_cast<long>(pairs.size());
+      }
+      current = refine(before->state, before.get());  // back to before
+    }
+    joint_needed = static_cast<int>(pairs.size()) + options.joint_retry_inliers;
+    last_failure = n;
+    return 0;
+  };
+  for (size_t w = 0; w < ends.size(); ++w) {
+    const auto window_start = std::chrono::steady_clock::now();
+    const int n = ends[w];
+    std::vector<int> kept;
+    auto prefix = std::make_unique<LandmarkDataset>(PosePrefix(data, n, &kept));
+    std::vector<int> to_prefix(data.sightings.size(), -1);
+    for (size_t i = 0; i < kept.size(); ++i) to_prefix[kept[i]] = static_cast<int>(i);
+    int tracks_now = tracks_before;
+    while (tracks_now < num_tracks && first_pose[tracks_now] < n) ++tracks_now;
+    auto target_data = std::make_unique<LandmarkTargetData>();
+    target_data->data = prefix.get();
+    for (int t = 0; t < tracks_now; ++t) {
+      std::vector<int> in;
+      for (int k : result.tracks[t])
+        if (to_prefix[k] >= 0) in.push_back(to_prefix[k]);
+      target_data->tracks.push_back(in);
+    }
+    LandmarkTargetOptions window_target = options.target;
+    const int previous_end = w > 0 ? ends[w - 1] : 0;
+    if (options.free_poses > 0)
+      window_target.slam.held_poses = std::min(previous_end, std::max(0, n - options.free_poses));
+    held_poses = window_target.slam.held_poses;
+    auto window_evaluator = std::make_unique<LandmarkEvaluator>(*target_data, window_target);
+    if (options.target.one_sighting_per_scan) {
+      // Tracks merged in an earlier window may both go on into this one and
+      // be seen in one scan: the landmark would have two sightings of it
+      // (P = 0). Its tracks stay together, earliest first, while they share
+      // no scan; a track that does starts a new landmark (which the targeted
+      // merges may join elsewhere).
+      std::vector<std::vector<int>> blocks;
+      for (const auto& block : state.blocks) {
+        const bool goes_on = std::any_of(block.begin(), block.end(), [&](int t) {
+          return data.sightings[result.tracks[t].back()].pose >= previous_end;
+        });
+        if (block.size() < 2 || !goes_on) {  // no new scan can be shared
+          blocks.push_back(block);
+          continue;
+        }
+        std::vector<std::vector<int>> parts;
+        std::vector<std::set<int>> scans;  // poses seen per part
+        for (int t : block) {
+          std::vector<int> poses;
+          for (int k : result.tracks[t])
+            if (data.sightings[k].pose < n) poses.push_back(data.sightings[k].pose);
+          size_t p = 0;
+          while (p < parts.size() && std::any_of(poses.begin(), poses.end(), [&](int pose) {
+                   return scans[p].count(pose) > 0;
+                 }))
+            ++p;
+          if (p == parts.size()) {
+            parts.emplace_back();
+            scans.emplace_back();
+          }
+          parts[p].push_back(t);
+          scans[p].insert(poses.begin(), poses.end());
+        }
+        result.scan_splits += static_cast<long>(parts.size()) - 1;
+        blocks.insert(blocks.end(), parts.begin(), parts.end());
+      }
+      state.blocks = std::move(blocks);
+    }
+    for (int t = tracks_before; t < tracks_now; ++t) state.blocks.push_back({t});
+    state.classes.assign(state.blocks.size(), 0);
+    state.Canonicalize();
+    // Warm start: the previous window's solution, its trajectory continued
+    // by the odometry.
+    StateEvaluation seed;
+    if (previous) {
+      seed = *previous;
+      auto extended = std::make_shared<GeometricSlamResult>();
+      extended->trajectory =
+          ExtendByOdometry(previous->solution->trajectory, prefix->dead_reckoning);
+      seed.solution = std::move(extended);
+    }
+    current = window_evaluator->Refine(state, previous ? &seed : nullptr);
+    if (!current->valid)
+      throw Error::InFile(data.path,
+                          "the solve of the first " + std::to_string(n) + " poses failed");
+    // Keep the data alive as long as its evaluator.
+    evaluator = std::move(window_evaluator);
+    window_data = std::move(target_data);
+    window_dataset = std::move(prefix);
+    const long steps =
+        std::lround(options.hill_climb_steps_per_track * double(tracks_now - tracks_before));
+    long accepted = options.targeted_radius_m > 0 ? targeted(tracks_before) : 0;
+    if (options.sweep_radius_m > 0) accepted += targeted(0, options.sweep_radius_m);
+    if (const long joined = joint(n); joined > 0) {
+      accepted += joined;
+      // The rest of the re-entry: the recent tracks against everything.
+      const int recent_from = n - options.joint_recent_poses;
+      const int first_recent = static_cast<int>(
+          std::lower_bound(first_pose.begin(), first_pose.begin() + tracks_now, recent_from) -
+          first_pose.begin());
+      if (options.targeted_radius_m > 0) accepted += targeted(first_recent);
+    }
+    accepted += climb(steps);
+    state = current->state;
+    previous = current;
+    say(Format("window %.0f/%.0f: %.0f poses, %.0f tracks, %.0f steps (%.0f accepted) -> "
+               "%.0f landmarks,",
+               double(w + 1), double(ends.size()), double(n), double(tracks_now), double(steps),
+               double(accepted), double(state.blocks.size())) +
+        Format(" log target %.1f, %.2f s (%.0f full solves so far, %.1f s; targeted merges "
+               "scored in %.1f s)",
+               current->log_target, SecondsSince(window_start), double(result.refines),
+               result.refine_time_s, result.targeted_time_s));
+    tracks_before = tracks_now;
+  }
+  if (options.free_poses > 0 && options.free_poses < data.num_poses) {
+    // The windows held early poses: solve the whole problem once more.
+    auto whole = std::make_unique<LandmarkEvaluator>(*window_data, options.target);
+    const EvaluationPtr refined = whole->Refine(current->state, current.get());
+    if (refined->valid) current = refined;
+    evaluator = std::move(whole);
+    say(Format("all poses free: log target %.1f", current->log_target));
+  }
+  if (options.sweep_radius_m > 0) {
+    // The whole trajectory relaxed: duplicates the windows could not join
+    // (their drift needed bending poses held then) may be side by side now.
+    const long merged = targeted(0, options.sweep_radius_m);
+    say(Format("final sweep: %.0f merges, %.0f landmarks, log target %.1f", double(merged),
+               double(current->state.blocks.size()), current->log_target));
+  }
+  if (options.final_hill_climb_steps > 0) {
+    const auto pass_start = std::chrono::steady_clock::now();
+    const long accepted = climb(options.final_hill_climb_steps);
+    state = current->state;
+    say(Format("global pass: %.0f steps (%.0f accepted) -> %.0f landmarks, log target %.1f, %.2f s",
+               double(options.final_hill_climb_steps), double(accepted),
+               double(state.blocks.size()), current->log_target, SecondsSince(pass_start)));
+  }
+  result.hill_climb_time_s = SecondsSince(climb_start);
+  for (const MoveStatistics& s : stats) result.proposal_time_s += s.time_s;
+  result.solves = static_cast<long>(evaluator->num_solves());
+  result.cache_hits = static_cast<long>(evaluator->num_cache_hits());
+  EvaluationPtr best = current;
+
+  // ---- MC³ ----
+  if (options.samples > 0) {
+    const auto sampling_start = std::chrono::steady_clock::now();
+    SamplerOptions sampler_options;
+    sampler_options.hill_climb_steps = 0;
+    sampler_options.refine_every = options.refine_every;
+    sampler_options.sampling_moves = {0.5, 0.5, 0.0};  // one class: nothing to switch
+    sampler_options.moves = options.moves;
+    sampler_options.num_chains = options.num_chains;
+    sampler_options.num_iterations = options.samples;
+    sampler_options.burn_in = options.burn_in;
+    sampler_options.seed = options.seed;
+    const LandmarkTargetData& full_data = *window_data;
+    const LandmarkTargetOptions target = options.target;
+    Sampler sampler(
+        model,
+        [&full_data, target]() -> std::unique_ptr<StateEvaluator> {
+          return std::make_unique<LandmarkEvaluator>(full_data, target);
+        },
+        sampler_options);
+    size_t last_report = 0;
+    const SamplerResult sampled =
+        sampler.Run(state, [&](const char* stage, size_t done, size_t total) {
+          if (done == total || done >= last_report + std::max<size_t>(1, total / 10)) {
+            last_report = done;
+            say(std::string(stage) + Format(": %.0f/%.0f", double(done), double(total)));
+          }
+        });
+    result.sampler = sampled.summary;
+    if (sampled.best && sampled.best->valid && sampled.best->log_target > best->log_target)
+      best = sampled.best;
+    result.sampling_time_s = SecondsSince(sampling_start);
+    say(Format("MC3: %.0f iterations, %.0f chains, swaps %.0f/%.0f, %.2f s",
+               double(options.samples), double(options.num_chains),
+               double(sampled.summary.swaps_accepted), double(sampled.summary.swaps_proposed),
+               result.sampling_time_s));
+  }
+
+  // ---- the best state, solved in full ----
+  result.state = best->state;
+  result.association = evaluator->Association(result.state);
+  result.solution = evaluator->Solve(result.state, best.get());
+  result.log_target = result.solution.evidence.log_evidence;
+  result.total_time_s = SecondsSince(start);
+  say(Format("final solve: %.0f landmarks, log evidence %.1f, total %.2f s",
+             double(result.solution.landmarks.size()), result.log_target, result.total_time_s));
+  return result;
+}
+
+}  // namespace oslam

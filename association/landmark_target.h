@@ -1,0 +1,316 @@
+// O-SLAM with unknown association on planar landmark data (issue 10 items
+// 2-3): sightings are grouped into atomic tracks, the sampler's state is a
+// partition of the tracks into landmarks (one class, "tree"), and the target
+// is LandmarkSlam's Laplace log-evidence with a landmark location prior (so
+// states with different landmark counts compare).
+//
+// Two evaluations of a proposed state:
+//  * exact: the whole problem (all poses and landmarks) re-solved from the
+//    current state's solution with a few Levenberg-Marquardt iterations, its
+//    evidence the target (spec §9.6);
+//  * local (approximation): the poses are held at the trajectory of the last
+//    full solve (the reference state R, refined every K steps). Given the
+//    poses the landmarks are independent, so the log-evidence splits into a
+//    sum over landmarks; a state S scores
+//        log_target(R) + sum_{b in S \ R} L(b) - sum_{b in R \ S} L(b),
+//    where L(b) is the Laplace log-evidence of landmark b alone (its
+//    sightings, the location prior, poses fixed). Only the landmarks a move
+//    changes are solved (2-D problems of their sightings), so a proposal
+//    costs the same at any trajectory length. It ignores the pose
+//    uncertainty (how much a merge would bend the trajectory), which is why
+//    the driver below works in growing temporal windows: the poses a new
+//    track is seen from are then only a short drive from well-estimated ones.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "association/association_state.h"
+#include "slam/landmark_slam.h"
+#include "association/moves.h"
+#include "association/sampler.h"
+
+namespace oslam {
+
+// Pre-association of sightings into tracks: a sighting joins a track when the
+// track's last sighting is from an earlier pose at most max_pose_gap poses
+// back and its world position (sighting placed by the trajectory) is within
+// gate_m of the track's last one. A sighting with two or more tracks inside
+// the gate, or a track claimed by two sightings of one scan, starts afresh
+// (tracks must be certain; the sampler merges what is left apart).
+struct LandmarkTrackOptions {
+  double gate_m = 1.0;
+  int max_pose_gap = 20;
+
+  bool Validate(std::string* why) const;
+};
+
+// Sighting indices per track in pose order, tracks ordered by their first
+// sighting. Sightings at range 0 (no bearing) are in no track. Throws
+// oslam::Error when the trajectory does not cover the data set's poses.
+std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
+                                                  const std::vector<Pose2>& trajectory,
+                                                  const LandmarkTrackOptions& options);
+
+// kMarginal (for hill climbing): a merge of two landmarks of the reference
+// (the last full solve) is scored in closed form from their joint marginal
+// covariance at the reference, i.e. the exact answer of the linearised
+// problem (one linear system, spec §9.6), pose uncertainty and loop
+// correlations included; other proposals as kLocal. The driver re-solves
+// after each accepted move so the next merge is again against a reference.
+enum class LandmarkEvaluationMode { kExact, kLocal, kMarginal };
+
+struct LandmarkTargetOptions {
+  LandmarkTargetOptions() { slam.landmark_prior_std_m = 100.0; }
+  // The full solves (Refine, and exact proposals with fewer iterations).
+  // landmark_prior_std_m must be > 0.
+  LandmarkSlamOptions slam;
+  LandmarkEvaluationMode mode = LandmarkEvaluationMode::kMarginal;
+  int proposal_iterations = 5;  // exact: LM iterations of a proposal's warm re-solve
+  int local_iterations = 10;    // local: LM iterations of one landmark's solve
+  size_t max_cache_entries = 5000;
+  // A scan sees a landmark at most once: a state putting two sightings of
+  // one pose on one landmark is invalid (P = 0), so no such merge is made.
+  bool one_sighting_per_scan = true;
+
+  bool Validate(std::string* why) const;
+};
+
+struct LandmarkTargetData {
+  const LandmarkDataset* data = nullptr;
+  std::vector<std::vector<int>> tracks;  // sighting indices into *data
+};
+
+// The evaluations: locations (x, y, 0) and residual2 per block; solution
+// holds the trajectory they belong to (a full solve's own, for local ones the
+// reference's) and no objects.
+class LandmarkEvaluator : public StateEvaluator {
+ public:
+  // data (and its data set) must outlive the evaluator. Throws oslam::Error
+  // on invalid options.
+  LandmarkEvaluator(const LandmarkTargetData& data, const LandmarkTargetOptions& options);
+
+  EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation* from) override;
+  EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override;
+  void Remember(const EvaluationPtr& evaluation) override;
+  size_t num_solves() const override { return solves_; }
+  size_t num_cache_hits() const override { return hits_; }
+  size_t num_marginal_merges() const { return marginal_merges_; }  // marginal: closed-form merges
+
+  // The landmark id of every sighting under `state` (a block's id is its
+  // earliest track), -1 for sightings in no track.
+  std::vector<int> Association(const AssociationState& state) const;
+  // A full solve of `state` (the refine iterations) from `from` that leaves
+  // the reference (and so the marginal merges) alone: for trying a state far
+  // from the current one, e.g. a joint re-entry merge, before Refine-ing it.
+  EvaluationPtr Trial(const AssociationState& state, const StateEvaluation* from);
+  // The full solution of `state` with landmark covariances, warm-started
+  // from `from` when given (for the output map).
+  LandmarkSlamResult Solve(const AssociationState& state, const StateEvaluation* from);
+
+ private:
+  struct BlockValue {
+    double log_evidence = 0, residual2 = 0;
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  };
+  struct BlockHash {
+    size_t operator()(const std::vector<int>& block) const;
+  };
+  enum class Solver { kStep, kRefine, kTrial };
+  EvaluationPtr FullEvaluation(const AssociationState& state, const StateEvaluation* from,
+                               Solver solver);
+  EvaluationPtr LocalEvaluation(const AssociationState& state, const StateEvaluation* from);
+  const BlockValue& LocalBlock(const std::vector<int>& block, const StateEvaluation* from);
+  LandmarkSlamResult WarmStart(const StateEvaluation& from) const;
+  void Store(const EvaluationPtr& evaluation);
+
+  const LandmarkTargetData& data_;
+  LandmarkTargetOptions options_;
+  LandmarkSlam full_, step_, trial_;
+  SparseSolver local_solver_;
+  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
+  // Local mode: the reference (last full solve) and L(b) at its trajectory.
+  EvaluationPtr reference_;
+  bool reference_factorised_ = false;         // reference_ is full_'s last solve
+  std::vector<int> reference_position_keys_;  // per reference block
+  std::vector<int> last_refine_keys_;         // per block of full_'s last solve
+  std::unordered_map<std::vector<int>, int, BlockHash> reference_blocks_;  // block -> index
+  std::unordered_map<std::vector<int>, BlockValue, BlockHash> block_cache_;
+  void SetReference(const EvaluationPtr& evaluation);
+  // True when two of the block's sightings are from one pose.
+  bool SharesAScan(const std::vector<int>& block) const;
+  // log_target(merged) - log_target(reference) for merging reference blocks
+  // ja and jb, and the merged landmark's mean; false when not computable.
+  bool MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean);
+  size_t solves_ = 0, hits_ = 0, marginal_merges_ = 0;
+};
+
+// Squared whitened range-bearing residuals of the sightings `sightings` of a
+// landmark at `landmark_m`, seen from `trajectory`.
+double SightingResidual2(const LandmarkDataset& data, const std::vector<Pose2>& trajectory,
+                         const std::vector<int>& sightings, const Eigen::Vector2d& landmark_m);
+
+// Pairwise comparison of two associations of the same sightings (ids need
+// not match; -1 = a landmark of its own): over all pairs of sightings,
+// "same landmark" in one vs the other.
+struct PairwiseAgreement {
+  long long pairs = 0, same_both = 0, same_estimate = 0, same_truth = 0;
+  double agreement = 0;  // share of pairs on which both agree (same or different)
+  double precision = 0;  // same_both / same_estimate (1 when no pair is "same")
+  double recall = 0;     // same_both / same_truth (1 when no pair is "same")
+};
+// Throws oslam::Error when the sizes differ.
+PairwiseAgreement ComparePairwise(const std::vector<int>& estimate, const std::vector<int>& truth);
+
+// RMS of the position differences of two trajectories of the same poses (m).
+double TrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b);
+
+// The whole pipeline: tracks on the dead reckoning, then hill climbing in
+// growing windows of poses (each window's new tracks start separate and are
+// merged into the map so far; the window is re-solved in full every
+// refine_every steps and at its end), a final global hill-climbing pass on
+// all poses, optionally MC³ sampling, and a full solve of the best state.
+struct UnknownAssociationOptions {
+  UnknownAssociationOptions() {
+    moves.merge_distance_m = 3.0;
+    moves.merge_sigma_m = 1.5;
+  }
+  LandmarkTrackOptions tracks;
+  // Clutter: tracks with fewer sightings than this are explained by the
+  // sensor's clutter (false detections, uniform over the field of view)
+  // rather than by a landmark; they stay out of the state (association -1).
+  // The clutter term is then the same for every state, so it drops out of
+  // the comparisons. A birth rule as in FastSLAM / RFS-SLAM: on the raw
+  // Victoria Park scans most short tracks are clutter (docs/benchmarks.md);
+  // with the pre-processed sightings (with_ids) a tree is often seen once,
+  // hence 1 (every track a landmark candidate) by default.
+  int min_track_sightings = 1;
+  // A track measures its trunk's diameter once (its mean, with
+  // target.slam.diameter_std_m) instead of once per sighting: on the raw
+  // Victoria Park scans the diameter's error is mostly per track (range,
+  // viewing angle; consecutive scans differ by 0.08 m, tracks of one trunk
+  // by about as much in their means), so per-sighting factors make two
+  // tracks of one tree with 40 sightings each look like different trees.
+  bool diameter_per_track = false;
+  LandmarkTargetOptions target;
+  MoveOptions moves;  // merge_distance_m / merge_sigma_m: how far apart merge candidates are
+  MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
+  // Short windows: each loop closure is made (and the trajectory corrected)
+  // before the drive goes on (Victoria Park, docs/benchmarks.md: with single
+  // merges only, recall 0.45 with 50-pose windows on the first 2,000 poses,
+  // 0.999 with 10; with the joint merges below, 20-pose windows reach 0.997
+  // on the whole drive in less time than 10).
+  int window_poses = 20;  // 0: one window with every pose
+  // Poses free in a window's solves: the last free_poses of it (never fewer
+  // than its new poses); the earlier ones are held at the previous window's
+  // solution, so a proposal's exact solve costs what the recent drive costs.
+  // The evidence is then conditional on the held poses (an approximation).
+  // 0: every pose free. After the windows the whole problem is solved.
+  int free_poses = 0;
+  double hill_climb_steps_per_track = 4;  // per window: this times its tracks
+  int final_hill_climb_steps = 0;         // global pass after the windows (0: none)
+  int refine_every = 50;
+  // Targeted merges before each window's random moves: every landmark with a
+  // track new in the window is scored against every landmark within this
+  // distance (marginal mode's closed form, so tens of metres of drift since
+  // the last visit are fine); the best merge of each landmark is made when it
+  // raises the target, all at once, then the window is re-solved (if the
+  // whole-problem target fell, only the single best is kept); repeated until
+  // nothing improves. 0: off. Needs LandmarkEvaluationMode::kMarginal.
+  double targeted_radius_m = 50;
+  // At most this many candidates per landmark for the targeted merges, the
+  // nearest ones (0: every landmark within targeted_radius_m). Bounds a
+  // window's cost where landmarks are dense (clutter).
+  int targeted_max_candidates = 0;
+  // Duplicate sweep, after each window's targeted merges: every pair of
+  // landmarks within this distance anywhere is scored (closed form) and
+  // merged as the targeted merges are. Two landmarks of one tree can end up
+  // centimetres apart when neither holds a new track any more (the merge
+  // that would have joined them was not yet paying when their tracks were
+  // new; later loop closures brought them together), and only random moves
+  // would find them. 0: off.
+  double sweep_radius_m = 0;
+  // When a targeted merge gaining more than this (linearised) fails its
+  // warm re-solve, it is re-solved once more from dead reckoning.
+  double cold_retry_gain = 10;
+  // Joint re-entry merge (a loop closure that no single merge pays for:
+  // after a long drive the drift bends the whole stretch, so one sighting
+  // cannot, but many together can; docs/benchmarks.md). At most every
+  // joint_every_poses poses, after the window's targeted merges, the recent
+  // parts of the landmarks (their tracks first seen in the last
+  // joint_recent_poses poses, placed by their own sightings: a merge made
+  // under the drift may be wrong) are aligned rigidly onto the old parts
+  // (tracks last seen before that) by RANSAC: joint_ransac_iterations
+  // samples of two recent parts, every old pair within joint_search_m that
+  // matches, rotation within joint_max_rotation_rad; inliers the mutually
+  // nearest pairs within joint_inlier_m. An alignment with at least
+  // joint_min_inliers inliers (a dense park offers random ones of 4-7) that
+  // moves something by more than joint_inlier_m and merges something new is
+  // tried: per anchor pose (joint_recent_poses times 1, 2, 4, ... back,
+  // joint_anchors of them) the tracks first seen after the anchor are
+  // released from their landmarks, every inlier pair merged, and the whole
+  // problem solved from the trajectory with the correction spread along the
+  // drive since the anchor (linearly in the distance driven). The best
+  // anchor's state is kept when the whole-problem evidence rises, after
+  // redoing the targeted merges of the released tracks if needed; else the
+  // state before is restored and the next try needs joint_retry_inliers
+  // more inliers. joint_min_inliers 0: off.
+  int joint_min_inliers = 8;
+  int joint_recent_poses = 300;
+  double joint_search_m = 60;
+  double joint_inlier_m = 2.5;
+  double joint_max_rotation_rad = 0.5;
+  // Alignments shifting the recent landmarks by more than this are not
+  // tried (0: no limit). On the raw Victoria Park drive every alignment
+  // shifting them 40-56 m was a random one in the dense park, and its solve
+  // (from a start tens of metres off) the most expensive; the true re-entries
+  // there shift them 1-16 m.
+  double joint_max_shift_m = 0;
+  int joint_ransac_iterations = 300;
+  int joint_anchors = 2;
+  int joint_retry_inliers = 2;
+  int joint_every_poses = 50;  // RANSAC at most once per this many poses
+  int samples = 0;             // MC³ iterations after hill climbing (0: hill climbing only)
+  int burn_in = 0;
+  int num_chains = 2;
+  unsigned long seed = 1;
+  // Landmark location prior N(centre, prior_std^2 I): the centre is the mean
+  // of the sightings placed by dead reckoning; std from target.slam.
+  bool Validate(std::string* why) const;
+};
+
+struct UnknownAssociationResult {
+  std::vector<std::vector<int>> tracks;
+  AssociationState state;        // the best state found
+  std::vector<int> association;  // per sighting (ids = earliest track of the landmark)
+  LandmarkSlamResult solution;   // full solve of `state`, landmark covariances
+  double log_target = 0;         // of `state`, full evaluation
+  long proposals = 0, accepted = 0, solves = 0, cache_hits = 0, cold_retries = 0;
+  long joint_tries = 0, joint_merges = 0;  // joint re-entry merges: solves tried, pairs kept
+  long clutter_tracks = 0, clutter_sightings = 0;  // left out (min_track_sightings)
+  // Landmarks split at a window start because two of their tracks, merged
+  // before, both continued into one scan (one sighting per scan).
+  long scan_splits = 0;
+  double track_time_s = 0, hill_climb_time_s = 0, sampling_time_s = 0, total_time_s = 0;
+  double proposal_time_s = 0;  // spent evaluating proposals (hill climbing)
+  double joint_time_s = 0;     // spent on joint re-entry merges (RANSAC, solves, re-merges)
+  long refines = 0;            // full solves of the windows' states (hill climbing)
+  double refine_time_s = 0;    // spent in them
+  double targeted_time_s = 0;  // spent scoring targeted merges
+  SamplerSummary sampler;      // when samples > 0
+};
+
+using LandmarkProgress = std::function<void(const std::string& line)>;
+
+// Throws oslam::Error on invalid options or an unsolvable start.
+UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
+                                                 const UnknownAssociationOptions& options,
+                                                 const LandmarkProgress& progress = {});
+
+}  // namespace oslam

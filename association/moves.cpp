@@ -1,0 +1,330 @@
+#include "association/moves.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace oslam {
+namespace {
+
+constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+
+double LogSumExp(const std::vector<double>& v) {
+  double max = kNegInf;
+  for (double x : v) max = std::max(max, x);
+  if (max == kNegInf) return kNegInf;
+  double sum = 0;
+  for (double x : v) sum += std::exp(x - max);
+  return max + std::log(sum);
+}
+
+// Normalises log weights in place; false when every weight is zero.
+bool NormaliseLog(std::vector<double>* log_w) {
+  const double total = LogSumExp(*log_w);
+  if (total == kNegInf) return false;
+  for (double& x : *log_w) x -= total;
+  return true;
+}
+
+int SampleLog(const std::vector<double>& log_p, Rng& rng) {
+  double u = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+  int last = -1;
+  for (size_t i = 0; i < log_p.size(); ++i) {
+    if (log_p[i] == kNegInf) continue;
+    last = static_cast<int>(i);
+    u -= std::exp(log_p[i]);
+    if (u < 0) return last;
+  }
+  return last;  // rounding: the last possible index
+}
+
+double LogOf(double p) {
+  return p > 0 ? std::log(p) : kNegInf;
+}
+
+// log q(c | Psi) of the class a move draws: the data-driven proposal of
+// Algorithms 5-7 (prod P(a | c)) mixed with a uniform one. The data-driven
+// part alone almost never proposes a class the detector rarely reports (an
+// orange door seen as orange balls: (P(ball|door) / P(ball|ball))^n for n
+// detections), although the geometric evidence (the size prior) may favour
+// it strongly; the uniform part keeps such classes reachable.
+std::vector<double> LogClassProposal(const ClassConfusionModel& model,
+                                     const std::vector<int>& block, const MoveOptions& options) {
+  std::vector<double> log_q = model.ClassLogProposal(block);
+  const double mix = options.class_proposal_uniform;
+  if (mix <= 0) return log_q;
+  const double log_uniform = std::log(mix / static_cast<double>(log_q.size()));
+  const double log_data = std::log1p(-mix);
+  for (double& x : log_q) x = LogSumExp({log_data + x, log_uniform});
+  return log_q;
+}
+
+// log d~_j normalised (Algorithm 5 steps 2-3); false if all are zero.
+bool MergeFirstWeights(const StateEvaluation& s, const MoveOptions& options,
+                       std::vector<double>* log_d) {
+  const size_t n = s.state.blocks.size();
+  log_d->assign(n, kNegInf);
+  for (size_t j = 0; j < n; ++j) {
+    double count = options.merge_count_includes_self ? 1.0 : 0.0;
+    for (size_t k = 0; k < n; ++k)
+      if (k != j && s.state.classes[k] == s.state.classes[j] &&
+          (s.locations[k] - s.locations[j]).norm() < options.merge_distance_m)
+        count += 1.0;
+    (*log_d)[j] = LogOf(count + options.merge_count_smoothing);
+  }
+  return NormaliseLog(log_d);
+}
+
+// log eps_j normalised over j != j1 (Algorithm 5 steps 4 and 6).
+bool MergePartnerWeights(const StateEvaluation& s, int j1, const MoveOptions& options,
+                         std::vector<double>* log_e) {
+  const size_t n = s.state.blocks.size();
+  log_e->assign(n, kNegInf);
+  const double sigma2 = options.merge_sigma_m * options.merge_sigma_m;
+  for (size_t j = 0; j < n; ++j) {
+    if (static_cast<int>(j) == j1) continue;
+    double e = (s.locations[j] - s.locations[j1]).squaredNorm() / sigma2;
+    if (s.state.classes[j] != s.state.classes[j1]) {
+      if (std::isinf(options.class_mismatch_penalty)) continue;
+      e *= options.class_mismatch_penalty;
+    }
+    (*log_e)[j] = -0.5 * e;
+  }
+  return NormaliseLog(log_e);
+}
+
+// Split weights r^2(j), zero for single-track objects (#19).
+bool SplitWeights(const StateEvaluation& s, std::vector<double>* log_w) {
+  const size_t n = s.state.blocks.size();
+  log_w->assign(n, kNegInf);
+  for (size_t j = 0; j < n; ++j)
+    if (s.state.blocks[j].size() >= 2) (*log_w)[j] = LogOf(s.residual2[j]);
+  return NormaliseLog(log_w);
+}
+
+double LogPartitionProbability(size_t n, size_t second_size, SplitSampler sampler) {
+  if (sampler == SplitSampler::kUniform) return -std::log(std::pow(2.0, double(n) - 1.0) - 1.0);
+  return std::log(double(second_size) / double(n - 1)) - double(n - 2) * std::log(2.0);
+}
+
+std::vector<int> Union(const std::vector<int>& a, const std::vector<int>& b) {
+  std::vector<int> u;
+  std::merge(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(u));
+  return u;
+}
+
+Proposal ProposeMerge(const StateEvaluation& s, const ClassConfusionModel& model,
+                      const MoveOptions& options, const MoveProbabilities& probabilities,
+                      Rng& rng) {
+  Proposal p;
+  p.type = MoveType::kMerge;
+  std::vector<double> log_d, log_e;
+  if (s.state.blocks.size() < 2 || !MergeFirstWeights(s, options, &log_d)) return p;
+  const int j1 = SampleLog(log_d, rng);
+  if (!MergePartnerWeights(s, j1, options, &log_e)) return p;  // #42: self-transition
+  const int j2 = SampleLog(log_e, rng);
+  p.part_a = s.state.blocks[j1];
+  p.part_b = s.state.blocks[j2];
+  p.old_class_a = s.state.classes[j1];
+  p.old_class_b = s.state.classes[j2];
+  const std::vector<int> merged = Union(p.part_a, p.part_b);
+  const int c = SampleLog(LogClassProposal(model, merged, options), rng);
+  p.state = s.state;
+  p.state.blocks[j1] = merged;
+  p.state.classes[j1] = c;
+  p.state.blocks.erase(p.state.blocks.begin() + j2);
+  p.state.classes.erase(p.state.classes.begin() + j2);
+  p.state.Canonicalize();
+  p.log_q_forward = LogMergeProbability(s, j1, j2, c, model, options, probabilities);
+  p.self_transition = false;
+  return p;
+}
+
+// Algorithm 6 step 4: the earliest track stays in the first part.
+std::vector<int> SampleSecondPart(const std::vector<int>& block, SplitSampler sampler, Rng& rng) {
+  std::bernoulli_distribution coin(0.5);
+  std::vector<int> second;
+  if (sampler == SplitSampler::kUniform) {
+    while (second.empty())
+      for (size_t k = 1; k < block.size(); ++k)
+        if (coin(rng)) second.push_back(block[k]);
+    return second;
+  }
+  const size_t chosen = 1 + std::uniform_int_distribution<size_t>(0, block.size() - 2)(rng);
+  for (size_t k = 1; k < block.size(); ++k)
+    if (k == chosen || coin(rng)) second.push_back(block[k]);
+  return second;
+}
+
+Proposal ProposeSplit(const StateEvaluation& s, const ClassConfusionModel& model,
+                      const MoveOptions& options, const MoveProbabilities& probabilities,
+                      Rng& rng) {
+  Proposal p;
+  p.type = MoveType::kSplit;
+  std::vector<double> log_w;
+  if (!SplitWeights(s, &log_w)) return p;
+  const int j = SampleLog(log_w, rng);
+  const std::vector<int>& block = s.state.blocks[j];
+  p.part_b = SampleSecondPart(block, options.split_sampler, rng);
+  std::set_difference(block.begin(), block.end(), p.part_b.begin(), p.part_b.end(),
+                      std::back_inserter(p.part_a));
+  p.old_class_a = s.state.classes[j];
+  const int ca = SampleLog(LogClassProposal(model, p.part_a, options), rng);
+  const int cb = SampleLog(LogClassProposal(model, p.part_b, options), rng);
+  p.state = s.state;
+  p.state.blocks[j] = p.part_a;
+  p.state.classes[j] = ca;
+  p.state.blocks.push_back(p.part_b);
+  p.state.classes.push_back(cb);
+  p.state.Canonicalize();
+  p.log_q_forward =
+      LogSplitProbability(s, j, p.part_a, p.part_b, ca, cb, model, options, probabilities);
+  p.self_transition = false;
+  return p;
+}
+
+std::vector<double> SwitchWeights(const StateEvaluation& s, const ClassConfusionModel& model) {
+  std::vector<double> log_p(s.state.blocks.size());
+  for (size_t j = 0; j < log_p.size(); ++j)
+    log_p[j] = LogOf(-std::expm1(model.BlockLogLikelihood(s.state.blocks[j], s.state.classes[j])));
+  return log_p;
+}
+
+Proposal ProposeSwitch(const StateEvaluation& s, const ClassConfusionModel& model,
+                       const MoveOptions& options, const MoveProbabilities& probabilities,
+                       Rng& rng) {
+  Proposal p;
+  p.type = MoveType::kSwitch;
+  std::vector<double> log_p = SwitchWeights(s, model);
+  if (!NormaliseLog(&log_p)) return p;
+  const int j = SampleLog(log_p, rng);
+  const int c = SampleLog(LogClassProposal(model, s.state.blocks[j], options), rng);
+  if (c == s.state.classes[j]) return p;  // same state: accepted without a solve
+  p.track = s.state.blocks[j].front();
+  p.old_class_a = s.state.classes[j];
+  p.state = s.state;
+  p.state.classes[j] = c;
+  p.log_q_forward = LogSwitchProbability(s, j, c, model, options, probabilities);
+  p.self_transition = false;
+  return p;
+}
+
+}  // namespace
+
+const char* MoveName(MoveType type) {
+  switch (type) {
+    case MoveType::kMerge:
+      return "merge";
+    case MoveType::kSplit:
+      return "split";
+    case MoveType::kSwitch:
+      return "switch";
+  }
+  return "?";
+}
+
+bool MoveOptions::Validate(std::string* why) const {
+  auto fail = [why](const char* what) {
+    if (why) *why = what;
+    return false;
+  };
+  if (!(merge_distance_m > 0)) return fail("the merge distance threshold must be > 0 m");
+  if (!(merge_sigma_m > 0) || std::isinf(merge_sigma_m)) return fail("sigma_E must be > 0 m");
+  if (!(class_mismatch_penalty >= 1)) return fail("the class-mismatch penalty must be >= 1");
+  if (!(merge_count_smoothing >= 0) || std::isinf(merge_count_smoothing))
+    return fail("the merge count smoothing must be >= 0");
+  if (!(class_proposal_uniform >= 0) || !(class_proposal_uniform < 1))
+    return fail("the uniform share of the class proposal must be in [0, 1)");
+  return true;
+}
+
+double LogMergeProbability(const StateEvaluation& s, int a, int b, int merged_class,
+                           const ClassConfusionModel& model, const MoveOptions& options,
+                           const MoveProbabilities& probabilities) {
+  std::vector<double> log_d, log_ea, log_eb;
+  if (!MergeFirstWeights(s, options, &log_d)) return kNegInf;
+  // #17/#40: both orders (a, b) and (b, a) give the same merged state.
+  const double order_ab =
+      MergePartnerWeights(s, a, options, &log_ea) ? log_d[a] + log_ea[b] : kNegInf;
+  const double order_ba =
+      MergePartnerWeights(s, b, options, &log_eb) ? log_d[b] + log_eb[a] : kNegInf;
+  const std::vector<int> merged = Union(s.state.blocks[a], s.state.blocks[b]);
+  return LogOf(probabilities.merge) + LogSumExp({order_ab, order_ba}) +
+         LogClassProposal(model, merged, options)[merged_class];
+}
+
+double LogSplitProbability(const StateEvaluation& s, int block, const std::vector<int>& part_first,
+                           const std::vector<int>& part_second, int class_first, int class_second,
+                           const ClassConfusionModel& model, const MoveOptions& options,
+                           const MoveProbabilities& probabilities) {
+  std::vector<double> log_w;
+  if (!SplitWeights(s, &log_w)) return kNegInf;
+  const size_t n = s.state.blocks[block].size();
+  return LogOf(probabilities.split) + log_w[block] +
+         LogPartitionProbability(n, part_second.size(), options.split_sampler) +
+         LogClassProposal(model, part_first, options)[class_first] +
+         LogClassProposal(model, part_second, options)[class_second];
+}
+
+double LogSwitchProbability(const StateEvaluation& s, int block, int new_class,
+                            const ClassConfusionModel& model, const MoveOptions& options,
+                            const MoveProbabilities& probabilities) {
+  std::vector<double> log_p = SwitchWeights(s, model);
+  if (!NormaliseLog(&log_p)) return kNegInf;
+  return LogOf(probabilities.switch_class) + log_p[block] +
+         LogClassProposal(model, s.state.blocks[block], options)[new_class];
+}
+
+Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& model,
+                     const MoveOptions& options, const MoveProbabilities& probabilities, Rng& rng) {
+  const double u = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+  if (u < probabilities.merge) return ProposeMerge(current, model, options, probabilities, rng);
+  if (u < probabilities.merge + probabilities.split)
+    return ProposeSplit(current, model, options, probabilities, rng);
+  return ProposeSwitch(current, model, options, probabilities, rng);
+}
+
+double LogReverseProbability(const Proposal& p, const StateEvaluation& proposed,
+                             const ClassConfusionModel& model, const MoveOptions& options,
+                             const MoveProbabilities& probabilities) {
+  const AssociationState& s = proposed.state;
+  switch (p.type) {
+    case MoveType::kMerge: {
+      // The split that undoes it: the part holding the earliest track comes first.
+      const bool a_first = p.part_a.front() < p.part_b.front();
+      return LogSplitProbability(
+          proposed, s.BlockOf(p.part_a.front()), a_first ? p.part_a : p.part_b,
+          a_first ? p.part_b : p.part_a, a_first ? p.old_class_a : p.old_class_b,
+          a_first ? p.old_class_b : p.old_class_a, model, options, probabilities);
+    }
+    case MoveType::kSplit:
+      return LogMergeProbability(proposed, s.BlockOf(p.part_a.front()), s.BlockOf(p.part_b.front()),
+                                 p.old_class_a, model, options, probabilities);
+    case MoveType::kSwitch:
+      return LogSwitchProbability(proposed, s.BlockOf(p.track), p.old_class_a, model, options,
+                                  probabilities);
+  }
+  return kNegInf;
+}
+
+double LogForwardProbability(const Proposal& p, const StateEvaluation& from,
+                             const ClassConfusionModel& model, const MoveOptions& options,
+                             const MoveProbabilities& probabilities) {
+  const AssociationState& s = from.state;
+  const AssociationState& to = p.state;
+  auto new_class = [&to](int track) { return to.classes[to.BlockOf(track)]; };
+  switch (p.type) {
+    case MoveType::kMerge:
+      return LogMergeProbability(from, s.BlockOf(p.part_a.front()), s.BlockOf(p.part_b.front()),
+                                 new_class(p.part_a.front()), model, options, probabilities);
+    case MoveType::kSplit:  // part_a holds the earliest track (Algorithm 6 step 4)
+      return LogSplitProbability(from, s.BlockOf(p.part_a.front()), p.part_a, p.part_b,
+                                 new_class(p.part_a.front()), new_class(p.part_b.front()), model,
+                                 options, probabilities);
+    case MoveType::kSwitch:
+      return LogSwitchProbability(from, s.BlockOf(p.track), new_class(p.track), model, options,
+                                  probabilities);
+  }
+  return kNegInf;
+}
+
+}  // namespace oslam

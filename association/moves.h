@@ -1,0 +1,89 @@
+// The data-driven proposals of spec §9.2 (Algorithms 5-7) with the review's
+// fixes (spec §9.2-9.3, §13 #16-#19, #40-#45): merge (class-aware and
+// distance-based, forward probability summed over both orders), split
+// (residual-based; the partition probability is the one of the sampler
+// actually used) and switch class. Each move's probability is a function of
+// (state, evaluation) so that the reverse probability is computed by the same
+// code as the forward one.
+#pragma once
+
+#include <limits>
+#include <random>
+#include <string>
+
+#include "association/association_state.h"
+
+namespace oslam {
+
+enum class MoveType { kMerge = 0, kSplit = 1, kSwitch = 2 };
+const char* MoveName(MoveType type);
+
+// P_merge, P_split, P_switch (must sum to 1).
+struct MoveProbabilities {
+  double merge = 0.4, split = 0.4, switch_class = 0.2;
+};
+
+// How a split partitions an object's tracks (spec §13 #18/#43).
+enum class SplitSampler {
+  kUniform,  // uniform non-empty subset of the non-earliest tracks: 1/(2^(n-1) - 1)
+  kThesis,   // Algorithm 6 step 4, with its true probability |Psi2|/(n-1) 2^-(n-2)
+};
+
+struct MoveOptions {
+  double merge_distance_m = 0.5;           // d_thr (Sec. 6.2)
+  double merge_sigma_m = 0.5;              // sigma_E (#14)
+  double class_mismatch_penalty = 3.0;     // on e_j; infinity = never merge across classes (#15)
+  double merge_count_smoothing = 0.1;      // epsilon_d added to every d_j (#16)
+  bool merge_count_includes_self = false;  // d_j counts o_j itself (#41)
+  SplitSampler split_sampler = SplitSampler::kUniform;
+  // Share of a uniform distribution in the class drawn by merge, split and
+  // switch, q(c) = (1 - u) prod P(a | c) / Z + u / |classes| (0 = thesis).
+  // Without it a class the detector seldom reports is never proposed.
+  double class_proposal_uniform = 0.1;
+
+  bool Validate(std::string* why) const;
+};
+
+struct Proposal {
+  MoveType type = MoveType::kMerge;
+  bool self_transition = true;  // nothing to propose (or the same state)
+  AssociationState state;       // the proposed state (canonical)
+  double log_q_forward = 0;
+  // What the reverse move needs: the affected track sets and the old classes.
+  std::vector<int> part_a, part_b;       // merge: the two merged blocks; split: the two halves
+  int old_class_a = 0, old_class_b = 0;  // merge: classes of part_a/b; split/switch: old class
+  int track = 0;                         // switch: a track of the switched object
+};
+
+using Rng = std::mt19937_64;
+
+// Draws a move from `current` (whose evaluation is `evaluation`).
+Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& model,
+                     const MoveOptions& options, const MoveProbabilities& probabilities, Rng& rng);
+
+// log q(proposed -> current) evaluated on the proposed state's evaluation;
+// -infinity when the reverse move is impossible.
+double LogReverseProbability(const Proposal& proposal, const StateEvaluation& proposed,
+                             const ClassConfusionModel& model, const MoveOptions& options,
+                             const MoveProbabilities& probabilities);
+
+// log q(current -> proposed) evaluated on `from`, an evaluation of the state
+// the proposal started from (proposal.log_q_forward when it is that state's
+// own evaluation; delayed acceptance passes an approximate one).
+double LogForwardProbability(const Proposal& proposal, const StateEvaluation& from,
+                             const ClassConfusionModel& model, const MoveOptions& options,
+                             const MoveProbabilities& probabilities);
+
+// The move probabilities themselves (log q, including P_move), exposed for tests.
+double LogMergeProbability(const StateEvaluation& s, int block_a, int block_b, int merged_class,
+                           const ClassConfusionModel& model, const MoveOptions& options,
+                           const MoveProbabilities& probabilities);
+double LogSplitProbability(const StateEvaluation& s, int block, const std::vector<int>& part_first,
+                           const std::vector<int>& part_second, int class_first, int class_second,
+                           const ClassConfusionModel& model, const MoveOptions& options,
+                           const MoveProbabilities& probabilities);
+double LogSwitchProbability(const StateEvaluation& s, int block, int new_class,
+                            const ClassConfusionModel& model, const MoveOptions& options,
+                            const MoveProbabilities& probabilities);
+
+}  // namespace oslam

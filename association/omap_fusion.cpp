@@ -1,0 +1,291 @@
+#include "association/omap_fusion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <tuple>
+#include <utility>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "core/error.h"
+
+namespace oslam {
+namespace {
+
+using Matrix5d = Eigen::Matrix<double, 5, 5>;
+using Vector5d = Eigen::Matrix<double, 5, 1>;
+
+struct Accumulator {
+  int count = 0;
+  Vector5d mean_sum = Vector5d::Zero();
+  Matrix5d second_sum = Matrix5d::Zero();  // sum of mean mean^T
+  Matrix5d covariance_sum = Matrix5d::Zero();
+  std::map<int, int> class_counts;
+  // (sample index, P(xi)) in sample order; one entry per sample (merged
+  // identities keep the largest P(xi) of a sample).
+  std::vector<std::pair<int, double>> presence;
+  std::vector<std::pair<std::vector<int>, int>> members;  // identity, its samples
+
+  Vector5d Mean() const { return mean_sum / count; }
+  int Class() const {
+    int best = -1, best_count = -1;
+    for (const auto& [c, n] : class_counts)
+      if (n > best_count) best = c, best_count = n;  // ties: the lower class index
+    return best;
+  }
+};
+
+// Samples in which both hold an identity.
+int CoOccurrences(const Accumulator& a, const Accumulator& b) {
+  int n = 0;
+  auto i = a.presence.begin(), j = b.presence.begin();
+  while (i != a.presence.end() && j != b.presence.end()) {
+    if (i->first < j->first) {
+      ++i;
+    } else if (j->first < i->first) {
+      ++j;
+    } else {
+      ++n, ++i, ++j;
+    }
+  }
+  return n;
+}
+
+void MergeInto(Accumulator* a, Accumulator&& b) {
+  a->count += b.count;
+  a->mean_sum += b.mean_sum;
+  a->second_sum += b.second_sum;
+  a->covariance_sum += b.covariance_sum;
+  for (const auto& [c, n] : b.class_counts) a->class_counts[c] += n;
+  std::vector<std::pair<int, double>> presence;
+  auto i = a->presence.begin(), j = b.presence.begin();
+  while (i != a->presence.end() || j != b.presence.end()) {
+    if (j == b.presence.end() || (i != a->presence.end() && i->first < j->first)) {
+      presence.push_back(*i++);
+    } else if (i == a->presence.end() || j->first < i->first) {
+      presence.push_back(*j++);
+    } else {
+      presence.push_back({i->first, std::max(i->second, j->second)});
+      ++i, ++j;
+    }
+  }
+  a->presence = std::move(presence);
+  for (auto& m : b.members) a->members.push_back(std::move(m));
+}
+
+// Squared class-aware distance between two identities' mean base points.
+double IdentityDistance2(const Accumulator& a, const Accumulator& b, const FusionOptions& options) {
+  double d2 = (a.Mean().head<3>() - b.Mean().head<3>()).squaredNorm();
+  if (a.Class() != b.Class()) {
+    if (std::isinf(options.identity_class_mismatch_penalty))
+      return std::numeric_limits<double>::infinity();
+    d2 *= options.identity_class_mismatch_penalty;
+  }
+  return d2;
+}
+
+bool Combinable(const Accumulator& a, const Accumulator& b, const FusionOptions& options) {
+  const double limit = options.identity_merge_distance_m * options.identity_merge_distance_m;
+  if (!(IdentityDistance2(a, b, options) < limit)) return false;
+  const double rarer = static_cast<double>(std::min(a.presence.size(), b.presence.size()));
+  return CoOccurrences(a, b) <= options.identity_max_cooccurrence * rarer;
+}
+
+// Greedy agglomeration (item 6a): candidate pairs of identities, closest
+// first; two groups are joined when their pooled means are still close and
+// they rarely co-occur, so two distinct objects that are both present in
+// most samples are never joined through a rare identity that spans both.
+std::vector<Accumulator> CombineIdentities(std::vector<Accumulator> identities,
+                                           const FusionOptions& options) {
+  const size_t n = identities.size();
+  std::vector<std::tuple<double, size_t, size_t>> pairs;
+  const double limit = options.identity_merge_distance_m * options.identity_merge_distance_m;
+  for (size_t a = 0; a < n; ++a)
+    for (size_t b = a + 1; b < n; ++b) {
+      const double d2 = IdentityDistance2(identities[a], identities[b], options);
+      if (d2 < limit) pairs.emplace_back(d2, a, b);
+    }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<size_t> root(n);
+  for (size_t i = 0; i < n; ++i) root[i] = i;
+  auto find = [&](size_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  for (const auto& [d2, a, b] : pairs) {
+    const size_t ra = find(a), rb = find(b);
+    if (ra == rb || !Combinable(identities[ra], identities[rb], options)) continue;
+    MergeInto(&identities[ra], std::move(identities[rb]));
+    root[rb] = ra;
+  }
+  std::vector<Accumulator> combined;
+  for (size_t i = 0; i < n; ++i)
+    if (find(i) == i) combined.push_back(std::move(identities[i]));
+  return combined;
+}
+
+Vector5d Parameters(const MappedObject& object) {
+  Vector5d v;
+  v << object.geometry.base_world, object.geometry.diameter_m, object.geometry.height_m;
+  return v;
+}
+
+OMapObject MakeObject(const Accumulator& a, const std::vector<ClassPrior>& classes,
+                      size_t num_samples) {
+  OMapObject object;
+  const Vector5d mean = a.Mean();  // (4.26)/(4.27): conditional mean
+  // Law of total covariance over the samples holding the identity.
+  const Matrix5d covariance =
+      a.covariance_sum / a.count + a.second_sum / a.count - mean * mean.transpose();
+  object.base_world = mean.head<3>();
+  object.diameter_m = mean[3];
+  object.height_m = mean[4];
+  object.covariance = 0.5 * (covariance + covariance.transpose());
+  double existence_sum = 0;
+  for (const auto& [sample, xi] : a.presence) existence_sum += xi;
+  object.existence_probability = existence_sum / num_samples;  // (4.46) with 1/N_s
+  for (const auto& [c, n] : a.class_counts)
+    object.class_histogram.push_back({classes[c].name, double(n) / a.count});
+  std::stable_sort(object.class_histogram.begin(), object.class_histogram.end(),
+                   [](const auto& x, const auto& y) { return x.second > y.second; });
+  object.class_name = classes[a.Class()].name;
+  return object;
+}
+
+}  // namespace
+
+bool FusionOptions::Validate(std::string* why) const {
+  if (!(spurious_t0_m2 >= 0) || !(spurious_tau_m2 >= 0) || std::isinf(spurious_t0_m2)) {
+    if (why) *why = "the spurious sigmoid needs t0 >= 0 and tau >= 0 (m^2)";
+    return false;
+  }
+  if (!(min_existence >= 0 && min_existence <= 1)) {
+    if (why) *why = "the minimum existence probability must be in [0, 1]";
+    return false;
+  }
+  if (!(identity_merge_distance_m >= 0) || !(identity_class_mismatch_penalty >= 1) ||
+      !(identity_max_cooccurrence >= 0 && identity_max_cooccurrence <= 1)) {
+    if (why)
+      *why = "identity merging needs a distance >= 0 m, a class-mismatch penalty >= 1 and a "
+             "co-occurrence fraction in [0, 1]";
+    return false;
+  }
+  return true;
+}
+
+double MirroredSigmoid(double t, double t0, double tau) {
+  if (std::isinf(t)) return 0.0;
+  if (tau == 0) return t < t0 ? 1.0 : 0.0;  // the conference version's hard threshold
+  return 1.0 / (1.0 + std::exp((t - t0) / tau));
+}
+
+double PriorFreeLocationVariance(const Matrix5d& covariance, const ClassPrior& prior) {
+  const double infinity = std::numeric_limits<double>::infinity();
+  Eigen::LDLT<Matrix5d> ldlt(covariance);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || covariance.isZero()) return infinity;
+  Matrix5d information = ldlt.solve(Matrix5d::Identity());
+  // (4.43): remove the prior information diag(Gamma^-1, Sigma^-1).
+  Vector5d prior_variance;
+  prior_variance << prior.location_std_m.array().square(), prior.size_std_m.array().square();
+  information.diagonal() -= prior_variance.cwiseInverse();
+  information = 0.5 * (information + information.transpose());
+  Eigen::SelfAdjointEigenSolver<Matrix5d> eigen(information);
+  const double largest = eigen.eigenvalues().maxCoeff();
+  if (!(eigen.eigenvalues().minCoeff() > 1e-12 * largest)) return infinity;  // §7.2 guard
+  // The location block of the inverse, not the inverse of the location block.
+  const Matrix5d prior_free = eigen.eigenvectors() *
+                              eigen.eigenvalues().cwiseInverse().asDiagonal() *
+                              eigen.eigenvectors().transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> location(prior_free.topLeftCorner<3, 3>());
+  return location.eigenvalues().maxCoeff();
+}
+
+double NonSpuriousProbability(const Matrix5d& covariance, const ClassPrior& prior,
+                              const FusionOptions& options) {
+  if (!options.spurious_model) return 1.0;
+  return MirroredSigmoid(PriorFreeLocationVariance(covariance, prior), options.spurious_t0_m2,
+                         options.spurious_tau_m2);
+}
+
+FusionResult FuseSamples(const std::vector<EvaluationPtr>& samples,
+                         const std::vector<ClassPrior>& classes,
+                         const std::vector<int>& track_sizes, const FusionOptions& options) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("O-Map fusion options: " + why);
+  if (samples.empty()) throw Error("O-Map fusion: no samples");
+  std::map<std::vector<int>, Accumulator> identities;
+  const size_t num_poses =
+      samples.front()->solution ? samples.front()->solution->trajectory.size() : 0;
+  std::vector<Eigen::Vector4d> pose_sums(num_poses, Eigen::Vector4d::Zero());  // x, y, sin, cos
+  for (size_t n = 0; n < samples.size(); ++n) {
+    const EvaluationPtr& sample = samples[n];
+    if (!sample->solution) throw Error("O-Map fusion: a sample has no geometric solution");
+    const GeometricSlamResult& solution = *sample->solution;
+    for (size_t i = 0; i < num_poses && i < solution.trajectory.size(); ++i) {
+      const Pose2& p = solution.trajectory[i];
+      pose_sums[i] += Eigen::Vector4d(p.x, p.y, std::sin(p.theta), std::cos(p.theta));
+    }
+    const AssociationState& state = sample->state;
+    for (size_t j = 0; j < state.blocks.size(); ++j) {
+      const int id = state.blocks[j].front();
+      const auto object = std::find_if(solution.objects.begin(), solution.objects.end(),
+                                       [id](const MappedObject& o) { return o.id == id; });
+      if (object == solution.objects.end()) continue;
+      Accumulator& a = identities[state.blocks[j]];
+      const Vector5d v = Parameters(*object);
+      ++a.count;
+      a.mean_sum += v;
+      a.second_sum += v * v.transpose();
+      a.covariance_sum += object->covariance;
+      a.presence.push_back({static_cast<int>(n), NonSpuriousProbability(
+                                                     object->covariance,
+                                                     classes[state.classes[j]], options)});
+      ++a.class_counts[state.classes[j]];
+    }
+  }
+  FusionResult result;
+  for (size_t i = 0; i < num_poses; ++i) {
+    const Eigen::Vector4d& s = pose_sums[i];  // (4.25) with a circular mean heading (#34)
+    result.map.trajectory.push_back(
+        {s[0] / samples.size(), s[1] / samples.size(), std::atan2(s[2], s[3])});
+  }
+  std::vector<Accumulator> groups;
+  for (auto& [tracks, a] : identities) {
+    a.members.push_back({tracks, a.count});
+    groups.push_back(std::move(a));
+  }
+  if (options.merge_identities) groups = CombineIdentities(std::move(groups), options);
+  std::vector<std::pair<OMapObject, FusedIdentity>> objects;
+  for (Accumulator& a : groups) {
+    OMapObject object = MakeObject(a, classes, samples.size());
+    if (object.existence_probability < options.min_existence) continue;
+    FusedIdentity identity;
+    std::stable_sort(a.members.begin(), a.members.end(),
+                     [](const auto& x, const auto& y) { return x.second > y.second; });
+    for (const auto& [tracks, count] : a.members) {
+      identity.tracks.insert(identity.tracks.end(), tracks.begin(), tracks.end());
+      identity.members.push_back(tracks);
+      identity.member_samples.push_back(count);
+    }
+    std::sort(identity.tracks.begin(), identity.tracks.end());
+    identity.tracks.erase(std::unique(identity.tracks.begin(), identity.tracks.end()),
+                          identity.tracks.end());
+    identity.num_samples = static_cast<int>(a.presence.size());
+    for (int t : identity.tracks) object.num_detections += track_sizes.at(t);
+    objects.push_back({object, identity});
+  }
+  std::stable_sort(objects.begin(), objects.end(), [](const auto& x, const auto& y) {
+    return x.first.existence_probability > y.first.existence_probability;
+  });
+  for (auto& [object, identity] : objects) {
+    object.id = static_cast<int>(result.map.objects.size());
+    result.map.objects.push_back(object);
+    result.identities.push_back(identity);
+  }
+  return result;
+}
+
+}  // namespace oslam

@@ -1,0 +1,137 @@
+// O-SLAM inference over (C, J) (spec §9.1, §9.4, §9.7 Algorithm 9): a
+// hill-climbing phase from the all-tracks-separate state, then
+// Metropolis-coupled MCMC (MC³; plain Metropolis-Hastings is the one-chain
+// case). Chains step in parallel threads; each chain owns its random stream
+// and its evaluator, so a run is reproducible from the seed with or without
+// threads.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "association/moves.h"
+
+namespace oslam {
+
+struct SamplerOptions {
+  int hill_climb_steps = 100;  // 100 (Sec. 6.2), 400 (long run); the minimum
+  // Beyond hill_climb_steps, climbing goes on while a move was accepted in
+  // the last `hill_climb_patience` steps (0: stop at hill_climb_steps, the
+  // thesis' fixed count), up to hill_climb_max_steps. A fixed count that
+  // suits lab's ~40 tracks leaves long_loop's ~180 tracks half merged.
+  int hill_climb_patience = 50;
+  int hill_climb_max_steps = 2000;
+  // Hill climbing skips the solve of a proposal whose approximate gain (the
+  // delayed-acceptance approximation) is below -hill_climb_screen_nats: it
+  // would not raise the target. long_loop: -10 skips 60 % of the solves and
+  // none that the solve would have accepted. Infinity: solve every proposal.
+  double hill_climb_screen_nats = 10.0;
+  int refine_every = 50;  // K_NL: full optimisation of the current state
+  MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
+  MoveProbabilities sampling_moves{0.4, 0.4, 0.2};  // 0.5/0.5/0 with known classes
+  MoveOptions moves;
+  int num_chains = 3;               // N_c; 1 = plain Metropolis-Hastings
+  double delta_temperature = 3.33;  // beta_i = 1 / (1 + dT (i - 1))
+  // Adjacent chains may swap after every `swap_every` iterations (1: after
+  // each, Algorithm 8); any schedule keeps the tempered targets invariant.
+  int swap_every = 1;
+  // Iterations t = 1..num_iterations; the cold chain's state is recorded when
+  // t > burn_in (Algorithm 8), so num_iterations counts the burn-in (#21).
+  int num_iterations = 667;
+  int burn_in = 70;
+  unsigned long seed = 1;
+  bool parallel_chains = true;
+  // With threads, a chain may step up to this many swap intervals ahead of
+  // the swap decisions, so that it waits for no other chain; an accepted swap
+  // sends the chains it reaches back to that iteration (their evaluators roll
+  // back), and the result is the one of stepping the chains one after another.
+  // 0 (or an evaluator that cannot roll back): the chains step in lock-step.
+  int speculation_depth = 8;
+  // MC³ proposals pass a cheap screen before they are solved (delayed
+  // acceptance, Christen & Fox 2005): the first stage accepts with
+  // min(1, exp(beta a(x, y))), a = the evaluator's approximate log ratio, the
+  // second corrects with the exact target, so the chain keeps the same
+  // stationary distribution; proposals the screen rejects cost no solve.
+  // Hill climbing never screens. Off: plain Metropolis-Hastings (thesis).
+  bool delayed_acceptance = true;
+
+  bool Validate(std::string* why) const;
+};
+
+struct MoveStatistics {
+  long proposed = 0, accepted = 0, self_transitions = 0;
+  long cache_hits = 0;    // proposed states found in the evaluator's cache (no solve)
+  long screened_out = 0;  // rejected by delayed acceptance's first stage (no solve)
+  double time_s = 0;      // spent evaluating proposals of this type (screen included)
+  // Proposals that needed a solve.
+  long solves() const { return proposed - self_transitions - cache_hits - screened_out; }
+  // Proposals that were screened, looked up or solved (all but self-transitions).
+  long evaluated() const { return proposed - self_transitions; }
+};
+
+struct SamplerSummary {
+  std::array<MoveStatistics, 3> hill_climb{}, sampling{};  // by MoveType, cold chain
+  long swaps_proposed = 0, swaps_accepted = 0;
+  // Solves done ahead of a swap that was then accepted, and undone (depend on
+  // the threads' timing; not in num_solves).
+  size_t speculative_solves_undone = 0;
+  int hill_climb_steps = 0;              // taken (patience may add to the minimum)
+  std::vector<double> hill_climb_trace;  // log target of the current state per step
+  std::vector<double> cold_trace;        // cold chain's log target per iteration
+  double initial_log_target = 0, hill_climbed_log_target = 0;
+  size_t num_solves = 0, num_cache_hits = 0;
+  double hill_climb_time_s = 0, sampling_time_s = 0;
+  double effective_sample_size = 0;  // of the cold chain's log target (after burn-in)
+  std::string message;
+};
+
+struct SamplerResult {
+  std::vector<EvaluationPtr> samples;  // cold chain, one per recorded iteration
+  EvaluationPtr hill_climbed;          // the state MC³ started from
+  EvaluationPtr best;                  // highest log target seen by the cold chain
+  SamplerSummary summary;
+};
+
+using EvaluatorFactory = std::function<std::unique_ptr<StateEvaluator>()>;
+using ProgressCallback = std::function<void(const char* stage, size_t done, size_t total)>;
+
+class Sampler {
+ public:
+  Sampler(const ClassConfusionModel& model, EvaluatorFactory factory,
+          const SamplerOptions& options);
+  // Throws oslam::Error on invalid options or an unevaluable start state.
+  SamplerResult Run(const AssociationState& start, const ProgressCallback& progress = {});
+
+ private:
+  const ClassConfusionModel& model_;
+  EvaluatorFactory factory_;
+  SamplerOptions options_;
+};
+
+// How a Metropolis-Hastings step decides; the sampler's phases differ only here.
+struct StepRule {
+  double beta = 1.0;    // inverse temperature of the target
+  bool greedy = false;  // accept only increases of the target (hill climbing)
+  // Not greedy: screen the proposal first (SamplerOptions::delayed_acceptance).
+  bool delayed_acceptance = false;
+  // Greedy: reject without a solve when the approximate gain is below
+  // -greedy_screen_nats (SamplerOptions::hill_climb_screen_nats).
+  double greedy_screen_nats = std::numeric_limits<double>::infinity();
+};
+
+// One Metropolis-Hastings step: proposes from `current` and returns the next
+// state (the current one when rejected). Counts into `stats` (indexed by
+// MoveType).
+EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
+                             StateEvaluator& evaluator, const ClassConfusionModel& model,
+                             const MoveOptions& options, const MoveProbabilities& probabilities,
+                             Rng& rng, std::array<MoveStatistics, 3>* stats);
+
+// Integrated-autocorrelation effective sample size (initial positive sequence).
+double EffectiveSampleSize(const std::vector<double>& series);
+
+}  // namespace oslam

@@ -1,0 +1,90 @@
+// The O-SLAM target for the sampler (spec §8): log P(Z | C, J) by the
+// geometric solver's Laplace evidence, plus the class-confusion penalty
+// sum log P(a | c) (eq. 4.32) and log P(C, J) (uniform joint by default,
+// spec §13 #37). A state's objects are its blocks of tracks; object id = the
+// block's earliest track. Proposed states are solved from the current state's
+// solution with few iterations (spec §9.6), and every evaluated state is
+// cached by its canonical form, so a revisited state keeps one value (§9.3).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "association/association_state.h"
+#include "slam/geometric_slam.h"
+#include "association/tracks.h"
+
+namespace oslam {
+
+struct SlamTargetOptions {
+  GeometricSlamOptions slam;  // E, motion noise, solver (full optimisation)
+  // Linear systems solved for a proposed state, linearised at the current
+  // state's solution: 1 = the thesis' single Gauss-Newton step with the
+  // evidence of that linear system (spec §9.6, §8.2 notes); k > 1 adds k - 1
+  // Levenberg-Marquardt iterations before it.
+  int proposal_iterations = 1;
+  // #37: false = P(C, J) uniform (thesis reading); true = prod_j 1/|classes|.
+  bool class_prior_per_object = false;
+  size_t max_cache_entries = 100000;  // the cache is cleared when it grows beyond this
+
+  bool Validate(std::string* why) const;
+};
+
+// Everything the evaluator needs; shared read-only by all chains.
+struct SlamTargetData {
+  const CameraModel* camera = nullptr;
+  std::vector<OdometryIncrement> increments;
+  Pose2 first_pose;
+  std::vector<ClassPrior> classes;
+  std::vector<ClassedSlice> detections;
+  std::vector<Track> tracks;
+};
+
+class SlamEvaluator : public StateEvaluator {
+ public:
+  // data and model must outlive the evaluator.
+  SlamEvaluator(const SlamTargetData& data, const ClassConfusionModel& model,
+                const SlamTargetOptions& options);
+
+  EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation* from) override;
+  EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override;
+  void Remember(const EvaluationPtr& evaluation) override;
+  EvaluationPtr Complete(const EvaluationPtr& evaluation) override;
+  // The objects that differ between the states, each solved alone with the
+  // poses held at from's trajectory (ObjectLogEvidenceWithPosesHeld), change
+  // from's log target; objects both states share keep from's values.
+  EvaluationPtr Approximate(const AssociationState& to, const StateEvaluation& from) override;
+  size_t num_solves() const override { return cache_.solves(); }
+  size_t num_cache_hits() const override { return cache_.hits(); }
+  bool SupportsRollBack() const override { return true; }
+  size_t Mark() override { return cache_.Mark(); }
+  void RollBack(size_t mark) override { cache_.RollBack(mark); }
+  void Release(size_t mark) override { cache_.Release(mark); }
+
+  GeometricSlamProblem BuildProblem(const AssociationState& state) const;
+
+ private:
+  EvaluationPtr Solve(const AssociationState& state, const StateEvaluation* from, bool full);
+  GeometricSlamResult WarmStart(const AssociationState& state, const StateEvaluation& from) const;
+  // The detections of a block's tracks, as observations of object block.front().
+  void AddObservations(const std::vector<int>& block,
+                       std::vector<SliceObservation>* observations) const;
+  // An object's class terms: log P(a | c) of its tracks and its share of log P(C, J).
+  double ClassTerm(const std::vector<int>& block, int class_index) const;
+  // An object's log-evidence with the poses held plus its class terms, solved
+  // from `start` (which receives the result), and r^2 of its detections;
+  // false when it cannot be evaluated.
+  bool LocalObjectLogTarget(const std::vector<int>& block, int class_index,
+                            const std::vector<Pose2>& poses, CylinderGeometry* object,
+                            double* log_target, double* squared_residual) const;
+
+  const SlamTargetData& data_;
+  const ClassConfusionModel& model_;
+  SlamTargetOptions options_;
+  GeometricSlam full_, step_, covariances_;
+  EvaluationCache cache_;
+};
+
+}  // namespace oslam

@@ -1,0 +1,462 @@
+#include "slam/landmark_data.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+#include <Eigen/Cholesky>
+
+#include "core/angles.h"
+#include "core/error.h"
+
+namespace oslam {
+
+namespace {
+
+// Whitespace-separated numeric text files: calls `row(line, tokens)` for
+// every line that is not blank or a '#' comment.
+void ForEachRow(const std::string& path,
+                const std::function<void(int, const std::vector<std::string>&)>& row) {
+  std::ifstream in(path);
+  if (!in) throw Error::InFile(path, "cannot open the file");
+  std::string text;
+  int line = 0;
+  bool any = false;
+  while (std::getline(in, text)) {
+    ++line;
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    std::istringstream fields(text);
+    std::vector<std::string> tokens;
+    for (std::string token; fields >> token;) tokens.push_back(token);
+    if (tokens.empty() || tokens[0][0] == '#') continue;
+    any = true;
+    row(line, tokens);
+  }
+  if (in.bad()) throw Error::InFile(path, "read error");
+  if (!any) throw Error::InFile(path, "no data (empty file)");
+}
+
+double Number(const std::string& path, int line, const std::string& token, const char* what) {
+  errno = 0;
+  char* end = nullptr;
+  const double value = std::strtod(token.c_str(), &end);
+  if (end == token.c_str() || *end != '\0')
+    throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not a number");
+  if (!std::isfinite(value) || errno == ERANGE)
+    throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not finite");
+  return value;
+}
+
+long Integer(const std::string& path, int line, const std::string& token, const char* what) {
+  errno = 0;
+  char* end = nullptr;
+  const long value = std::strtol(token.c_str(), &end, 10);
+  if (end == token.c_str() || *end != '\0' || errno == ERANGE)
+    throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not an integer");
+  if (value < 0) throw Error::AtLine(path, line, std::string(what) + " must be >= 0");
+  return value;
+}
+
+void ExpectFields(const std::string& path, int line, const std::vector<std::string>& tokens,
+                  size_t count, const char* layout) {
+  if (tokens.size() != count)
+    throw Error::AtLine(path, line,
+                        "expected " + std::to_string(count) + " fields (" + layout + "), got " +
+                            std::to_string(tokens.size()));
+}
+
+bool PositiveDefinite(const Eigen::Matrix3d& covariance) {
+  const Eigen::LLT<Eigen::Matrix3d> llt(covariance);
+  return llt.info() == Eigen::Success && llt.matrixL().toDenseMatrix().diagonal().minCoeff() > 0;
+}
+
+// Euler integration of the Ackermann model in the frame of the start pose,
+// with first-order propagation of the input noise.
+struct AckermannIntegrator {
+  Eigen::Vector3d state = Eigen::Vector3d::Zero();  // (x, y, theta)
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+
+  void Step(double speed, double steering, double dt, const VictoriaRawOptions& o) {
+    if (!(dt > 0.0)) return;
+    const double t = std::tan(steering), sec2 = 1.0 + t * t;
+    const double k = o.encoder_offset_m / o.wheelbase_m;
+    const double denominator = 1.0 - t * k;
+    // Speed of the rear-axle centre from the encoder's (rear left wheel).
+    const double vc = speed / denominator;
+    const double dvc_dspeed = 1.0 / denominator;
+    const double dvc_dsteering = speed * k * sec2 / (denominator * denominator);
+    const double c = std::cos(state.z()), s = std::sin(state.z());
+    const double distance = vc * dt;
+    Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
+    f(0, 2) = -distance * s;
+    f(1, 2) = distance * c;
+    // d(state)/d(vc), d(state)/d(steering) at fixed vc.
+    const Eigen::Vector3d wrt_vc(dt * c, dt * s, dt * t / o.wheelbase_m);
+    const Eigen::Vector3d wrt_steering_direct(0.0, 0.0, distance * sec2 / o.wheelbase_m);
+    Eigen::Matrix<double, 3, 2> g;
+    g.col(0) = wrt_vc * dvc_dspeed;
+    g.col(1) = wrt_vc * dvc_dsteering + wrt_steering_direct;
+    const double speed_std = o.speed_std_fraction * std::abs(speed) + o.speed_std_floor_mps;
+    const Eigen::Vector2d input_variance(speed_std * speed_std,
+                                         o.steering_std_rad * o.steering_std_rad);
+    covariance = f * covariance * f.transpose() + g * input_variance.asDiagonal() * g.transpose();
+    state += Eigen::Vector3d(distance * c, distance * s, distance * t / o.wheelbase_m);
+  }
+
+  RelativePoseMeasurement Finish(const VictoriaRawOptions& o) const {
+    RelativePoseMeasurement m;
+    m.delta = {state.x(), state.y(), WrapAngle(state.z())};
+    m.covariance = covariance;
+    m.covariance.diagonal() += o.increment_std_floor.cwiseAbs2();
+    m.covariance = 0.5 * (m.covariance + m.covariance.transpose()).eval();
+    return m;
+  }
+};
+
+// Composes the odometry from pose 0 along the edges in order (each edge's
+// `from` is reached before it, as the readers guarantee).
+std::vector<Pose2> DeadReckoning(int num_poses, const std::vector<RelativePoseMeasurement>& edges) {
+  std::vector<Pose2> poses(num_poses);
+  std::vector<bool> known(num_poses, false);
+  if (num_poses > 0) known[0] = true;
+  for (const auto& edge : edges) {
+    if (known[edge.to] || !known[edge.from]) continue;
+    const Pose2& a = poses[edge.from];
+    const double c = std::cos(a.theta), s = std::sin(a.theta);
+    poses[edge.to] = {a.x + c * edge.delta.x - s * edge.delta.y,
+                      a.y + s * edge.delta.x + c * edge.delta.y,
+                      WrapAngle(a.theta + edge.delta.theta)};
+    known[edge.to] = true;
+  }
+  return poses;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+
+LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
+  LandmarkDataset data;
+  data.path = path;
+  data.format = "gtsam";
+  data.has_landmark_ids = true;
+  std::map<long, int> pose_index;  // file id -> index
+  struct PendingSighting {
+    long pose_id;
+    LandmarkSighting sighting;
+  };
+  std::vector<PendingSighting> pending;
+  ForEachRow(path, [&](int line, const std::vector<std::string>& t) {
+    if (t[0] == "ODOMETRY") {
+      ExpectFields(path, line, t, 12, "ODOMETRY i j dx dy dtheta c11 c12 c13 c22 c23 c33");
+      const long i = Integer(path, line, t[1], "pose i"), j = Integer(path, line, t[2], "pose j");
+      if (i == j) throw Error::AtLine(path, line, "odometry from pose " + t[1] + " to itself");
+      double v[9];
+      static const char* kNames[9] = {"dx",  "dy",  "dtheta", "c11", "c12",
+                                      "c13", "c22", "c23",    "c33"};
+      for (int k = 0; k < 9; ++k) v[k] = Number(path, line, t[3 + k], kNames[k]);
+      RelativePoseMeasurement edge;
+      edge.delta = {v[0], v[1], v[2]};
+      edge.covariance << v[3], v[4], v[5], v[4], v[6], v[7], v[5], v[7], v[8];
+      if (!PositiveDefinite(edge.covariance))
+        throw Error::AtLine(path, line, "the odometry covariance is not positive definite");
+      if (pose_index.empty()) {
+        pose_index[i] = 0;
+        data.pose_ids.push_back(i);
+      }
+      const auto from = pose_index.find(i);
+      if (from == pose_index.end())
+        throw Error::AtLine(
+            path, line,
+            "odometry starts at pose " + t[1] + ", which no earlier odometry line reaches");
+      edge.from = from->second;
+      const auto to = pose_index.find(j);
+      if (to == pose_index.end()) {
+        edge.to = static_cast<int>(data.pose_ids.size());
+        pose_index[j] = edge.to;
+        data.pose_ids.push_back(j);
+      } else {
+        edge.to = to->second;  // loop closure
+      }
+      data.odometry.push_back(edge);
+    } else if (t[0] == "LANDMARK") {
+      ExpectFields(path, line, t, 8, "LANDMARK i l x y c11 c12 c22");
+      PendingSighting p;
+      p.pose_id = Integer(path, line, t[1], "pose i");
+      LandmarkSighting& s = p.sighting;
+      s.line = line;
+      const long id = Integer(path, line, t[2], "landmark l");
+      if (id > std::numeric_limits<int>::max())
+        throw Error::AtLine(path, line, "landmark id " + t[2] + " is too large");
+      s.landmark = static_cast<int>(id);
+      const double x = Number(path, line, t[3], "x"), y = Number(path, line, t[4], "y");
+      const double c11 = Number(path, line, t[5], "c11"), c12 = Number(path, line, t[6], "c12"),
+                   c22 = Number(path, line, t[7], "c22");
+      if (!(c11 > 0 && c22 > 0 && c11 * c22 - c12 * c12 > 0))
+        throw Error::AtLine(path, line, "the landmark covariance is not positive definite");
+      s.range_m = std::hypot(x, y);
+      if (!(s.range_m > 0)) throw Error::AtLine(path, line, "landmark at range 0 (no bearing)");
+      s.bearing_rad = std::atan2(y, x);
+      if (std::abs(c11 - c22) < 1e-4) {
+        // GTSAM's load2D: the covariance read as the uncertainty at 10 m.
+        s.bearing_std_rad = std::sqrt(c11 / 10.0);
+        s.range_std_m = std::sqrt(c11);
+      } else {
+        const Eigen::Vector2d radial(x / s.range_m, y / s.range_m);
+        const Eigen::Vector2d tangential(-radial.y(), radial.x());
+        Eigen::Matrix2d c;
+        c << c11, c12, c12, c22;
+        s.range_std_m = std::sqrt(radial.dot(c * radial));
+        s.bearing_std_rad = std::sqrt(tangential.dot(c * tangential)) / s.range_m;
+      }
+      pending.push_back(p);
+    } else {
+      throw Error::AtLine(path, line,
+                          "unknown record '" + t[0] + "' (expected ODOMETRY or LANDMARK)");
+    }
+  });
+  if (data.pose_ids.empty()) throw Error::InFile(path, "no ODOMETRY lines");
+  for (auto& p : pending) {
+    const auto found = pose_index.find(p.pose_id);
+    if (found == pose_index.end())
+      throw Error::AtLine(path, p.sighting.line,
+                          "landmark seen from pose " + std::to_string(p.pose_id) +
+                              ", which no odometry line reaches");
+    p.sighting.pose = found->second;
+    data.sightings.push_back(p.sighting);
+  }
+  data.num_poses = static_cast<int>(data.pose_ids.size());
+  data.dead_reckoning = DeadReckoning(data.num_poses, data.odometry);
+  return data;
+}
+
+// ---------------------------------------------------------------------------
+
+bool VictoriaRawOptions::Validate(std::string* why) const {
+  auto fail = [&](const char* message) {
+    if (why) *why = message;
+    return false;
+  };
+  if (!(wheelbase_m > 0) || !std::isfinite(wheelbase_m)) return fail("wheelbase must be > 0");
+  if (!std::isfinite(encoder_offset_m)) return fail("encoder offset must be finite");
+  if (!laser_offset_m.allFinite()) return fail("laser offset must be finite");
+  if (!(speed_std_fraction >= 0) || !(speed_std_floor_mps >= 0) || !(steering_std_rad >= 0))
+    return fail("input noise must be >= 0");
+  if (!(increment_std_floor.minCoeff() > 0) || !increment_std_floor.allFinite())
+    return fail("the increment noise floor must be > 0 and finite");
+  if (!(range_std_m > 0) || !(bearing_std_rad > 0) || !std::isfinite(range_std_m) ||
+      !std::isfinite(bearing_std_rad))
+    return fail("laser noise must be > 0 and finite");
+  if (!(min_range_m >= 0) || !(max_range_m > min_range_m))
+    return fail("need 0 <= min range < max range");
+  return true;
+}
+
+RelativePoseMeasurement IntegrateAckermann(double speed_mps, double steering_rad, double dt_s,
+                                           const VictoriaRawOptions& options, int steps) {
+  AckermannIntegrator integrator;
+  for (int k = 0; k < steps; ++k) integrator.Step(speed_mps, steering_rad, dt_s / steps, options);
+  RelativePoseMeasurement m = integrator.Finish(options);
+  m.from = 0;
+  m.to = 1;
+  return m;
+}
+
+LandmarkDataset ReadVictoriaRaw(const std::string& measurements_path,
+                                const std::string& inputs_path, const VictoriaRawOptions& options) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("Victoria Park raw options: " + why);
+  LandmarkDataset data;
+  data.path = measurements_path;
+  data.format = "victoria-raw";
+  data.sensor_offset_m = options.laser_offset_m;
+
+  // Scans: one pose per distinct time.
+  double last_time = -std::numeric_limits<double>::infinity();
+  ForEachRow(measurements_path, [&](int line, const std::vector<std::string>& t) {
+    ExpectFields(measurements_path, line, t, 4, "time range bearing diameter");
+    const double time = Number(measurements_path, line, t[0], "time");
+    const double range = Number(measurements_path, line, t[1], "range");
+    const double bearing = Number(measurements_path, line, t[2], "bearing");
+    const double diameter = Number(measurements_path, line, t[3], "diameter");
+    if (time < last_time)
+      throw Error::AtLine(measurements_path, line, "time goes backwards (" + t[0] + " s)");
+    if (range < 0) throw Error::AtLine(measurements_path, line, "negative range");
+    if (diameter < 0) throw Error::AtLine(measurements_path, line, "negative diameter");
+    if (time > last_time) {
+      data.pose_times.push_back(time);
+      data.pose_ids.push_back(static_cast<long>(data.pose_times.size()) - 1);
+      last_time = time;
+    }
+    if (range < options.min_range_m || range > options.max_range_m) return;
+    LandmarkSighting s;
+    s.pose = static_cast<int>(data.pose_times.size()) - 1;
+    s.range_m = range;
+    s.bearing_rad = WrapAngle(bearing - kPi / 2);  // laser: pi/2 = ahead
+    s.range_std_m = options.range_std_m;
+    s.bearing_std_rad = options.bearing_std_rad;
+    s.diameter_m = diameter;
+    s.line = line;
+    data.sightings.push_back(s);
+  });
+  data.num_poses = static_cast<int>(data.pose_times.size());
+
+  // Inputs: piecewise constant from each sample's time to the next one's.
+  struct Input {
+    double time, speed, steering;
+  };
+  std::vector<Input> inputs;
+  ForEachRow(inputs_path, [&](int line, const std::vector<std::string>& t) {
+    ExpectFields(inputs_path, line, t, 3, "time speed steering");
+    const Input input{Number(inputs_path, line, t[0], "time"),
+                      Number(inputs_path, line, t[1], "speed"),
+                      Number(inputs_path, line, t[2], "steering")};
+    if (!inputs.empty() && input.time < inputs.back().time)
+      throw Error::AtLine(inputs_path, line, "time goes backwards (" + t[0] + " s)");
+    if (std::abs(input.steering) >= kPi / 2)
+      throw Error::AtLine(inputs_path, line, "steering angle beyond +-pi/2");
+    if (std::abs(std::tan(input.steering)) * options.encoder_offset_m / options.wheelbase_m >= 1)
+      throw Error::AtLine(inputs_path, line, "steering too sharp for the Ackermann geometry");
+    inputs.push_back(input);
+  });
+  if (data.num_poses > 1 && inputs.front().time > data.pose_times[1])
+    throw Error::InFile(inputs_path, "the inputs start after the second laser scan (" +
+                                         std::to_string(data.pose_times[1]) + " s)");
+
+  // Integrate between consecutive scans. Before the first input sample the
+  // vehicle is taken to stand still; after the last one it keeps that input.
+  size_t k = 0;
+  for (int i = 1; i < data.num_poses; ++i) {
+    const double start = data.pose_times[i - 1], end = data.pose_times[i];
+    AckermannIntegrator integrator;
+    while (k + 1 < inputs.size() && inputs[k + 1].time <= start) ++k;
+    for (size_t m = k; m < inputs.size(); ++m) {
+      const double from = std::max(start, inputs[m].time);
+      const double to = m + 1 < inputs.size() ? std::min(end, inputs[m + 1].time) : end;
+      if (inputs[m].time >= end) break;
+      if (to > from) integrator.Step(inputs[m].speed, inputs[m].steering, to - from, options);
+    }
+    RelativePoseMeasurement edge = integrator.Finish(options);
+    edge.from = i - 1;
+    edge.to = i;
+    data.odometry.push_back(edge);
+  }
+  data.dead_reckoning = DeadReckoning(data.num_poses, data.odometry);
+  return data;
+}
+
+// ---------------------------------------------------------------------------
+
+std::vector<GpsFix> ReadGps(const std::string& path) {
+  std::vector<GpsFix> fixes;
+  ForEachRow(path, [&](int line, const std::vector<std::string>& t) {
+    ExpectFields(path, line, t, 3, "time x y");
+    GpsFix fix{Number(path, line, t[0], "time"), Number(path, line, t[1], "x"),
+               Number(path, line, t[2], "y")};
+    if (!fixes.empty() && fix.time_s < fixes.back().time_s)
+      throw Error::AtLine(path, line, "time goes backwards (" + t[0] + " s)");
+    fixes.push_back(fix);
+  });
+  return fixes;
+}
+
+GpsError CompareWithGps(const std::vector<Pose2>& trajectory, const std::vector<double>& times_s,
+                        const std::vector<GpsFix>& gps, double max_gap_s) {
+  if (trajectory.size() != times_s.size())
+    throw Error("GPS comparison: " + std::to_string(trajectory.size()) + " poses but " +
+                std::to_string(times_s.size()) + " times");
+  for (size_t i = 1; i < times_s.size(); ++i)
+    if (times_s[i] < times_s[i - 1]) throw Error("GPS comparison: pose times decrease");
+  std::vector<Eigen::Vector2d> estimated, measured;
+  size_t i = 0;
+  for (const GpsFix& fix : gps) {
+    while (i + 2 < times_s.size() && times_s[i + 1] <= fix.time_s) ++i;
+    if (times_s.size() < 2 || fix.time_s < times_s[i] || fix.time_s > times_s[i + 1]) continue;
+    const double gap = times_s[i + 1] - times_s[i];
+    if (!(gap > 0) || gap > max_gap_s) continue;
+    const double w = (fix.time_s - times_s[i]) / gap;
+    const Pose2& a = trajectory[i];
+    const Pose2& b = trajectory[i + 1];
+    estimated.emplace_back((1 - w) * a.x + w * b.x, (1 - w) * a.y + w * b.y);
+    measured.emplace_back(fix.x_m, fix.y_m);
+  }
+  const size_t n = estimated.size();
+  if (n < 2) throw Error("GPS comparison: fewer than 2 fixes fall within the trajectory's times");
+  Eigen::Vector2d mean_e = Eigen::Vector2d::Zero(), mean_m = Eigen::Vector2d::Zero();
+  for (size_t k = 0; k < n; ++k) {
+    mean_e += estimated[k];
+    mean_m += measured[k];
+  }
+  mean_e /= n;
+  mean_m /= n;
+  // Planar Procrustes: the rotation angle maximising sum m_k . R e_k.
+  double dot = 0, cross = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const Eigen::Vector2d e = estimated[k] - mean_e, m = measured[k] - mean_m;
+    dot += e.dot(m);
+    cross += e.x() * m.y() - e.y() * m.x();
+  }
+  GpsError result;
+  result.rotation_rad = std::atan2(cross, dot);
+  const double c = std::cos(result.rotation_rad), s = std::sin(result.rotation_rad);
+  const Eigen::Matrix2d rotation = (Eigen::Matrix2d() << c, -s, s, c).finished();
+  result.translation_m = mean_m - rotation * mean_e;
+  std::vector<double> errors(n);
+  double sum_sq = 0;
+  for (size_t k = 0; k < n; ++k) {
+    errors[k] = (rotation * estimated[k] + result.translation_m - measured[k]).norm();
+    sum_sq += errors[k] * errors[k];
+  }
+  std::sort(errors.begin(), errors.end());
+  result.num_fixes = static_cast<int>(n);
+  result.rmse_m = std::sqrt(sum_sq / n);
+  result.median_m = errors[n / 2];
+  result.p95_m = errors[std::min(n - 1, n * 95 / 100)];
+  result.max_m = errors.back();
+  return result;
+}
+
+std::vector<int> GivenAssociation(const LandmarkDataset& data) {
+  std::vector<int> association;
+  association.reserve(data.sightings.size());
+  for (const auto& s : data.sightings) association.push_back(s.landmark);
+  return association;
+}
+
+std::vector<int> ReadAssociation(const std::string& path, size_t num_sightings) {
+  std::vector<int> association;
+  ForEachRow(path, [&](int line, const std::vector<std::string>& t) {
+    ExpectFields(path, line, t, 1, "landmark id");
+    errno = 0;
+    char* end = nullptr;
+    const long id = std::strtol(t[0].c_str(), &end, 10);
+    if (end == t[0].c_str() || *end != '\0' || errno == ERANGE || id < -1 ||
+        id > std::numeric_limits<int>::max())
+      throw Error::AtLine(path, line, "'" + t[0] + "' is not a landmark id (integer >= -1)");
+    association.push_back(static_cast<int>(id));
+  });
+  if (association.size() != num_sightings)
+    throw Error::InFile(path, std::to_string(association.size()) + " ids for " +
+                                  std::to_string(num_sightings) + " sightings");
+  return association;
+}
+
+std::optional<double> MeanMeasuredDiameter(const std::vector<LandmarkSighting>& sightings,
+                                           const std::vector<int>& indices) {
+  double sum = 0;
+  int count = 0;
+  for (int k : indices)
+    if (std::isfinite(sightings[k].diameter_m)) {
+      sum += sightings[k].diameter_m;
+      ++count;
+    }
+  if (count == 0) return std::nullopt;
+  return sum / count;
+}
+
+}  // namespace oslam

@@ -1,0 +1,299 @@
+#include "slam/landmark_slam.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "core/error.h"
+#include "solver/factor_graph.h"
+#include "slam/factors.h"
+#include "slam/landmark_factors.h"
+
+namespace oslam {
+
+std::vector<Pose2> ExtendByOdometry(const std::vector<Pose2>& solved,
+                                    const std::vector<Pose2>& dead_reckoning) {
+  std::vector<Pose2> poses = solved;
+  if (solved.empty()) return dead_reckoning;
+  const size_t k = solved.size() - 1;
+  const Pose2& anchor = dead_reckoning[k];
+  for (size_t j = solved.size(); j < dead_reckoning.size(); ++j)
+    poses.push_back(ComposePose(solved[k], BetweenPoses(anchor, dead_reckoning[j])));
+  return poses;
+}
+
+bool LandmarkSlamOptions::Validate(std::string* why) const {
+  if (!(diameter_std_m > 0) || !std::isfinite(diameter_std_m)) {
+    if (why) *why = "the diameter noise must be > 0 and finite";
+    return false;
+  }
+  if (!(landmark_prior_std_m >= 0) || !std::isfinite(landmark_prior_std_m) ||
+      !landmark_prior_mean_m.allFinite()) {
+    if (why) *why = "the landmark prior std must be >= 0 and the mean finite";
+    return false;
+  }
+  if (held_poses < 0) {
+    if (why) *why = "the held poses must be >= 0";
+    return false;
+  }
+  if (initialisation_window_poses < 0) {
+    if (why) *why = "the initialisation window must be >= 0 poses";
+    return false;
+  }
+  return solver.Validate(why);
+}
+
+LandmarkSlam::LandmarkSlam(const LandmarkSlamOptions& options)
+    : options_(options), solver_(options.solver) {}
+
+LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
+                                       const std::vector<int>& association,
+                                       const LandmarkSlamResult* warm_start) {
+  const auto start_time = std::chrono::steady_clock::now();
+  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
+  std::string why;
+  if (!options_.Validate(&why)) throw Error("landmark SLAM options: " + why);
+  if (data.num_poses < 1) throw Error("landmark SLAM: no poses");
+  if (association.size() != data.sightings.size())
+    throw Error("landmark SLAM: the association has " + std::to_string(association.size()) +
+                " entries for " + std::to_string(data.sightings.size()) + " sightings");
+
+  // Sightings per landmark, in pose order (the first one initialises it).
+  std::map<int, std::vector<int>> by_landmark;
+  for (size_t k = 0; k < association.size(); ++k) {
+    if (association[k] < -1)
+      throw Error("landmark SLAM: sighting " + std::to_string(k) + " has landmark id " +
+                  std::to_string(association[k]) + " (ids are >= 0, -1 = none)");
+    const LandmarkSighting& s = data.sightings[k];
+    if (s.pose < 0 || s.pose >= data.num_poses)
+      throw Error("landmark SLAM: sighting " + std::to_string(k) + " refers to pose " +
+                  std::to_string(s.pose) + " of " + std::to_string(data.num_poses));
+    if (association[k] >= 0) by_landmark[association[k]].push_back(static_cast<int>(k));
+  }
+  for (auto& [id, list] : by_landmark)
+    std::stable_sort(list.begin(), list.end(),
+                     [&](int a, int b) { return data.sightings[a].pose < data.sightings[b].pose; });
+
+  LandmarkSlamResult staged;
+  if (!warm_start && options_.initialisation_window_poses > 0 &&
+      data.num_poses > options_.initialisation_window_poses) {
+    staged = StagedInitialisation(data, association);
+    if (!staged.trajectory.empty()) warm_start = &staged;
+  }
+  const double initialisation_time_s = seconds_since(start_time);
+
+  // ---- variables ----
+  FactorGraph graph;
+  const bool warm_poses =
+      warm_start && static_cast<int>(warm_start->trajectory.size()) == data.num_poses;
+  const std::vector<Pose2>& initial = warm_poses ? warm_start->trajectory : data.dead_reckoning;
+  if (static_cast<int>(initial.size()) != data.num_poses)
+    throw Error("landmark SLAM: the data set's dead reckoning does not cover its poses");
+  std::vector<int> pose_keys(data.num_poses);
+  for (int i = 0; i < data.num_poses; ++i)
+    pose_keys[i] = graph.AddPose(initial[i].x, initial[i].y, initial[i].theta,
+                                 /*fixed=*/i == 0 || i < options_.held_poses);  // gauge
+
+  std::map<int, const MappedLandmark*> previous;
+  if (warm_start)
+    for (const auto& landmark : warm_start->landmarks) previous[landmark.id] = &landmark;
+  struct LandmarkKeys {
+    int id, position, diameter;  // diameter -1: none measured
+    int count;
+  };
+  std::vector<LandmarkKeys> landmarks;
+  landmarks.reserve(by_landmark.size());
+  for (const auto& [id, list] : by_landmark) {
+    // The first sighting with a bearing (range > 0) places the landmark.
+    const auto with_range = std::find_if(list.begin(), list.end(),
+                                         [&](int k) { return data.sightings[k].range_m > 0; });
+    if (with_range == list.end())
+      throw Error("landmark SLAM: every sighting of landmark " + std::to_string(id) +
+                  " has range 0 (no bearing)");
+    const LandmarkSighting& first = data.sightings[*with_range];
+    const auto found = previous.find(id);
+    const Eigen::Vector2d start =
+        found != previous.end() ? found->second->position_m
+                                : LandmarkFromRangeBearing(initial[first.pose], first.range_m,
+                                                           first.bearing_rad, data.sensor_offset_m);
+    LandmarkKeys keys{id, graph.AddVariable(start), -1, static_cast<int>(list.size())};
+    if (const std::optional<double> measured = MeanMeasuredDiameter(data.sightings, list)) {
+      const double d = found != previous.end() && std::isfinite(found->second->diameter_m)
+                           ? found->second->diameter_m
+                           : *measured;
+      keys.diameter = graph.AddVariable(Eigen::Matrix<double, 1, 1>(d));
+    }
+    landmarks.push_back(keys);
+  }
+
+  // ---- factors ----
+  for (const RelativePoseMeasurement& edge : data.odometry) {
+    if (edge.from < 0 || edge.from >= data.num_poses || edge.to < 0 || edge.to >= data.num_poses)
+      throw Error("landmark SLAM: odometry between poses " + std::to_string(edge.from) + " and " +
+                  std::to_string(edge.to) + " outside the data set");
+    graph.Emplace<RelativePoseFactor>(pose_keys[edge.from], pose_keys[edge.to], edge.delta,
+                                      edge.covariance);
+  }
+  const Eigen::Matrix<double, 1, 1> diameter_variance(options_.diameter_std_m *
+                                                      options_.diameter_std_m);
+  int used = 0;
+  for (const LandmarkKeys& landmark : landmarks) {
+    if (options_.landmark_prior_std_m > 0)
+      graph.Emplace<PriorFactor>(
+          landmark.position, Eigen::VectorXd(options_.landmark_prior_mean_m),
+          Eigen::MatrixXd(Eigen::Matrix2d::Identity() * options_.landmark_prior_std_m *
+                          options_.landmark_prior_std_m),
+          "landmark prior");
+    for (int k : by_landmark[landmark.id]) {
+      const LandmarkSighting& s = data.sightings[k];
+      graph.Emplace<RangeBearingFactor>(pose_keys[s.pose], landmark.position, s.range_m,
+                                        s.bearing_rad, s.range_std_m, s.bearing_std_rad,
+                                        data.sensor_offset_m);
+      if (landmark.diameter >= 0 && std::isfinite(s.diameter_m))
+        graph.Emplace<PriorFactor>(landmark.diameter, Eigen::Matrix<double, 1, 1>(s.diameter_m),
+                                   diameter_variance, "diameter");
+      ++used;
+    }
+  }
+
+  // ---- solve and read out ----
+  solver_.set_options(options_.solver);
+  const SolveResult solved = solver_.Solve(&graph);
+  LandmarkSlamResult result;
+  result.summary = solved.summary;
+  result.evidence = solved.evidence;
+  result.num_sightings_used = used;
+  result.initialisation_time_s = initialisation_time_s;
+  const Values& values = graph.values();
+  result.trajectory.reserve(data.num_poses);
+  for (int key : pose_keys) {
+    const double* p = values.Data(key);
+    result.trajectory.push_back({p[0], p[1], p[2]});
+  }
+  for (const LandmarkKeys& landmark : landmarks) {
+    MappedLandmark mapped;
+    mapped.id = landmark.id;
+    mapped.position_m = values.Get(landmark.position);
+    if (landmark.diameter >= 0) mapped.diameter_m = values.Data(landmark.diameter)[0];
+    mapped.num_sightings = landmark.count;
+    result.landmarks.push_back(mapped);
+    result.landmark_position_keys.push_back(landmark.position);
+  }
+  if (!result.summary.IsUsable()) {
+    result.total_time_s = seconds_since(start_time);
+    return result;
+  }
+
+  if (options_.compute_landmark_covariances && !landmarks.empty()) {
+    std::vector<std::vector<int>> groups;
+    for (const LandmarkKeys& landmark : landmarks) {
+      groups.push_back({landmark.position});
+      if (landmark.diameter >= 0) groups.back().push_back(landmark.diameter);
+    }
+    std::vector<Eigen::MatrixXd> blocks;
+    if (solver_.MarginalCovariances(groups, &blocks, &result.covariance_message))
+      for (size_t j = 0; j < landmarks.size(); ++j) {
+        const int n = static_cast<int>(blocks[j].rows());
+        result.landmarks[j].covariance.topLeftCorner(n, n) = blocks[j];
+      }
+  }
+  if (options_.compute_pose_covariances) {
+    std::vector<std::vector<int>> groups;
+    for (int i = 1; i < data.num_poses; ++i) groups.push_back({pose_keys[i]});
+    std::vector<Eigen::MatrixXd> blocks;
+    result.pose_covariances.assign(data.num_poses, Eigen::Matrix3d::Zero());
+    if (groups.empty() || solver_.MarginalCovariances(groups, &blocks, &result.covariance_message))
+      for (size_t i = 0; i < blocks.size(); ++i) result.pose_covariances[i + 1] = blocks[i];
+  }
+  result.total_time_s = seconds_since(start_time);
+  return result;
+}
+
+LandmarkSlamResult LandmarkSlam::StagedInitialisation(const LandmarkDataset& data,
+                                                      const std::vector<int>& association) const {
+  LandmarkSlamOptions inner = options_;
+  inner.initialisation_window_poses = 0;
+  inner.compute_landmark_covariances = false;
+  inner.compute_pose_covariances = false;
+  inner.solver.compute_evidence = false;
+  LandmarkSlam stage(inner);
+  LandmarkSlamResult previous;
+  const int window = options_.initialisation_window_poses;
+  for (int n = window; n < data.num_poses; n += window) {
+    std::vector<int> kept;
+    const LandmarkDataset prefix = PosePrefix(data, n, &kept);
+    std::vector<int> prefix_association;
+    prefix_association.reserve(kept.size());
+    for (int k : kept) prefix_association.push_back(association[k]);
+    LandmarkSlamResult start;
+    start.landmarks = previous.landmarks;
+    start.trajectory = ExtendByOdometry(previous.trajectory, prefix.dead_reckoning);
+    LandmarkSlamResult solved = stage.Solve(prefix, prefix_association, &start);
+    if (!solved.summary.IsUsable()) return {};  // fall back to dead reckoning
+    previous = std::move(solved);
+  }
+  LandmarkSlamResult start;
+  start.landmarks = std::move(previous.landmarks);
+  start.trajectory = ExtendByOdometry(previous.trajectory, data.dead_reckoning);
+  return start;
+}
+
+LandmarkDataset PosePrefix(const LandmarkDataset& data, int num_poses,
+                           std::vector<int>* kept_sightings) {
+  LandmarkDataset prefix = data;
+  const int n = std::max(0, std::min(num_poses, data.num_poses));
+  prefix.num_poses = n;
+  prefix.pose_ids.resize(std::min(prefix.pose_ids.size(), static_cast<size_t>(n)));
+  if (!prefix.pose_times.empty()) prefix.pose_times.resize(n);
+  prefix.dead_reckoning.resize(n);
+  prefix.odometry.clear();
+  for (const auto& edge : data.odometry)
+    if (edge.from < n && edge.to < n) prefix.odometry.push_back(edge);
+  prefix.sightings.clear();
+  if (kept_sightings) kept_sightings->clear();
+  for (size_t k = 0; k < data.sightings.size(); ++k)
+    if (data.sightings[k].pose < n) {
+      prefix.sightings.push_back(data.sightings[k]);
+      if (kept_sightings) kept_sightings->push_back(static_cast<int>(k));
+    }
+  return prefix;
+}
+
+GeometricSlamResult LandmarkResultAsOMap(const LandmarkSlamResult& result) {
+  GeometricSlamResult map;
+  map.trajectory = result.trajectory;
+  map.pose_covariances = result.pose_covariances;
+  map.summary = result.summary;
+  map.evidence = result.evidence;
+  map.covariance_message = result.covariance_message;
+  for (const MappedLandmark& landmark : result.landmarks) {
+    MappedObject object;
+    object.id = landmark.id;
+    object.class_index = 0;
+    object.geometry.base_world =
+        Eigen::Vector3d(landmark.position_m.x(), landmark.position_m.y(), 0);
+    const bool measured = std::isfinite(landmark.diameter_m);
+    object.geometry.diameter_m = measured ? landmark.diameter_m : 0.0;
+    object.geometry.height_m = 0.0;
+    // (x, y, d) -> rows/columns (0, 1, 3) of (x, y, z, d, h).
+    const int index[3] = {0, 1, 3};
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) object.covariance(index[r], index[c]) = landmark.covariance(r, c);
+    object.num_observations = landmark.num_sightings;
+    map.objects.push_back(object);
+  }
+  return map;
+}
+
+double TrajectoryLength(const std::vector<Pose2>& trajectory) {
+  double length = 0;
+  for (size_t i = 1; i < trajectory.size(); ++i)
+    length +=
+        std::hypot(trajectory[i].x - trajectory[i - 1].x, trajectory[i].y - trajectory[i - 1].y);
+  return length;
+}
+
+}  // namespace oslam

@@ -1,0 +1,132 @@
+// Planar landmark SLAM with a given association (issue 10): poses linked by
+// relative-pose odometry, point landmarks (trees) seen by range and bearing,
+// trunk diameters as the objects' size when measured. Built on the same
+// factor graph and SparseSolver as geometric O-SLAM, so the result carries
+// the Laplace log-evidence (spec §8.2) and marginal covariances.
+//
+// The association comes from anywhere: a vector with one landmark id per
+// sighting (-1: the sighting is left out, e.g. clutter). The file's ids give
+// known-association SLAM; an MCMC sampler passes its own vector and may
+// warm-start from a previous result and reuse the solver's symbolic
+// analysis, as GeometricSlam does.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/pose2.h"
+#include "slam/geometric_slam.h"
+#include "slam/landmark_data.h"
+#include "solver/sparse_solver.h"
+
+namespace oslam {
+
+struct LandmarkSlamOptions {
+  // LM starts with little damping (1e-8 instead of 1e-4): the damping is
+  // relative to diag(J^T J), and on a long, stiff odometry chain even 1e-4
+  // of it blocks the slow whole-trajectory corrections (Victoria Park: no
+  // convergence in 100 iterations, against 11 at 1e-8).
+  LandmarkSlamOptions() { solver.initial_damping = 1e-8; }
+
+  SolverOptions solver;
+  // Std of one trunk-diameter measurement (PriorFactor "diameter" on the
+  // landmark's diameter variable).
+  double diameter_std_m = 0.05;
+  // Location prior of every landmark, N(landmark_prior_mean_m,
+  // landmark_prior_std_m^2 I) (the class location prior of spec §5.1). 0:
+  // none (flat), which is fine for a fixed association but makes the
+  // evidence improper across associations with different landmark counts:
+  // without it a split of one sighting off a landmark can raise the
+  // evidence (Victoria Park, 1k poses: +2.1). Samplers should set it.
+  double landmark_prior_std_m = 0.0;
+  Eigen::Vector2d landmark_prior_mean_m = Eigen::Vector2d::Zero();
+  // Staged initialisation: when there are more poses than this (and no
+  // warm start), solve the first W, 2W, ... poses in turn, each stage
+  // starting from the previous one's estimate extended by the odometry, and
+  // start the full solve from the last stage. A batch LM from plain dead
+  // reckoning crawls on long drives (Victoria Park: hundreds of metres of
+  // drift). 0: start from dead reckoning.
+  int initialisation_window_poses = 500;
+  // Poses 0..held_poses-1 are held at their start values (pose 0 always is):
+  // a windowed solve of the recent drive, its evidence conditional on the
+  // held poses (for comparing associations within one window).
+  int held_poses = 0;
+  bool compute_landmark_covariances = true;
+  bool compute_pose_covariances = false;
+
+  bool Validate(std::string* why) const;
+};
+
+struct MappedLandmark {
+  int id = 0;
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  double diameter_m = std::numeric_limits<double>::quiet_NaN();  // NaN: never measured
+  // Joint covariance of (x, y, diameter); the diameter row/column is zero
+  // when it was not measured, everything zero when not computed.
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  int num_sightings = 0;
+};
+
+struct LandmarkSlamResult {
+  std::vector<Pose2> trajectory;                  // one per pose of the data set
+  std::vector<Eigen::Matrix3d> pose_covariances;  // empty unless asked; pose 0 is zero
+  std::vector<MappedLandmark> landmarks;          // sorted by id
+  // The solver's variable key of each landmark's position (parallel to
+  // landmarks), for MarginalCovariances on solver() after this solve.
+  std::vector<int> landmark_position_keys;
+  SolverSummary summary;
+  Evidence evidence;
+  std::string covariance_message;  // why covariances are missing, if they are
+  int num_sightings_used = 0;
+  // Wall time of Solve (s): staged initialisation, final solve, covariances.
+  double total_time_s = 0;
+  double initialisation_time_s = 0;  // the staged initialisation's part
+};
+
+class LandmarkSlam {
+ public:
+  explicit LandmarkSlam(const LandmarkSlamOptions& options = LandmarkSlamOptions());
+
+  // association[k] is the landmark id of data.sightings[k] (>= 0) or -1.
+  // Pose 0 is held at the origin (the gauge); the other poses start from the
+  // dead reckoning, or from warm_start's trajectory when it has as many
+  // poses; a landmark starts where warm_start has it, else at its first
+  // sighting (lowest pose index) with a range > 0. Throws oslam::Error for
+  // invalid input (options, association size, ids < -1, a landmark seen only
+  // at range 0); numerical trouble is reported in the summary.
+  LandmarkSlamResult Solve(const LandmarkDataset& data, const std::vector<int>& association,
+                           const LandmarkSlamResult* warm_start = nullptr);
+
+  SparseSolver& solver() { return solver_; }
+
+ private:
+  LandmarkSlamResult StagedInitialisation(const LandmarkDataset& data,
+                                          const std::vector<int>& association) const;
+
+  LandmarkSlamOptions options_;
+  SparseSolver solver_;
+};
+
+// The data set cut to its first `num_poses` poses: odometry and sightings
+// touching later poses are dropped (for benchmarks and windowed solves).
+// Returns the indices of the kept sightings in `kept_sightings` if given.
+LandmarkDataset PosePrefix(const LandmarkDataset& data, int num_poses,
+                           std::vector<int>* kept_sightings = nullptr);
+
+// The result as an O-Map (one object per landmark, class `class_name`,
+// base point (x, y, 0), diameter when measured else 0, height 0 = not
+// observed; covariance rows (x, y, diameter) filled), for WriteOMap.
+GeometricSlamResult LandmarkResultAsOMap(const LandmarkSlamResult& result);
+
+// `solved` (the first poses) followed by the later poses of `dead_reckoning`
+// moved rigidly so that they continue from the last solved pose.
+std::vector<Pose2> ExtendByOdometry(const std::vector<Pose2>& solved,
+                                    const std::vector<Pose2>& dead_reckoning);
+
+// Sum of the distances between consecutive poses (m).
+double TrajectoryLength(const std::vector<Pose2>& trajectory);
+
+}  // namespace oslam

@@ -1,0 +1,133 @@
+// Every factor's analytic Jacobian against central differences, and the
+// whitening/normaliser against their definitions.
+#include "slam/factors.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <Eigen/LU>
+
+#include "calib/hyperbolic_camera.h"
+#include "core/angles.h"
+#include "core/error.h"
+#include "calib/observation_model.h"
+#include "tests/solver/factor_check.h"
+#include "tests/test_util.h"
+
+namespace oslam {
+namespace {
+
+using testing::ExpectJacobianMatchesNumeric;
+
+TEST(OdometryFactorTest, JacobiansMatchCentralDifferences) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (bool world_frame : {false, true}) {
+    MotionNoiseOptions options;
+    options.world_frame = world_frame;
+    for (int trial = 0; trial < 20; ++trial) {
+      Values values;
+      const int a = values.AddPose(u(rng), u(rng), 3.0 * u(rng));
+      const int b = values.AddPose(u(rng), u(rng), 3.0 * u(rng));
+      OdometryFactor factor(a, b, {0.3 * u(rng), 0.3 * u(rng)}, options);
+      ExpectJacobianMatchesNumeric(factor, values, 1e-6);
+    }
+  }
+}
+
+TEST(OdometryFactorTest, ZeroErrorOnTheModelAndWhitenedByQ) {
+  MotionNoiseOptions options;
+  Values values;
+  const Pose2 previous{1.0, 2.0, 0.5};
+  const OdometryIncrement increment{0.2, DegToRad(10)};
+  const Pose2 next = ApplyIncrement(previous, increment);
+  const int a = values.AddPose(previous.x, previous.y, previous.theta);
+  const int b = values.AddPose(next.x, next.y, next.theta);
+  OdometryFactor factor(a, b, increment, options);
+  Eigen::VectorXd error(3);
+  ASSERT_TRUE(factor.Linearize(values, error, nullptr));
+  EXPECT_LT(error.norm(), 1e-12);
+  // Off the model, ||e||^2 equals the Mahalanobis distance under spec Q_i.
+  const Eigen::Vector3d offset(0.01, -0.02, 0.03);
+  values.Set(b, next.Vector() - offset);
+  ASSERT_TRUE(factor.Linearize(values, error, nullptr));
+  const Eigen::Matrix3d q = MotionCovariance(previous.theta, increment, options);
+  EXPECT_NEAR(error.squaredNorm(), offset.dot(q.inverse() * offset), 1e-9);
+  EXPECT_NEAR(factor.LogDetCovariance(), std::log(q.determinant()), 1e-9);
+}
+
+TEST(BoundingSliceFactorTest, JacobiansMatchCentralDifferences) {
+  for (const char* preset : {"lpa", "cogniron"}) {
+    const HyperbolicCamera camera = HyperbolicCamera::Preset(preset);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int checked = 0;
+    for (int trial = 0; trial < 40; ++trial) {
+      Values values;
+      const int pose = values.AddPose(u(rng), u(rng), 3.0 * u(rng));
+      const double range = 1.0 + 1.5 * (u(rng) + 1.0), bearing = 3.0 * u(rng);
+      const Pose2 p{values.Data(pose)[0], values.Data(pose)[1], values.Data(pose)[2]};
+      const Eigen::Vector3d base =
+          p.RobotToWorld({range * std::cos(bearing), range * std::sin(bearing), 0.1 * u(rng)});
+      const int base_key = values.Add(base);
+      const int size_key = values.Add(Eigen::Vector2d(0.3 + 0.1 * u(rng), 0.4 + 0.1 * u(rng)));
+      BoundingSlice measured{150.0 + 20 * u(rng), u(rng), 20.0, 0.1};
+      BoundingSliceFactor factor(&camera, pose, base_key, size_key, measured, 30.0);
+      Eigen::VectorXd error(4);
+      if (!factor.Linearize(values, error, nullptr)) continue;
+      ExpectJacobianMatchesNumeric(factor, values, 1e-5);
+      ++checked;
+    }
+    EXPECT_GT(checked, 30) << preset;
+  }
+}
+
+TEST(BoundingSliceFactorTest, WhiteningIsRAndTwoRAndAngleResidualWraps) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  Values values;
+  const int pose = values.AddPose(0, 0, 0);
+  const int base = values.Add(Eigen::Vector3d(2.0, 0.0, 0.0));
+  const int size = values.Add(Eigen::Vector2d(0.3, 0.5));
+  BoundingSlice truth;
+  ASSERT_TRUE(PredictSlice(camera, Pose2{}, {Eigen::Vector3d(2, 0, 0), 0.3, 0.5}, &truth));
+  const double e = 30.0;
+  BoundingSlice measured = truth;
+  measured.u_r_px += 3.0;
+  measured.u_phi_rad = WrapAngle(measured.u_phi_rad + 2 * kPi - 0.01);  // across the seam
+  measured.s_r_px -= 6.0;
+  measured.s_phi_rad += 0.02;
+  BoundingSliceFactor factor(&camera, pose, base, size, measured, e);
+  Eigen::VectorXd error(4);
+  ASSERT_TRUE(factor.Linearize(values, error, nullptr));
+  const double ur = measured.u_r_px;
+  EXPECT_NEAR(error[0], -3.0 / e, 1e-9);
+  EXPECT_NEAR(error[1], 0.01 / (e / ur), 1e-6);
+  EXPECT_NEAR(error[2], 6.0 / (std::sqrt(2.0) * e), 1e-9);
+  EXPECT_NEAR(error[3], -0.02 / (std::sqrt(2.0) * e / ur), 1e-9);
+  // log |R| + log |W| with W = 2R.
+  const double log_det_r = std::log(e * e) + std::log(e * e / (ur * ur));
+  EXPECT_NEAR(factor.LogDetCovariance(), 2 * log_det_r + 2 * std::log(2.0), 1e-9);
+}
+
+TEST(PriorFactorTest, JacobianErrorAndNormaliser) {
+  Values values;
+  const int key = values.Add(Eigen::Vector3d(1.0, -2.0, 0.5));
+  Eigen::Matrix3d covariance;
+  covariance << 4.0, 0.5, 0.1, 0.5, 2.0, 0.2, 0.1, 0.2, 1.0;
+  const Eigen::Vector3d mean(0.5, 0.5, 0.0);
+  PriorFactor factor(key, mean, covariance, "location prior");
+  ExpectJacobianMatchesNumeric(factor, values, 1e-7);
+  Eigen::VectorXd error(3);
+  ASSERT_TRUE(factor.Linearize(values, error, nullptr));
+  const Eigen::Vector3d d = values.Get(key) - mean;
+  EXPECT_NEAR(error.squaredNorm(), d.dot(covariance.inverse() * d), 1e-12);
+  EXPECT_NEAR(factor.LogDetCovariance(), std::log(covariance.determinant()), 1e-12);
+
+  auto size_prior = MakeSizePrior(key + 0, Eigen::Vector2d(0.3, 0.5), Eigen::Vector2d(0.05, 0.1));
+  EXPECT_NEAR(size_prior->LogDetCovariance(), std::log(0.05 * 0.05 * 0.1 * 0.1), 1e-12);
+  EXPECT_THROW(PriorFactor(key, mean, -covariance), oslam::Error);
+}
+
+}  // namespace
+}  // namespace oslam
