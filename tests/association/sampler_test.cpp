@@ -1,136 +1,27 @@
-// Detailed balance of the O-SLAM moves and samplers (spec §9.2-9.4): on a
-// 4-track, 2-class problem whose 94 states can be enumerated, the visit
-// frequencies of MH and of MC³'s cold chain must match the exact posterior of
-// the same target. The target and the per-object quantities the moves use
-// (locations, residuals) are fixed functions of the state, as exact MH needs.
+// The samplers (sampler.h): detailed balance of Metropolis-Hastings and of
+// MC³'s cold chain on the enumerable 4-track, 2-class problem (spec §9.2-9.4):
+// the visit frequencies must match the exact posterior of the same target;
+// hill climbing; reproducibility from the seed, with threads and speculation.
+#include "association/sampler.h"
+
 #include <cmath>
-#include <functional>
 #include <limits>
-#include <map>
 #include <random>
 #include <unordered_map>
 
 #include <gtest/gtest.h>
 
+#include "association/association_fixture.h"
 #include "core/error.h"
-#include "association/association_state.h"
-#include "association/moves.h"
-#include "association/sampler.h"
 
 namespace oslam {
 namespace {
 
-const std::vector<Eigen::Vector3d> kTrackPositions = {
-    {0.0, 0.0, 0.0}, {0.3, 0.0, 0.0}, {0.2, 0.4, 0.0}, {1.0, 0.1, 0.0}};
-const std::vector<int> kTrackClass = {0, 0, 1, 0};
-const std::vector<int> kTrackSize = {3, 2, 3, 2};
-
-ClassConfusionModel TestModel() {
-  return ClassConfusionModel({{0.8, 0.2}, {0.3, 0.7}}, 1e-3, kTrackClass, kTrackSize);
-}
-
-// An arbitrary but fixed target: class penalty, a price per object and a
-// pseudo-random term per state (seeded by the state's hash).
-double TestLogTarget(const AssociationState& s, const ClassConfusionModel& model) {
-  std::mt19937_64 rng(AssociationStateHash()(s));
-  double target = std::uniform_real_distribution<double>(-1.5, 1.5)(rng);
-  for (size_t j = 0; j < s.blocks.size(); ++j)
-    target += model.BlockLogLikelihood(s.blocks[j], s.classes[j]) - 0.7;
-  return target;
-}
-
-class TestEvaluator : public StateEvaluator {
- public:
-  explicit TestEvaluator(const ClassConfusionModel& model) : model_(model) {}
-  EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation*) override {
-    if (EvaluationPtr found = cache_.Find(state)) return found;
-    EvaluationPtr e = Compute(state);
-    cache_.CountSolve();
-    cache_.Store(e);
-    return e;
-  }
-  EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override {
-    return Evaluate(state, from);
-  }
-  // For delayed acceptance: the exact evaluation of `to` with its target and
-  // locations perturbed by a deterministic function of (from, to), and none at
-  // all for some pairs, so that both screening paths are exercised.
-  EvaluationPtr Approximate(const AssociationState& to, const StateEvaluation& from) override {
-    if (!approximate_) return nullptr;  // EnableApproximation(0): exact values
-    const size_t key = AssociationStateHash()(to) * 31 + AssociationStateHash()(from.state);
-    if (key % 7 == 0) return nullptr;
-    std::mt19937_64 rng(key);
-    std::uniform_real_distribution<double> noise(-approximation_error_, approximation_error_);
-    auto approximate = std::make_shared<StateEvaluation>(*Compute(to));
-    approximate->log_target += noise(rng);
-    for (auto& location : approximate->locations) location.x() += 0.1 * noise(rng);
-    return approximate;
-  }
-  void EnableApproximation(double error) {
-    approximate_ = true;
-    approximation_error_ = error;
-  }
-  void Remember(const EvaluationPtr& e) override { cache_.Store(e); }
-  size_t num_solves() const override { return cache_.solves(); }
-  size_t num_cache_hits() const override { return cache_.hits(); }
-  void DisableRollBack() { roll_back_ = false; }
-  bool SupportsRollBack() const override { return roll_back_; }
-  size_t Mark() override { return cache_.Mark(); }
-  void RollBack(size_t mark) override { cache_.RollBack(mark); }
-  void Release(size_t mark) override { cache_.Release(mark); }
-
- private:
-  EvaluationPtr Compute(const AssociationState& state) const {
-    auto e = std::make_shared<StateEvaluation>();
-    e->state = state;
-    e->valid = true;
-    e->log_target = TestLogTarget(state, model_);
-    for (const auto& block : state.blocks) {
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (int t : block) mean += kTrackPositions[t];
-      mean /= block.size();
-      double spread = 0.2;
-      for (int t : block) spread += (kTrackPositions[t] - mean).squaredNorm();
-      e->locations.push_back(mean);
-      e->residual2.push_back(spread);
-    }
-    return e;
-  }
-
-  const ClassConfusionModel& model_;
-  EvaluationCache cache_{1000000};
-  bool roll_back_ = true;
-  bool approximate_ = false;
-  double approximation_error_ = 0;
-};
-
-// All set partitions of n elements (restricted growth strings) x classes.
-std::vector<AssociationState> EnumerateStates(int n, int num_classes) {
-  std::vector<AssociationState> states;
-  std::vector<int> label(n, 0);
-  std::function<void(int, int)> partitions = [&](int i, int used) {
-    if (i == n) {
-      std::vector<std::vector<int>> blocks(used);
-      for (int t = 0; t < n; ++t) blocks[label[t]].push_back(t);
-      const int k = used;
-      for (int code = 0; code < std::pow(num_classes, k); ++code) {
-        AssociationState s;
-        s.blocks = blocks;
-        for (int j = 0, c = code; j < k; ++j, c /= num_classes)
-          s.classes.push_back(c % num_classes);
-        s.Canonicalize();
-        states.push_back(s);
-      }
-      return;
-    }
-    for (int l = 0; l <= used; ++l) {
-      label[i] = l;
-      partitions(i + 1, std::max(used, l + 1));
-    }
-  };
-  partitions(0, 0);
-  return states;
-}
+using testing::EnumerateStates;
+using testing::kTrackClass;
+using testing::TestEvaluator;
+using testing::TestLogTarget;
+using testing::TestModel;
 
 // Total variation distance between the sample frequencies and the exact posterior.
 double TotalVariation(const SamplerResult& result, const ClassConfusionModel& model) {
@@ -177,29 +68,6 @@ SamplerResult RunTest(const SamplerOptions& options, const ClassConfusionModel& 
       },
       options);
   return sampler.Run(SeparateTracksState(kTrackClass));
-}
-
-TEST(AssociationStateTest, EnumerationCountsPartitionsTimesClasses) {
-  // Bell(4) = 15 partitions; sum over partitions of 2^blocks = 2 + 28 + 48 + 16.
-  EXPECT_EQ(EnumerateStates(4, 2).size(), 94u);
-}
-
-TEST(AssociationStateTest, CanonicalFormIsOrderFree) {
-  AssociationState a{{{3, 1}, {0, 2}}, {1, 0}}, b{{{0, 2}, {1, 3}}, {0, 1}};
-  a.Canonicalize();
-  b.Canonicalize();
-  EXPECT_EQ(a, b);
-  EXPECT_EQ(AssociationStateHash()(a), AssociationStateHash()(b));
-  EXPECT_EQ(a.ToString(), "{0,2}:0 {1,3}:1");
-  EXPECT_EQ(a.BlockOf(3), 1);
-}
-
-TEST(MovesTest, ClassProposalFollowsTheConfusionProduct) {
-  const ClassConfusionModel model = TestModel();
-  // Tracks 0 (3 x class 0) and 2 (3 x class 1): q(0) ∝ 0.8^3 0.2^3, q(1) ∝ 0.3^3 0.7^3.
-  const std::vector<double> q = model.ClassLogProposal({0, 2});
-  const double p0 = std::pow(0.8 * 0.2, 3), p1 = std::pow(0.3 * 0.7, 3);
-  EXPECT_NEAR(std::exp(q[0]), p0 / (p0 + p1), 1e-3);  // the 1e-3 floor shifts it slightly
 }
 
 // Sample counts and tolerance: 200,000 MH iterations on 94 states; the
@@ -316,56 +184,6 @@ TEST(SamplerTest, SpeculativeChainsGiveTheSequentialResult) {
       }
     }
   }
-}
-
-// Going back to a mark restores the entries (also across a clear of a full
-// cache) and the counters; a released mark is refused.
-TEST(EvaluationCacheTest, RollBackRestoresEntriesAndCounters) {
-  auto evaluation = [](std::vector<std::vector<int>> blocks, double log_target) {
-    auto e = std::make_shared<StateEvaluation>();
-    e->state.blocks = std::move(blocks);
-    e->state.classes.assign(e->state.blocks.size(), 0);
-    e->state.Canonicalize();
-    e->valid = true;
-    e->log_target = log_target;
-    return EvaluationPtr(e);
-  };
-  const EvaluationPtr a = evaluation({{0}, {1}, {2}}, 1.0);
-  const EvaluationPtr a_refined = evaluation({{0}, {1}, {2}}, 1.5);
-  const EvaluationPtr b = evaluation({{0, 1}, {2}}, 2.0);
-  const EvaluationPtr c = evaluation({{0, 2}, {1}}, 3.0);
-  const EvaluationPtr d = evaluation({{0, 1, 2}}, 4.0);
-  EvaluationCache cache(3);
-  cache.Store(a);
-  cache.CountSolve();
-  EXPECT_EQ(cache.Find(a->state), a);
-  const size_t mark = cache.Mark();
-  cache.Store(b);
-  cache.CountSolve();
-  cache.Store(a_refined);  // replaces a
-  EXPECT_EQ(cache.Find(b->state), b);
-  cache.Store(c);
-  cache.Store(d);  // full: cleared first
-  EXPECT_EQ(cache.size(), 1u);
-  EXPECT_EQ(cache.solves(), 2u);
-  EXPECT_EQ(cache.hits(), 2u);
-  cache.RollBack(mark);
-  EXPECT_EQ(cache.size(), 1u);
-  EXPECT_EQ(cache.solves(), 1u);
-  EXPECT_EQ(cache.hits(), 1u);
-  EXPECT_EQ(cache.Find(a->state), a);
-  EXPECT_EQ(cache.Find(b->state), nullptr);
-  EXPECT_EQ(cache.Find(d->state), nullptr);
-
-  const size_t before_b = cache.Mark();
-  cache.Store(b);
-  const size_t before_c = cache.Mark();
-  cache.Store(c);
-  cache.Release(before_c);
-  EXPECT_THROW(cache.RollBack(before_b), Error);
-  cache.RollBack(before_c);
-  EXPECT_EQ(cache.Find(b->state), b);
-  EXPECT_EQ(cache.Find(c->state), nullptr);
 }
 
 TEST(SamplerTest, HillClimbingNeverDecreasesTheTarget) {
