@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "association/association_state.h"
+#include "core/error.h"
 
 namespace oslam::testing {
 
@@ -58,9 +59,21 @@ inline EvaluationPtr TestEvaluation(const AssociationState& state,
 
 class TestEvaluator : public StateEvaluator {
  public:
+  // What an evaluator did, kept where it outlives the evaluator (a sampler
+  // destroys its evaluators when its run ends).
+  struct Counts {
+    size_t solves = 0;
+    int completions = 0;
+  };
+
   explicit TestEvaluator(const ClassConfusionModel& model) : model_(model) {}
+  ~TestEvaluator() override {
+    if (counts_) counts_->solves = cache_.solves();
+  }
   EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation*) override {
     if (EvaluationPtr found = cache_.Find(state)) return found;
+    if (fail_after_solves_ >= 0 && cache_.solves() >= static_cast<size_t>(fail_after_solves_))
+      throw Error("test evaluator: failing as asked");
     EvaluationPtr e = TestEvaluation(state, model_);
     cache_.CountSolve();
     cache_.Store(e);
@@ -83,13 +96,24 @@ class TestEvaluator : public StateEvaluator {
     for (auto& location : approximate->locations) location.x() += 0.1 * noise(rng);
     return approximate;
   }
+  // A completed evaluation is a copy with evaluation_time_s = 1, so that the
+  // tests can tell completed samples from the chains' evaluations.
+  EvaluationPtr Complete(const EvaluationPtr& evaluation) override {
+    if (counts_) ++counts_->completions;
+    auto completed = std::make_shared<StateEvaluation>(*evaluation);
+    completed->evaluation_time_s = 1.0;
+    return completed;
+  }
   void EnableApproximation(double error) {
     approximate_ = true;
     approximation_error_ = error;
   }
+  // Evaluate throws oslam::Error instead of solving once `solves` were done.
+  void FailAfterSolves(int solves) { fail_after_solves_ = solves; }
   void Remember(const EvaluationPtr& e) override { cache_.Store(e); }
   size_t num_solves() const override { return cache_.solves(); }
   size_t num_cache_hits() const override { return cache_.hits(); }
+  void CountInto(std::shared_ptr<Counts> counts) { counts_ = std::move(counts); }
   void DisableRollBack() { roll_back_ = false; }
   bool SupportsRollBack() const override { return roll_back_; }
   size_t Mark() override { return cache_.Mark(); }
@@ -102,6 +126,8 @@ class TestEvaluator : public StateEvaluator {
   bool roll_back_ = true;
   bool approximate_ = false;
   double approximation_error_ = 0;
+  int fail_after_solves_ = -1;
+  std::shared_ptr<Counts> counts_;
 };
 
 // All set partitions of n elements (restricted growth strings) x classes.

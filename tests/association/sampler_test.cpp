@@ -1,10 +1,15 @@
 // The samplers (sampler.h): detailed balance of Metropolis-Hastings and of
 // MC³'s cold chain on the enumerable 4-track, 2-class problem (spec §9.2-9.4):
 // the visit frequencies must match the exact posterior of the same target;
-// hill climbing; reproducibility from the seed, with threads and speculation.
+// hill climbing; reproducibility from the seed, with threads and speculation;
+// what a run records and how it fails; the Metropolis step; the effective
+// sample size.
 #include "association/sampler.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <random>
 #include <unordered_map>
@@ -259,19 +264,289 @@ TEST(SamplerTest, HillClimbingGoesOnWhileItImprovesWithinTheLimits) {
   EXPECT_THROW(RunTest(options, model), Error);
 }
 
-TEST(SamplerTest, EffectiveSampleSizeOfIndependentAndCorrelatedSeries) {
-  std::mt19937_64 rng(3);
+// A stationary AR(1) series x_t = rho x_{t-1} + e_t, e_t ~ N(0, 1).
+std::vector<double> Ar1(double rho, size_t n, unsigned long seed) {
+  std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal;
-  std::vector<double> independent(4000), correlated(4000);
-  double ar = 0;
-  for (size_t i = 0; i < independent.size(); ++i) {
-    independent[i] = normal(rng);
-    ar = 0.9 * ar + normal(rng);
-    correlated[i] = ar;
+  std::vector<double> x(n);
+  double previous = normal(rng) / std::sqrt(1 - rho * rho);
+  for (double& v : x) previous = v = rho * previous + normal(rng);
+  return x;
+}
+
+// Geyer's estimate against the known values: N for white noise,
+// N (1 - rho) / (1 + rho) for AR(1). The tolerance grows with rho, as the
+// estimate's spread does.
+TEST(EffectiveSampleSizeTest, MatchesTheKnownValueOfAutoregressiveSeries) {
+  constexpr size_t kN = 20000;
+  for (unsigned long seed : {1, 2, 3}) {
+    for (const auto& [rho, tolerance] : {std::pair{0.0, 0.08}, {0.5, 0.12}, {0.9, 0.2}}) {
+      const double expected = kN * (1 - rho) / (1 + rho);
+      const double ess = EffectiveSampleSize(Ar1(rho, kN, seed));
+      EXPECT_NEAR(ess / expected, 1.0, tolerance) << "rho " << rho << ", seed " << seed;
+      EXPECT_LE(ess, kN);
+    }
   }
-  EXPECT_GT(EffectiveSampleSize(independent), 3000);
-  // AR(1) with rho = 0.9: n (1 - rho) / (1 + rho) = 4000 / 19 = 211.
-  EXPECT_NEAR(EffectiveSampleSize(correlated), 211, 80);
+}
+
+TEST(EffectiveSampleSizeTest, ShortOrConstantSeriesCountEveryValue) {
+  EXPECT_EQ(EffectiveSampleSize({}), 0.0);
+  EXPECT_EQ(EffectiveSampleSize({1.0, 5.0, 2.0}), 3.0);
+  EXPECT_EQ(EffectiveSampleSize(std::vector<double>(50, 2.5)), 50.0);
+}
+
+TEST(SamplerTest, OptionsValidationNamesTheBadValue) {
+  EXPECT_TRUE(SamplerOptions().Validate(nullptr));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::pair<std::function<void(SamplerOptions*)>, std::string>> bad = {
+      {[](SamplerOptions* o) { o->hill_climb_steps = -1; }, "hill-climbing steps"},
+      {[](SamplerOptions* o) { o->hill_climb_patience = -1; }, "patience"},
+      {[](SamplerOptions* o) { o->hill_climb_max_steps = 10; }, "hill_climb_max_steps"},
+      {[](SamplerOptions* o) { o->refine_every = 0; }, "K_NL"},
+      {[](SamplerOptions* o) { o->hill_climb_screen_nats = -1; }, "screen margin"},
+      {[&](SamplerOptions* o) { o->hill_climb_screen_nats = nan; }, "screen margin"},
+      {[](SamplerOptions* o) {
+         o->hill_climb_moves = {0.5, 0.6, 0.0};
+       },
+       "move probabilities"},
+      {[](SamplerOptions* o) {
+         o->sampling_moves = {1.2, 0.0, -0.2};
+       },
+       "move probabilities"},
+      {[](SamplerOptions* o) { o->num_chains = 0; }, "chain"},
+      {[](SamplerOptions* o) { o->swap_every = 0; }, "swap"},
+      {[](SamplerOptions* o) { o->speculation_depth = -1; }, "speculation depth"},
+      {[](SamplerOptions* o) { o->delta_temperature = -1; }, "dT"},
+      {[&](SamplerOptions* o) { o->delta_temperature = inf; }, "dT"},
+      {[](SamplerOptions* o) { o->num_iterations = 0; }, "iteration"},
+      {[](SamplerOptions* o) { o->burn_in = -1; }, "burn-in"},
+      {[](SamplerOptions* o) { o->burn_in = o->num_iterations; }, "burn-in"},
+      {[](SamplerOptions* o) { o->moves.merge_sigma_m = 0; }, "sigma_E"},  // the moves' own
+  };
+  const ClassConfusionModel model = TestModel();
+  for (const auto& [change, name] : bad) {
+    SamplerOptions options;
+    change(&options);
+    std::string why;
+    EXPECT_FALSE(options.Validate(&why)) << name;
+    EXPECT_NE(why.find(name), std::string::npos) << "\"" << why << "\" does not name " << name;
+    EXPECT_FALSE(options.Validate(nullptr)) << name;
+    try {
+      RunTest(options, model);
+      ADD_FAILURE() << "Run accepted bad options: " << name;
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()), "sampler options: " + why);
+    }
+  }
+}
+
+// The same seed gives the same run, on threads or not, with one chain or
+// several; the result does not depend on the threads' timing.
+TEST(SamplerTest, DeterministicFromTheSeed) {
+  const ClassConfusionModel model = TestModel();
+  for (int chains : {1, 3}) {
+    for (bool threads : {false, true}) {
+      SamplerOptions options = TestOptions(chains, 800);
+      options.burn_in = 100;
+      options.hill_climb_steps = 20;
+      options.delta_temperature = 0.5;
+      options.parallel_chains = threads;
+      const SamplerResult a = RunTest(options, model, 1.0);
+      const SamplerResult b = RunTest(options, model, 1.0);
+      SCOPED_TRACE(std::to_string(chains) + " chains" + (threads ? " on threads" : ""));
+      ASSERT_EQ(a.samples.size(), 700u);
+      ASSERT_EQ(a.samples.size(), b.samples.size());
+      for (size_t i = 0; i < a.samples.size(); ++i)
+        ASSERT_EQ(a.samples[i]->state, b.samples[i]->state) << i;
+      EXPECT_EQ(a.summary.hill_climb_trace, b.summary.hill_climb_trace);
+      EXPECT_EQ(a.summary.cold_trace, b.summary.cold_trace);
+      EXPECT_EQ(a.hill_climbed->state, b.hill_climbed->state);
+      EXPECT_EQ(a.best->state, b.best->state);
+      EXPECT_EQ(a.summary.swaps_accepted, b.summary.swaps_accepted);
+      EXPECT_EQ(a.summary.num_solves, b.summary.num_solves);
+      EXPECT_EQ(a.summary.effective_sample_size, b.summary.effective_sample_size);
+      for (int m = 0; m < 3; ++m)
+        EXPECT_EQ(a.summary.sampling[m].accepted, b.summary.sampling[m].accepted);
+    }
+  }
+}
+
+// What the run reports: the cold chain's trace for every iteration, the
+// samples after the burn-in, each completed once per distinct state by an
+// evaluator of its own, the best state seen, one swap proposal per adjacent
+// pair and swap interval.
+TEST(SamplerTest, RecordsTheColdChainAfterTheBurnIn) {
+  const ClassConfusionModel model = TestModel();
+  SamplerOptions options = TestOptions(3, 301);
+  options.burn_in = 50;
+  options.swap_every = 4;
+  std::vector<std::shared_ptr<TestEvaluator::Counts>> counts;  // by creation
+  Sampler sampler(
+      model,
+      [&] {
+        auto evaluator = std::make_unique<TestEvaluator>(model);
+        counts.push_back(std::make_shared<TestEvaluator::Counts>());
+        evaluator->CountInto(counts.back());
+        return evaluator;
+      },
+      options);
+  const SamplerResult result = sampler.Run(SeparateTracksState(kTrackClass));
+  const SamplerSummary& summary = result.summary;
+  ASSERT_EQ(counts.size(), 4u);  // three chains and the completer
+  ASSERT_EQ(summary.cold_trace.size(), 301u);
+  ASSERT_EQ(result.samples.size(), 251u);
+  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> completed;
+  for (size_t i = 0; i < result.samples.size(); ++i) {
+    const EvaluationPtr& sample = result.samples[i];
+    EXPECT_EQ(sample->evaluation_time_s, 1.0) << "not completed: " << i;
+    EXPECT_EQ(sample->log_target, summary.cold_trace[50 + i]);
+    EXPECT_EQ(sample->log_target, TestLogTarget(sample->state, model));
+    EvaluationPtr& first = completed[sample->state];
+    if (!first) first = sample;
+    EXPECT_EQ(sample, first) << "completed twice: " << sample->state.ToString();
+  }
+  EXPECT_EQ(counts[3]->completions, static_cast<int>(completed.size()));
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(counts[i]->completions, 0);
+
+  double best = result.hill_climbed->log_target;
+  for (double v : summary.cold_trace) best = std::max(best, v);
+  EXPECT_EQ(result.best->log_target, best);
+  EXPECT_EQ(result.hill_climbed->log_target, summary.hill_climbed_log_target);
+  EXPECT_EQ(summary.swaps_proposed, 2 * 76);  // 2 pairs, ceil(301 / 4) intervals
+  EXPECT_GT(summary.swaps_accepted, 0);
+  long proposed = 0;
+  for (const MoveStatistics& m : summary.sampling) proposed += m.proposed;
+  EXPECT_EQ(proposed, 301);  // the cold chain's, one per iteration
+  size_t solves = 0;
+  for (const auto& c : counts) solves += c->solves;
+  EXPECT_EQ(summary.num_solves, solves);
+  EXPECT_GT(summary.effective_sample_size, 0);
+  EXPECT_LE(summary.effective_sample_size, 251);
+  EXPECT_EQ(summary.message, "ok");
+}
+
+// An evaluator that throws in a chain's thread (or between swap decisions)
+// ends the run with its error, whether the chains run ahead, in lock-step or
+// one after another.
+TEST(SamplerTest, AChainsErrorEndsTheRun) {
+  const ClassConfusionModel model = TestModel();
+  for (int failing : {0, 2}) {
+    for (const auto& [threads, depth] : {std::pair{true, 8}, {true, 0}, {false, 0}}) {
+      SamplerOptions options = TestOptions(3, 2000);
+      options.burn_in = 10;
+      options.delta_temperature = 0.3;
+      options.parallel_chains = threads;
+      options.speculation_depth = depth;
+      int created = 0;
+      Sampler sampler(
+          model,
+          [&] {
+            auto evaluator = std::make_unique<TestEvaluator>(model);
+            if (created++ == failing) evaluator->FailAfterSolves(15);
+            return evaluator;
+          },
+          options);
+      SCOPED_TRACE("chain " + std::to_string(failing) + (threads ? " on threads" : "") +
+                   ", depth " + std::to_string(depth));
+      try {
+        sampler.Run(SeparateTracksState(kTrackClass));
+        ADD_FAILURE() << "the run ended without the evaluator's error";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("failing as asked"), std::string::npos) << e.what();
+      }
+    }
+  }
+}
+
+TEST(SamplerTest, AnUnevaluableStartIsAnError) {
+  class Unevaluable : public TestEvaluator {
+   public:
+    using TestEvaluator::TestEvaluator;
+    EvaluationPtr Refine(const AssociationState& state, const StateEvaluation*) override {
+      auto e = std::make_shared<StateEvaluation>();
+      e->state = state;
+      return e;  // not valid
+    }
+  };
+  const ClassConfusionModel model = TestModel();
+  Sampler sampler(
+      model, [&] { return std::make_unique<Unevaluable>(model); }, TestOptions(1, 2000));
+  try {
+    sampler.Run(SeparateTracksState(kTrackClass));
+    ADD_FAILURE() << "an unevaluable start was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("start state"), std::string::npos) << e.what();
+  }
+}
+
+// A greedy step returns the current state or one with a higher target,
+// never a lower one; a tempered step from the same draws does accept
+// decreases, so the rule is what makes the difference.
+TEST(MetropolisStepTest, GreedyAcceptsOnlyIncreases) {
+  const ClassConfusionModel model = TestModel();
+  const MoveOptions moves;
+  const MoveProbabilities probabilities{0.4, 0.4, 0.2};
+  StepRule greedy;
+  greedy.greedy = true;
+  const StepRule tempered;  // beta 1, no screen
+  long greedy_accepted = 0, decreases_accepted = 0;
+  for (const AssociationState& state : testing::EnumerateStates(4, 2)) {
+    TestEvaluator evaluator(model);
+    const EvaluationPtr current = evaluator.Evaluate(state, nullptr);
+    for (unsigned long seed = 0; seed < 20; ++seed) {
+      std::array<MoveStatistics, 3> stats{};
+      Rng rng(seed);
+      const EvaluationPtr next =
+          MetropolisStep(current, greedy, evaluator, model, moves, probabilities, rng, &stats);
+      long accepted = 0;
+      for (const MoveStatistics& m : stats) accepted += m.accepted;
+      if (next == current) {
+        EXPECT_EQ(accepted, 0);
+      } else {
+        EXPECT_GT(next->log_target, current->log_target) << state.ToString();
+        EXPECT_EQ(accepted, 1);
+        ++greedy_accepted;
+      }
+      Rng same(seed);
+      const EvaluationPtr sampled =
+          MetropolisStep(current, tempered, evaluator, model, moves, probabilities, same, &stats);
+      if (sampled != current && sampled->log_target < current->log_target) ++decreases_accepted;
+    }
+  }
+  EXPECT_GT(greedy_accepted, 100);
+  EXPECT_GT(decreases_accepted, 50);
+}
+
+// A proposal whose evaluation fails is rejected, and counted as proposed.
+TEST(MetropolisStepTest, RejectsAnInvalidEvaluation) {
+  class Invalid : public TestEvaluator {
+   public:
+    using TestEvaluator::TestEvaluator;
+    EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation*) override {
+      auto e = std::make_shared<StateEvaluation>();
+      e->state = state;
+      return e;  // not valid
+    }
+  };
+  const ClassConfusionModel model = TestModel();
+  Invalid evaluator(model);
+  const EvaluationPtr current = testing::TestEvaluation(SeparateTracksState(kTrackClass), model);
+  std::array<MoveStatistics, 3> stats{};
+  Rng rng(5);
+  for (int k = 0; k < 50; ++k)
+    EXPECT_EQ(MetropolisStep(current, StepRule{}, evaluator, model, MoveOptions{}, {0.4, 0.4, 0.2},
+                             rng, &stats),
+              current);
+  long proposed = 0, accepted = 0, self_transitions = 0;
+  for (const MoveStatistics& m : stats) {
+    proposed += m.proposed;
+    accepted += m.accepted;
+    self_transitions += m.self_transitions;
+  }
+  EXPECT_EQ(proposed, 50);
+  EXPECT_EQ(accepted, 0);
+  EXPECT_LT(self_transitions, 40);  // most were evaluated, and rejected
 }
 
 }  // namespace
