@@ -31,6 +31,20 @@ Rng ChainRng(unsigned long seed, int chain) {
   return Rng(sequence);
 }
 
+// Delayed acceptance's first stage for a move from `from` to the state that
+// `approximate` stands for: min(0, log alpha1), 0 (accept) when the evaluator
+// has no approximation or the ratio is NaN. `log_alpha1(approximate,
+// tempered)` completes the ratio from its first term, tempered = beta
+// (log pi~(to) - log pi(from)), with the proposal probabilities.
+template <typename LogAlpha1>
+double LogScreenAcceptance(const EvaluationPtr& approximate, const StateEvaluation& from,
+                           double beta, const LogAlpha1& log_alpha1) {
+  if (!approximate || !approximate->valid) return 0.0;
+  const double log_alpha =
+      log_alpha1(*approximate, beta * (approximate->log_target - from.log_target));
+  return std::isnan(log_alpha) ? 0.0 : std::min(0.0, log_alpha);
+}
+
 // One MC3 chain: its state, temperature, random stream, statistics and evaluator.
 struct Chain {
   EvaluationPtr state;
@@ -377,14 +391,13 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
   // y~ = the evaluator's approximation of y made from x; 1 where it has none.
   double log_screen_forward = 0.0;
   if (screen) {
-    const EvaluationPtr approximate = evaluator.Approximate(proposal.state, *current);
-    if (approximate && approximate->valid) {
-      const double log_reverse =
-          LogReverseProbability(proposal, *approximate, model, options, probabilities);
-      const double log_alpha = beta * (approximate->log_target - current->log_target) +
-                               log_reverse - proposal.log_q_forward;
-      if (!std::isnan(log_alpha)) log_screen_forward = std::min(0.0, log_alpha);
-    }
+    log_screen_forward = LogScreenAcceptance(
+        evaluator.Approximate(proposal.state, *current), *current, beta,
+        [&](const StateEvaluation& approximate, double tempered) {
+          return tempered +
+                 LogReverseProbability(proposal, approximate, model, options, probabilities) -
+                 proposal.log_q_forward;
+        });
     if (log_u_screen >= log_screen_forward) {
       ++stat.screened_out;
       stat.time_s += Seconds(start);
@@ -409,14 +422,12 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
     if (screen) {
       // Stage 2: times alpha1(y, x) / alpha1(x, y), the reverse move's
       // screen as the sampler would compute it standing at y.
-      double log_screen_reverse = 0.0;
-      const EvaluationPtr approximate = evaluator.Approximate(current->state, *proposed);
-      if (approximate && approximate->valid) {
-        const double log_alpha1 =
-            beta * (approximate->log_target - proposed->log_target) - log_reverse +
-            LogForwardProbability(proposal, *approximate, model, options, probabilities);
-        if (!std::isnan(log_alpha1)) log_screen_reverse = std::min(0.0, log_alpha1);
-      }
+      const double log_screen_reverse = LogScreenAcceptance(
+          evaluator.Approximate(current->state, *proposed), *proposed, beta,
+          [&](const StateEvaluation& approximate, double tempered) {
+            return tempered - log_reverse +
+                   LogForwardProbability(proposal, approximate, model, options, probabilities);
+          });
       log_alpha += log_screen_reverse - log_screen_forward;
     }
     accept = std::isfinite(log_reverse) && log_u < std::min(0.0, log_alpha);
