@@ -5,11 +5,11 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <map>
+#include <optional>
 #include <set>
+#include <utility>
 
-#include <Eigen/Geometry>
-
+#include "association/rigid_alignment.h"
 #include "core/angles.h"
 #include "core/error.h"
 #include "slam/landmark_factors.h"
@@ -26,46 +26,6 @@ std::string Format(const char* format, double a, double b = 0, double c = 0, dou
   char line[256];
   std::snprintf(line, sizeof(line), format, a, b, c, d, e, f, g);
   return line;
-}
-
-// A rigid planar transform x -> R(angle) x + t.
-struct Rigid2 {
-  double angle = 0;
-  Eigen::Vector2d t = Eigen::Vector2d::Zero();
-  Eigen::Vector2d operator()(const Eigen::Vector2d& x) const {
-    return Eigen::Rotation2Dd(angle) * x + t;
-  }
-};
-
-// The least-squares rigid transform taking from[i] onto to[i].
-Rigid2 FitRigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
-  Eigen::Vector2d cf = Eigen::Vector2d::Zero(), ct = Eigen::Vector2d::Zero();
-  for (size_t i = 0; i < from.size(); ++i) {
-    cf += from[i];
-    ct += to[i];
-  }
-  cf /= double(from.size());
-  ct /= double(to.size());
-  double dot = 0, cross = 0;
-  for (size_t i = 0; i < from.size(); ++i) {
-    const Eigen::Vector2d a = from[i] - cf, b = to[i] - ct;
-    dot += a.dot(b);
-    cross += a.x() * b.y() - a.y() * b.x();
-  }
-  Rigid2 rigid;
-  rigid.angle = std::atan2(cross, dot);
-  rigid.t = ct - Eigen::Rotation2Dd(rigid.angle) * cf;
-  return rigid;
-}
-
-// The part `fraction` of `rigid` about `pivot`: at 0 the identity, at 1
-// `rigid` itself, rotating by fraction * angle about pivot in between.
-Rigid2 PartOf(const Rigid2& rigid, const Eigen::Vector2d& pivot, double fraction) {
-  Rigid2 part;
-  part.angle = fraction * rigid.angle;
-  const Eigen::Vector2d shift = rigid(pivot) - pivot;
-  part.t = pivot + fraction * shift - Eigen::Rotation2Dd(part.angle) * pivot;
-  return part;
 }
 
 }  // namespace
@@ -373,112 +333,21 @@ UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& input,
       }
     }
     if (static_cast<int>(recent.size()) < joint_needed) return 0;
-    const double inlier_m = options.joint_inlier_m, inlier2 = inlier_m * inlier_m;
-    const double reach = options.joint_search_m + inlier_m;
-    std::vector<std::vector<int>> near(recent.size());  // old units within reach
-    int with_candidates = 0;
-    for (size_t i = 0; i < recent.size(); ++i) {
-      for (size_t o = 0; o < old.size(); ++o)
-        if ((old[o].position_m - recent[i].position_m).squaredNorm() <= reach * reach)
-          near[i].push_back(static_cast<int>(o));
-      with_candidates += !near[i].empty();
-    }
-    if (with_candidates < joint_needed) return 0;
-    // Inliers of an alignment: mutually nearest (recent, old) pairs within
-    // joint_inlier_m of each other once the recent unit is moved.
-    // The old units on a grid of joint_inlier_m cells: an alignment's inliers
-    // are then found in the 3 x 3 cells around each moved recent unit instead
-    // of among all its old units in reach (thousands with clutter); the same
-    // pairs as a scan of near[i] (ties to the higher index, as that scan).
-    auto cell_of = [&](const Eigen::Vector2d& p) {
-      return std::make_pair(static_cast<long>(std::floor(p.x() / inlier_m)),
-                            static_cast<long>(std::floor(p.y() / inlier_m)));
-    };
-    std::map<std::pair<long, long>, std::vector<int>> grid;
-    for (size_t o = 0; o < old.size(); ++o)
-      grid[cell_of(old[o].position_m)].push_back(static_cast<int>(o));
-    auto inliers = [&](const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) {
-      std::map<int, std::pair<double, int>> by_old;  // old unit -> (distance², recent unit)
-      for (size_t i = 0; i < recent.size(); ++i) {
-        if (near[i].empty()) continue;
-        const Eigen::Vector2d p = rigid(recent[i].position_m);
-        const auto [cx, cy] = cell_of(p);
-        int nearest = -1;
-        double best = inlier2;
-        for (long x = cx - 1; x <= cx + 1; ++x)
-          for (long y = cy - 1; y <= cy + 1; ++y) {
-            const auto cell = grid.find({x, y});
-            if (cell == grid.end()) continue;
-            for (int o : cell->second) {
-              if ((old[o].position_m - recent[i].position_m).squaredNorm() > reach * reach)
-                continue;  // not in near[i]
-              const double d2 = (old[o].position_m - p).squaredNorm();
-              if (d2 < best || (d2 == best && o > nearest)) {
-                best = d2;
-                nearest = o;
-              }
-            }
-          }
-        if (nearest < 0) continue;
-        const auto it = by_old.find(nearest);
-        if (it == by_old.end() || best < it->second.first)
-          by_old[nearest] = {best, static_cast<int>(i)};
-      }
-      if (pairs) {
-        pairs->clear();
-        for (const auto& [o, value] : by_old) pairs->push_back({value.second, o});
-      }
-      return static_cast<int>(by_old.size());
-    };
-    std::uniform_int_distribution<size_t> pick(0, recent.size() - 1);
-    Rigid2 best_rigid;
-    int best_count = 0;
-    for (int sample = 0; sample < options.joint_ransac_iterations; ++sample) {
-      const size_t a = pick(rng), b = pick(rng);
-      if (a == b || near[a].empty() || near[b].empty()) continue;
-      const Eigen::Vector2d ra = recent[a].position_m, rb = recent[b].position_m;
-      const double d = (rb - ra).norm();
-      if (d < 2 * inlier_m) continue;
-      const double heading = std::atan2(rb.y() - ra.y(), rb.x() - ra.x());
-      for (int oa : near[a])
-        for (int ob : near[b]) {
-          if (oa == ob) continue;
-          const Eigen::Vector2d v = old[ob].position_m - old[oa].position_m;
-          if (std::abs(v.norm() - d) > inlier_m) continue;
-          const double angle = WrapAngle(std::atan2(v.y(), v.x()) - heading);
-          if (std::abs(angle) > options.joint_max_rotation_rad) continue;
-          if (options.joint_max_shift_m > 0 &&
-              (0.5 * (old[oa].position_m + old[ob].position_m - ra - rb)).norm() >
-                  options.joint_max_shift_m)
-            continue;
-          Rigid2 rigid;
-          rigid.angle = angle;
-          rigid.t = 0.5 * (old[oa].position_m + old[ob].position_m) -
-                    Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
-          const int count = inliers(rigid, nullptr);
-          if (count > best_count) {
-            best_count = count;
-            best_rigid = rigid;
-          }
-        }
-    }
-    if (best_count < joint_needed) return 0;
-    std::vector<std::pair<int, int>> pairs;
-    for (int refit = 0; refit < 2; ++refit) {
-      inliers(best_rigid, &pairs);
-      std::vector<Eigen::Vector2d> from, to;
-      for (const auto& [r, o] : pairs) {
-        from.push_back(recent[r].position_m);
-        to.push_back(old[o].position_m);
-      }
-      const Rigid2 fitted = FitRigid(from, to);
-      if (inliers(fitted, nullptr) < static_cast<int>(pairs.size())) break;
-      best_rigid = fitted;
-    }
-    inliers(best_rigid, &pairs);
-    if (static_cast<int>(pairs.size()) < joint_needed ||
-        std::abs(best_rigid.angle) > options.joint_max_rotation_rad)
-      return 0;
+    RigidRansacOptions ransac;
+    ransac.search_m = options.joint_search_m;
+    ransac.inlier_m = options.joint_inlier_m;
+    ransac.max_rotation_rad = options.joint_max_rotation_rad;
+    ransac.max_shift_m = options.joint_max_shift_m;
+    ransac.iterations = options.joint_ransac_iterations;
+    ransac.min_inliers = joint_needed;
+    std::vector<Eigen::Vector2d> recent_m, old_m;
+    for (const Unit& u : recent) recent_m.push_back(u.position_m);
+    for (const Unit& u : old) old_m.push_back(u.position_m);
+    const std::optional<RigidMatch> match = MatchRigidly(recent_m, old_m, ransac, rng);
+    if (!match) return 0;
+    const Rigid2& best_rigid = match->rigid;
+    const std::vector<std::pair<int, int>>& pairs = match->pairs;
+    const double inlier_m = options.joint_inlier_m;
     // Nothing for a joint merge when the alignment hardly moves the recent
     // landmarks (the single merges can make the pairs) or the pairs are
     // already merged.
