@@ -15,7 +15,8 @@
 #include "core/error.h"
 #include "slam/landmark_data.h"
 #include "slam/landmark_slam.h"
-#include "association/landmark_target.h"
+#include "association/association_metrics.h"
+#include "pipeline/landmark_association.h"
 #include "slam/omap_json.h"
 
 namespace oslam {

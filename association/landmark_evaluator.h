@@ -18,7 +18,7 @@
 //    changes are solved (2-D problems of their sightings), so a proposal
 //    costs the same at any trajectory length. It ignores the pose
 //    uncertainty (how much a merge would bend the trajectory), which is why
-//    the driver (association/landmark_target.h) works in growing temporal
+//    the driver (pipeline/landmark_association.h) works in growing temporal
 //    windows: the poses a new track is seen from are then only a short drive
 //    from well-estimated ones.
 #pragma once

@@ -13,7 +13,8 @@
 #include <benchmark/benchmark.h>
 
 #include "bench/victoria_park_data.h"
-#include "association/landmark_target.h"
+#include "association/landmark_evaluator.h"
+#include "association/landmark_tracks.h"
 
 namespace oslam {
 namespace {

@@ -5,16 +5,23 @@
 // partition solved in full.
 #pragma once
 
+#include <array>
+#include <chrono>
 #include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "association/association_metrics.h"
+#include <Eigen/Core>
+
 #include "association/association_state.h"
 #include "association/landmark_evaluator.h"
 #include "association/landmark_tracks.h"
 #include "association/moves.h"
+#include "association/rigid_alignment.h"
 #include "association/sampler.h"
+#include "slam/landmark_data.h"
 #include "slam/landmark_slam.h"
 
 namespace oslam {
@@ -160,5 +167,108 @@ using LandmarkProgress = std::function<void(const std::string& line)>;
 UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
                                                  const UnknownAssociationOptions& options,
                                                  const LandmarkProgress& progress = {});
+
+// One solve of SolveUnknownAssociation: its phases as methods sharing the
+// search's state (the current evaluation, the window's evaluator, the random
+// stream), in the order Run() calls them.
+class LandmarkAssociation {
+ public:
+  // `data` must outlive the object. Throws oslam::Error on invalid options.
+  LandmarkAssociation(const LandmarkDataset& data, const UnknownAssociationOptions& options,
+                      LandmarkProgress progress = {});
+  // Once per object (else throws oslam::Error). Throws oslam::Error on an
+  // unsolvable start.
+  UnknownAssociationResult Run();
+
+ private:
+  // The recent or the old part of a landmark, for the joint re-entry merges.
+  struct Unit {
+    std::vector<int> tracks;
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  };
+  // A joint re-entry merge found by RANSAC: recent units matched to old ones.
+  struct JointAlignment {
+    std::vector<Unit> recent, old;
+    RigidMatch match;                                 // from recent onto old units
+    Eigen::Vector2d pivot = Eigen::Vector2d::Zero();  // mean of the matched recent units
+  };
+  struct MergeCandidate {
+    double delta;  // linearised gain in log target
+    int a, b;      // blocks of the current state
+    EvaluationPtr evaluation;
+  };
+
+  // Tracks on the dead reckoning, clutter left out, the location prior's
+  // centre, the windows' ends.
+  void BuildTracks();
+  // A window: its start state and first solve, targeted merges, duplicate
+  // sweep, joint re-entry merge, random hill climbing.
+  void RunWindow(size_t w);
+  void StartWindow(size_t w);
+  void OpenWindowProblem(int n, int previous_end);
+  void SplitSharedScans(int previous_end, int n);
+  // Random greedy moves, re-solved after each accepted one (marginal mode)
+  // and every refine_every steps; returns the moves accepted.
+  long HillClimb(long steps);
+  // Targeted merges of the landmarks holding tracks >= first_new; the
+  // duplicate sweep: the same for every pair of landmarks within
+  // sweep_radius_m. Both return the merges made.
+  long TargetedMerges(int first_new);
+  long DuplicateSweep();
+  long MergeRounds(int first_new, double sweep_m);
+  std::vector<MergeCandidate> BestMerges(int first_new, double sweep_m);
+  bool MakeMerges(const std::vector<MergeCandidate>& best, double sweep_m, int* made);
+  // Joint re-entry merge at window end n; returns the pairs merged.
+  long JointMerge(int n);
+  long TryJointMerge(int n);
+  std::optional<JointAlignment> AlignRecentOntoOld(const StateEvaluation& before, int n);
+  EvaluationPtr TryAnchor(const StateEvaluation& before, const JointAlignment& alignment,
+                          const std::vector<double>& driven, int anchor, int n);
+  AssociationState ReleasedAndMerged(const AssociationState& s, const JointAlignment& alignment,
+                                     int anchor) const;
+  long KeepJointMerge(const EvaluationPtr& before, const EvaluationPtr& best, int best_anchor,
+                      int n, size_t pairs);
+  // Where the sightings of `tracks` before pose n put their landmark.
+  Eigen::Vector2d PlacedBy(const std::vector<int>& tracks, const std::vector<Pose2>& poses,
+                           int n) const;
+  // After the windows: every pose freed, the final sweep, the global pass.
+  void FinalGlobalPass();
+  // MC³ from the hill-climbing state; the better of its best and `best`.
+  EvaluationPtr SampleMc3(EvaluationPtr best);
+  void FinalSolve(const EvaluationPtr& best);
+  // A full solve of a window's state, timed.
+  EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from);
+  void Say(const std::string& line) const;
+
+  const LandmarkDataset& input_;
+  bool ran_ = false;
+  UnknownAssociationOptions options_;  // the location prior's centre set from the tracks
+  LandmarkProgress progress_;
+  std::chrono::steady_clock::time_point start_, climb_start_;
+  UnknownAssociationResult result_;
+
+  LandmarkDataset per_track_;              // diameter_per_track: the diameters per track
+  const LandmarkDataset* data_ = nullptr;  // input_ or per_track_
+  int num_tracks_ = 0;
+  std::vector<int> first_pose_, last_pose_, track_size_;  // per track
+  std::optional<ClassConfusionModel> model_;
+  std::vector<int> ends_;  // of the windows (pose counts)
+
+  Rng rng_;
+  AssociationState state_;  // the last window's (or the global pass's) final state
+  EvaluationPtr previous_;  // the last window's final full solve
+  EvaluationPtr current_;
+  int tracks_before_ = 0, tracks_now_ = 0;  // tracks of the earlier windows, and with this one
+  std::array<MoveStatistics, 3> stats_{};
+  // The window's data, kept alive as long as its evaluator.
+  std::unique_ptr<LandmarkDataset> window_dataset_;
+  std::unique_ptr<LandmarkTargetData> window_data_;
+  std::unique_ptr<LandmarkEvaluator> evaluator_;
+  int held_poses_ = 0;  // the current window's (free_poses)
+
+  int last_ransac_;   // window end of the last RANSAC
+  int joint_needed_;  // inliers the next joint merge needs
+  int last_failure_ = 0;
+};
 
 }  // namespace oslam

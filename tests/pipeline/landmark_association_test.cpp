@@ -4,7 +4,7 @@
 // re-entry merge closes the loop the single merges leave open; no landmark
 // keeps two sightings of one scan; short tracks are left to clutter; a run
 // is reproducible from its seed; the option checks.
-#include "association/landmark_target.h"
+#include "pipeline/landmark_association.h"
 
 #include <cmath>
 #include <cstdio>
@@ -26,7 +26,7 @@ using testing::DriveTargetOptions;
 using testing::SimulateDrive;
 using testing::SimulateExcursion;
 
-TEST(LandmarkTargetTest, HillClimbingRecoversTheTrueAssociation) {
+TEST(LandmarkAssociationTest, HillClimbingRecoversTheTrueAssociation) {
   std::vector<Pose2> truth;
   const LandmarkDataset data = SimulateDrive(5, &truth);
   LandmarkSlamOptions known_options = DriveTargetOptions(LandmarkEvaluationMode::kExact).slam;
@@ -56,7 +56,7 @@ TEST(LandmarkTargetTest, HillClimbingRecoversTheTrueAssociation) {
   }
 }
 
-TEST(LandmarkTargetTest, WindowsAndSamplingKeepTheTrueAssociation) {
+TEST(LandmarkAssociationTest, WindowsAndSamplingKeepTheTrueAssociation) {
   const LandmarkDataset data = SimulateDrive(6, nullptr);
   UnknownAssociationOptions options;
   options.tracks = {1.0, 2};
@@ -82,7 +82,7 @@ TEST(LandmarkTargetTest, WindowsAndSamplingKeepTheTrueAssociation) {
 // The re-entry into A after the drifting excursion: the single targeted
 // merges leave it open, the joint merge (RANSAC alignment, correction spread
 // along the excursion, kept on the full evidence) closes it.
-TEST(LandmarkTargetTest, JointMergeClosesALoopNoSingleMergeCloses) {
+TEST(LandmarkAssociationTest, JointMergeClosesALoopNoSingleMergeCloses) {
   const LandmarkDataset data = SimulateExcursion(11, 0.0015);
   const std::vector<int> truth = GivenAssociation(data);
   UnknownAssociationOptions options;
@@ -121,7 +121,7 @@ TEST(LandmarkTargetTest, JointMergeClosesALoopNoSingleMergeCloses) {
 // states it), in turns during the first window and both in every scan of the
 // second: merged in the first window, their tracks go on into scans that see
 // both, and the merged landmark must not keep two sightings of one scan.
-TEST(LandmarkTargetTest, NoLandmarkKeepsTwoSightingsOfOneScan) {
+TEST(LandmarkAssociationTest, NoLandmarkKeepsTwoSightingsOfOneScan) {
   LandmarkDataset data;
   data.path = "simulated";
   data.format = "simulated";
@@ -172,7 +172,7 @@ TEST(LandmarkTargetTest, NoLandmarkKeepsTwoSightingsOfOneScan) {
 }
 
 // Tracks shorter than min_track_sightings are clutter: out of the state, -1.
-TEST(LandmarkTargetTest, ShortTracksAreLeftToClutter) {
+TEST(LandmarkAssociationTest, ShortTracksAreLeftToClutter) {
   LandmarkDataset data = SimulateDrive(5, nullptr);
   const size_t real = data.sightings.size();
   std::mt19937 rng(9);
@@ -223,7 +223,7 @@ TEST(LandmarkTargetTest, ShortTracksAreLeftToClutter) {
 
 // With neither targeted merges nor random moves, the duplicate sweep alone
 // joins the tracks of each tree (within 2 m of each other).
-TEST(LandmarkTargetTest, TheSweepAloneJoinsDuplicates) {
+TEST(LandmarkAssociationTest, TheSweepAloneJoinsDuplicates) {
   const LandmarkDataset data = SimulateDrive(6, nullptr);
   UnknownAssociationOptions options;
   options.tracks = {1.0, 2};
@@ -247,7 +247,7 @@ TEST(LandmarkTargetTest, TheSweepAloneJoinsDuplicates) {
 
 // Targeted merges with a candidate cap and the sweep: still the true
 // association, and the same seed gives the same result to the bit.
-TEST(LandmarkTargetTest, ARunIsReproducibleFromItsSeed) {
+TEST(LandmarkAssociationTest, ARunIsReproducibleFromItsSeed) {
   const LandmarkDataset data = SimulateDrive(6, nullptr);
   UnknownAssociationOptions options;
   options.tracks = {1.0, 2};
@@ -259,7 +259,9 @@ TEST(LandmarkTargetTest, ARunIsReproducibleFromItsSeed) {
   options.sweep_radius_m = 1.5;
   options.seed = 4;
   const UnknownAssociationResult first = SolveUnknownAssociation(data, options);
-  const UnknownAssociationResult second = SolveUnknownAssociation(data, options);
+  LandmarkAssociation association(data, options);
+  const UnknownAssociationResult second = association.Run();
+  EXPECT_THROW(association.Run(), Error);  // one run per object
   EXPECT_DOUBLE_EQ(ComparePairwise(first.association, GivenAssociation(data)).agreement, 1.0);
   EXPECT_EQ(first.association, second.association);
   EXPECT_EQ(first.state, second.state);
@@ -270,7 +272,7 @@ TEST(LandmarkTargetTest, ARunIsReproducibleFromItsSeed) {
 
 // One diameter per track: the trunks still tell the trees apart and the map
 // reports one per landmark.
-TEST(LandmarkTargetTest, DiameterPerTrackKeepsTheTrueAssociation) {
+TEST(LandmarkAssociationTest, DiameterPerTrackKeepsTheTrueAssociation) {
   LandmarkDataset data = SimulateDrive(5, nullptr);
   std::mt19937 rng(2);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -291,7 +293,7 @@ TEST(LandmarkTargetTest, DiameterPerTrackKeepsTheTrueAssociation) {
   }
 }
 
-TEST(LandmarkTargetTest, NoTrackLongEnoughIsAnError) {
+TEST(LandmarkAssociationTest, NoTrackLongEnoughIsAnError) {
   const LandmarkDataset data = SimulateDrive(3, nullptr);
   UnknownAssociationOptions options;
   options.tracks = {1.0, 2};
@@ -299,7 +301,7 @@ TEST(LandmarkTargetTest, NoTrackLongEnoughIsAnError) {
   EXPECT_THROW(SolveUnknownAssociation(data, options), Error);
 }
 
-TEST(LandmarkTargetTest, RejectsInvalidOptions) {
+TEST(LandmarkAssociationTest, RejectsInvalidOptions) {
   const LandmarkDataset data = SimulateDrive(3, nullptr);
   std::string why;
   EXPECT_TRUE(UnknownAssociationOptions().Validate(&why));
@@ -307,7 +309,7 @@ TEST(LandmarkTargetTest, RejectsInvalidOptions) {
   bad.samples = 5;
   bad.burn_in = 5;
   EXPECT_FALSE(bad.Validate(&why));
-  EXPECT_THROW(SolveUnknownAssociation(data, bad), Error);
+  EXPECT_THROW(LandmarkAssociation(data, bad), Error);
   UnknownAssociationOptions joint;
   joint.joint_min_inliers = 2;  // any two landmarks align: no evidence of a re-entry
   EXPECT_FALSE(joint.Validate(&why));
