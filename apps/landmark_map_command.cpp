@@ -10,12 +10,13 @@
 
 #include "apps/arguments.h"
 #include "apps/commands.h"
+#include "association/association_metrics.h"
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
+#include "pipeline/landmark_association.h"
 #include "slam/landmark_data.h"
 #include "slam/landmark_slam.h"
-#include "association/landmark_target.h"
 #include "slam/omap_json.h"
 
 namespace oslam {
