@@ -8,7 +8,7 @@
 #include "core/error.h"
 #include "core/run_folder.h"
 #include "omap/map_metrics.h"
-#include "omap/omap.h"
+#include "omap/omap_json.h"
 
 namespace oslam {
 

@@ -10,7 +10,8 @@
 #include "core/run_folder.h"
 #include "slam/geometric_slam.h"
 #include "pipeline/known_association.h"
-#include "slam/omap_json.h"
+#include "omap/omap_json.h"
+#include "slam/slam_omap.h"
 
 namespace oslam {
 
@@ -64,9 +65,10 @@ int RunMapCommand(const std::vector<std::string>& args) {
   GeometricSlam slam(*camera, options);
   const GeometricSlamResult result = slam.Solve(input.problem);
 
-  OMapSource source{run_dir, "known (ground truth)", input_options.pixel_noise_px,
+  OMapSource source{run_dir, "known (ground truth)", std::nullopt, input_options.pixel_noise_px,
                     input_options.seed};
-  WriteOMap(arguments.Get("output"), result, input.class_names, source);
+  const OMap map = ToOMap(result, input.class_names, source);
+  WriteOMap(arguments.Get("output"), map);
   const bool quiet = arguments.Flag("quiet");
   if (!quiet) {
     const SolverSummary& s = result.summary;

@@ -22,8 +22,9 @@
 #include "detect/blob_detector.h"
 #include "association/nn_baseline.h"
 #include "omap/omap_evaluation.h"
+#include "omap/omap_json.h"
 #include "association/omap_fusion.h"
-#include "association/sampled_omap_json.h"
+#include "association/sampled_omap.h"
 #include "association/sampler.h"
 #include "association/slam_target.h"
 #include "association/tracks.h"
@@ -164,7 +165,7 @@ int RunSlamCommand(const std::vector<std::string>& args) {
 
   auto factory = [&] { return std::make_unique<SlamEvaluator>(input.data, model, target_options); };
   SamplerResult result;
-  SampledOMapSource source{arguments.Get("RUN_DIR"), arguments.Get("detections"), "", 0};
+  OMapSource source{arguments.Get("RUN_DIR"), "", arguments.Get("detections"), std::nullopt, 0};
   const AssociationState start = SeparateTracksState(track_class);
   const auto clock = std::chrono::steady_clock::now();
   if (arguments.Has("baseline")) {
@@ -191,8 +192,8 @@ int RunSlamCommand(const std::vector<std::string>& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   const FusionResult fused =
       FuseSamples(result.samples, input.data.classes, track_detections, fusion_options);
-  WriteSampledOMap(arguments.Get("output"), fused, source,
-                   arguments.Has("baseline") ? nullptr : &result.summary);
+  WriteOMap(arguments.Get("output"),
+            ToOMap(fused, source, arguments.Has("baseline") ? nullptr : &result.summary));
   if (quiet) return 0;
   if (!arguments.Has("baseline")) PrintReport(result);
   int above = 0;
