@@ -21,7 +21,7 @@
 #include "core/run_folder.h"
 #include "detect/blob_detector.h"
 #include "association/nn_baseline.h"
-#include "omap/omap_evaluation.h"
+#include "omap/evaluation.h"
 #include "omap/omap_json.h"
 #include "association/omap_fusion.h"
 #include "association/sampled_omap.h"
@@ -203,13 +203,14 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   std::printf("%zu map objects (from %zu sample identities), %d with pi > 0.5; %.2f s\n",
               fused.map.objects.size(), members, above, seconds);
   if (const auto truth = ReadGroundTruth(arguments.Get("RUN_DIR"))) {
-    const OMapScore s = ScoreOMap(fused.map, input.odometry, *truth);
+    const MapMetrics s = EvaluateMap(fused.map, input.odometry, *truth);
     std::printf(
         "vs ground truth: ATE %.3f m (odometry %.3f m); found %d/%d at pi > 0.5, "
-        "spurious %d; class correct %d/%d; position median %.3f m, max %.3f m\n",
-        s.trajectory_rmse_m, s.odometry_rmse_m, s.found, s.true_objects, s.spurious,
-        s.class_correct, s.found, s.position_median_m, s.position_max_m);
-    for (const std::string& name : s.missed) std::printf("  missed: %s\n", name.c_str());
+        "spurious %d; class correct %d/%d; horizontal position median %.3f m, max %.3f m\n",
+        s.estimate.ate_rmse_m, s.odometry.ate_rmse_m, s.true_objects_found, s.true_objects_total,
+        s.spurious_objects, s.class_correct, s.true_objects_found,
+        s.object_horizontal_error_median_m, s.object_horizontal_error_max_m);
+    for (const std::string& name : s.missed_classes) std::printf("  missed: %s\n", name.c_str());
   }
   std::printf("wrote %s\n", arguments.Get("output").c_str());
   return 0;
