@@ -90,9 +90,9 @@ int RunMapCommand(const std::vector<std::string>& args) {
                   result.evidence.squared_residual, result.evidence.log_det_information);
     MapMetricsOptions by_id;  // the map keeps the true object ids
     by_id.matching = ObjectMatching::kById;
-    const MapMetrics errors = EvaluateMap(
-        map, ComposeOdometry(input.problem.first_pose, input.problem.increments), input.truth,
-        by_id);
+    const MapMetrics errors =
+        EvaluateMap(map, ComposeOdometry(input.problem.first_pose, input.problem.increments),
+                    input.truth, by_id);
     std::printf(
         "vs ground truth: ATE %.3f m (odometry %.3f m); object position median %.3f m, "
         "max %.3f m; |diameter| %.3f m, |height| %.3f m (means)\n",

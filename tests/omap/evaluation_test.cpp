@@ -104,7 +104,7 @@ TEST(EvaluateMap, CountsFoundSpuriousAndErrors) {
   EXPECT_NEAR(m.estimate.ate_rmse_m, std::sqrt(0.01 / 3), 1e-12);
   EXPECT_NEAR(m.odometry.ate_rmse_m, std::sqrt((0.01 + 0.01 + 0.04) / 3), 1e-12);
   EXPECT_GT(m.estimate.rpe_translation_rmse_m, 0.0);
-  // The JSON has the keys issue 9 names.
+  // eval.json has the keys its readers rely on.
   const std::string json = m.Json();
   for (const char* key : {"ate_rmse_m", "odometry_ate_rmse_m", "object_position_error_median_m",
                           "diameter_error_mean_m", "height_error_mean_m", "class_accuracy",
