@@ -52,8 +52,9 @@ struct OMapSource {
   // The detections file given to O-SLAM ("" = the run folder's); absent for
   // maps made from other input.
   std::optional<std::string> detections;
-  // Noise added to the true detections (known association); absent when
-  // nothing was added, NaN when it does not apply.
+  // Noise added to the simulator's true detections (known association);
+  // absent for maps made from real detections, NaN when it does not apply
+  // (landmark data sets).
   std::optional<double> pixel_noise_px;
   unsigned long seed = 0;
 };
