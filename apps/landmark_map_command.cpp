@@ -17,7 +17,8 @@
 #include "pipeline/landmark_association.h"
 #include "slam/landmark_data.h"
 #include "slam/landmark_slam.h"
-#include "slam/omap_json.h"
+#include "omap/omap_json.h"
+#include "slam/slam_omap.h"
 
 namespace oslam {
 
@@ -108,8 +109,8 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
                     "unknown (O-SLAM hill climbing" +
                         std::string(options.samples > 0 ? " + MC3" : "") + ", seed " +
                         arguments.Get("seed") + ")",
-                    std::nan(""), 0};
-  WriteOMap(output, LandmarkResultAsOMap(solution), {arguments.Get("class")}, source);
+                    std::nullopt, std::nan(""), 0};
+  WriteOMap(output, ToOMap(solution, arguments.Get("class"), source));
   WriteTextFileAtomically(trajectory_path, TrajectoryCsv(data, solution));
   if (arguments.Has("association-out")) {
     std::ostringstream out;  // the --association format: one id per sighting
@@ -315,8 +316,8 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
       arguments.Has("trajectory")
           ? arguments.Get("trajectory")
           : (std::filesystem::path(output).parent_path() / "trajectory.csv").string();
-  OMapSource source{data.path, association_source, std::nan(""), 0};
-  WriteOMap(output, LandmarkResultAsOMap(result), {arguments.Get("class")}, source);
+  OMapSource source{data.path, association_source, std::nullopt, std::nan(""), 0};
+  WriteOMap(output, ToOMap(result, arguments.Get("class"), source));
   WriteTextFileAtomically(trajectory_path, TrajectoryCsv(data, result));
 
   if (!arguments.Flag("quiet")) {

@@ -21,9 +21,10 @@
 #include "core/run_folder.h"
 #include "detect/blob_detector.h"
 #include "association/nn_baseline.h"
-#include "omap/omap_evaluation.h"
+#include "omap/evaluation.h"
+#include "omap/omap_json.h"
 #include "association/omap_fusion.h"
-#include "association/sampled_omap_json.h"
+#include "association/sampled_omap.h"
 #include "association/sampler.h"
 #include "association/slam_target.h"
 #include "association/tracks.h"
@@ -164,7 +165,7 @@ int RunSlamCommand(const std::vector<std::string>& args) {
 
   auto factory = [&] { return std::make_unique<SlamEvaluator>(input.data, model, target_options); };
   SamplerResult result;
-  SampledOMapSource source{arguments.Get("RUN_DIR"), arguments.Get("detections"), "", 0};
+  OMapSource source{arguments.Get("RUN_DIR"), "", arguments.Get("detections"), std::nullopt, 0};
   const AssociationState start = SeparateTracksState(track_class);
   const auto clock = std::chrono::steady_clock::now();
   if (arguments.Has("baseline")) {
@@ -191,8 +192,8 @@ int RunSlamCommand(const std::vector<std::string>& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   const FusionResult fused =
       FuseSamples(result.samples, input.data.classes, track_detections, fusion_options);
-  WriteSampledOMap(arguments.Get("output"), fused, source,
-                   arguments.Has("baseline") ? nullptr : &result.summary);
+  WriteOMap(arguments.Get("output"),
+            ToOMap(fused, source, arguments.Has("baseline") ? nullptr : &result.summary));
   if (quiet) return 0;
   if (!arguments.Has("baseline")) PrintReport(result);
   int above = 0;
@@ -202,13 +203,14 @@ int RunSlamCommand(const std::vector<std::string>& args) {
   std::printf("%zu map objects (from %zu sample identities), %d with pi > 0.5; %.2f s\n",
               fused.map.objects.size(), members, above, seconds);
   if (const auto truth = ReadGroundTruth(arguments.Get("RUN_DIR"))) {
-    const OMapScore s = ScoreOMap(fused.map, input.odometry, *truth);
+    const MapMetrics s = EvaluateMap(fused.map, input.odometry, *truth);
     std::printf(
         "vs ground truth: ATE %.3f m (odometry %.3f m); found %d/%d at pi > 0.5, "
-        "spurious %d; class correct %d/%d; position median %.3f m, max %.3f m\n",
-        s.trajectory_rmse_m, s.odometry_rmse_m, s.found, s.true_objects, s.spurious,
-        s.class_correct, s.found, s.position_median_m, s.position_max_m);
-    for (const std::string& name : s.missed) std::printf("  missed: %s\n", name.c_str());
+        "spurious %d; class correct %d/%d; horizontal position median %.3f m, max %.3f m\n",
+        s.estimate.ate_rmse_m, s.odometry.ate_rmse_m, s.true_objects_found, s.true_objects_total,
+        s.spurious_objects, s.class_correct, s.true_objects_found,
+        s.object_horizontal_error_median_m, s.object_horizontal_error_max_m);
+    for (const std::string& name : s.missed_classes) std::printf("  missed: %s\n", name.c_str());
   }
   std::printf("wrote %s\n", arguments.Get("output").c_str());
   return 0;
