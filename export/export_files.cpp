@@ -6,12 +6,14 @@
 #include <sstream>
 
 #include "calib/camera_io.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "export/gltf_writer.h"
 #include "export/overlay.h"
 #include "export/ply_writer.h"
+#include "export/tum_writer.h"
 
 namespace oslam {
 
@@ -56,18 +58,32 @@ void CreateOutputFolder(const fs::path& out) {
 
 void WriteModels(const ExportScene& scene, const ExportOptions& options, const fs::path& out,
                  bool ascii_ply, bool quiet) {
-  Progress progress("models", 4, "files", quiet);
-  WriteGltf(scene, options, (out / "map.glb").string());
-  progress.Update(1);
-  WriteGltf(scene, options, (out / "map.gltf").string());
-  progress.Update(2);
+  std::string why;
+  if (!options.Validate(&why)) throw Error("export: " + why);
+  const DisplayScene display = BuildDisplayScene(scene, options);
   const PlyEncoding encoding = ascii_ply ? PlyEncoding::kAscii : PlyEncoding::kBinary;
-  WritePlyMesh(scene, options, (out / "map.ply").string(), encoding);
-  progress.Update(3);
-  if (!SceneTrajectories(scene).empty())
-    WritePlyTrajectories(scene, (out / "trajectory.ply").string(), encoding);
-  progress.Update(4);
-  progress.Done("map.glb, map.gltf, map.ply, trajectory.ply");
+  std::vector<std::pair<std::string, std::string>> files = {
+      {"map.glb", GltfBytes(display, options, true)},
+      {"map.gltf", GltfBytes(display, options, false)},
+      {"map.ply", PlyMeshBytes(display, encoding)}};
+  if (std::string trajectories = PlyTrajectoryBytes(display, scene, encoding);
+      !trajectories.empty())
+    files.emplace_back("trajectory.ply", std::move(trajectories));
+  // TUM files for evo (docs/export.md).
+  if (!scene.map.trajectory.empty())
+    files.emplace_back("trajectory_estimated.txt", TumTrajectory(scene.map.trajectory));
+  if (!scene.odometry.empty())
+    files.emplace_back("trajectory_odometry.txt", TumTrajectory(scene.odometry));
+  if (!scene.ground_truth.empty())
+    files.emplace_back("trajectory_truth.txt", TumTrajectory(scene.ground_truth));
+  Progress progress("models", files.size(), "files", quiet);
+  std::string names;
+  for (size_t i = 0; i < files.size(); ++i) {
+    WriteFileAtomically((out / files[i].first).string(), files[i].second);
+    names += (i ? ", " : "") + files[i].first;
+    progress.Update(i + 1);
+  }
+  progress.Done(names);
 }
 
 std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOptions& options,

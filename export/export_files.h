@@ -28,7 +28,9 @@ std::vector<long> ParseFrameList(const std::string& text, long frame_count);
 // Creates `out` (and parents); throws oslam::Error naming it when it cannot.
 void CreateOutputFolder(const std::filesystem::path& out);
 
-// map.glb, map.gltf, map.ply and (when there are trajectories) trajectory.ply.
+// map.glb, map.gltf, map.ply and, for the trajectories there are,
+// trajectory.ply and the TUM files trajectory_estimated.txt,
+// trajectory_odometry.txt and trajectory_truth.txt (docs/export.md).
 void WriteModels(const ExportScene& scene, const ExportOptions& options,
                  const std::filesystem::path& out, bool ascii_ply, bool quiet);
 

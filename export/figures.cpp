@@ -11,8 +11,8 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "export/cylinder_mesh.h"
 #include "export/raster.h"
+#include "export/shape_mesh.h"
 
 namespace oslam {
 namespace {
@@ -177,7 +177,8 @@ cv::Scalar Shade(const Rgb& rgb, const Eigen::Vector3d& normal) {
 // a painter's sort of a few thousand faces.
 void AppendObjectFaces(const OMapObject& object, const Rgb& rgb, int segments,
                        const ViewCamera& camera, std::vector<Face>* faces) {
-  const TriangleMesh mesh = CylinderMesh(object.diameter_m, object.height_m, segments);
+  const ShadedMesh mesh =
+      Shade(ShapeMesh(ObjectShape::kCylinder, object.diameter_m, object.height_m, segments));
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     Face face;
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();

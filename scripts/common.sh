@@ -12,7 +12,7 @@ OSLAM_CMAKE_EXTRA=()  # extra cmake arguments for the first configure
 OSLAM_PACKAGES=(
   g++ make cmake pkg-config
   libeigen3-dev libopencv-dev libsuitesparse-dev
-  libtinygltf-dev libstb-dev nlohmann-json3-dev libpcl-dev libvtk9-dev
+  libtinygltf-dev libstb-dev nlohmann-json3-dev libvtk9-dev
   libgtest-dev libbenchmark-dev
   # CHOLMOD's supernodal kernels run on the system BLAS. Debian otherwise
   # picks ATLAS's generic build, which takes about twice as long per
