@@ -92,7 +92,14 @@ std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOpti
   std::vector<std::string> written = {"birdseye.png", "perspective.png"};
   WritePng(RenderBirdsEye(scene, options), (out / written[0]).string());
   progress.Update(1);
-  WritePng(RenderPerspective(scene, options), (out / written[1]).string());
+  // Without an EGL driver there is no off-screen OpenGL: the other files are
+  // still worth having.
+  try {
+    WritePng(RenderPerspective(scene, options), (out / written[1]).string());
+  } catch (const Error& e) {
+    std::fprintf(stderr, "warning: perspective.png not written: %s\n", e.what());
+    written.erase(written.begin() + 1);
+  }
   progress.Update(2);
   std::string note;
   if (scene.ground_truth.empty()) {
@@ -101,7 +108,7 @@ std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOpti
     FigureOptions plot = options;
     plot.height_px = std::max(200, options.height_px / 2);
     written.push_back("trajectories.png");
-    WritePng(PlotTrajectoryErrors(scene, plot), (out / written[2]).string());
+    WritePng(PlotTrajectoryErrors(scene, plot), (out / written.back()).string());
   }
   progress.Update(3);
   progress.Done("birdseye.png, perspective.png, trajectories.png" + note);

@@ -12,7 +12,6 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "export/raster.h"
-#include "export/shape_mesh.h"
 
 namespace oslam {
 namespace {
@@ -124,88 +123,6 @@ void DrawCentreMarker(cv::Mat* image, cv::Point centre) {
   cv::fillConvexPoly(*image, triangle, cv::Scalar(0, 0, 220), cv::LINE_AA);
 }
 
-// ---------------------------------------------------------------- perspective
-
-// Pinhole camera looking at `target` from a direction given by azimuth and
-// elevation, far enough back that a sphere of `radius` fits the view.
-class ViewCamera {
- public:
-  ViewCamera(const Eigen::Vector3d& target, double radius, const FigureOptions& options,
-             cv::Size size) {
-    const double fov = 45.0 * M_PI / 180.0;
-    const Eigen::Vector3d direction(
-        std::cos(options.view_elevation_rad) * std::cos(options.view_azimuth_rad),
-        std::cos(options.view_elevation_rad) * std::sin(options.view_azimuth_rad),
-        std::sin(options.view_elevation_rad));
-    eye_ = target + direction * (radius / std::sin(0.5 * fov));
-    forward_ = (target - eye_).normalized();
-    right_ = forward_.cross(Eigen::Vector3d::UnitZ()).normalized();
-    up_ = right_.cross(forward_);
-    focal_ = 0.5 * std::min(size.width, size.height) / std::tan(0.5 * fov);
-    centre_ = {0.5 * size.width, 0.5 * size.height};
-  }
-  double Depth(const Eigen::Vector3d& p) const { return forward_.dot(p - eye_); }
-  cv::Point2d Project(const Eigen::Vector3d& p) const {
-    const Eigen::Vector3d d = p - eye_;
-    const double z = std::max(forward_.dot(d), 1e-3);
-    return {centre_.x + focal_ * right_.dot(d) / z, centre_.y - focal_ * up_.dot(d) / z};
-  }
-  const Eigen::Vector3d& eye() const { return eye_; }
-
- private:
-  Eigen::Vector3d eye_, forward_, right_, up_;
-  double focal_ = 1.0;
-  cv::Point2d centre_;
-};
-
-struct Face {
-  std::vector<Eigen::Vector3d> corners;
-  cv::Scalar colour;
-  double alpha = 1.0;
-  double depth = 0.0;
-};
-
-// Lambert shading from a fixed light over the viewer's shoulder, plus ambient,
-// so the cylinders read as solids.
-cv::Scalar Shade(const Rgb& rgb, const Eigen::Vector3d& normal) {
-  const Eigen::Vector3d light = Eigen::Vector3d(-0.4, -0.6, 0.7).normalized();
-  const double lambert = 0.5 + 0.5 * std::abs(normal.dot(light));  // double-sided
-  return Bgr(rgb) * lambert;
-}
-
-// Each triangle of the cylinder mesh is a face: simple, and small enough for
-// a painter's sort of a few thousand faces.
-void AppendObjectFaces(const OMapObject& object, const Rgb& rgb, int segments,
-                       const ViewCamera& camera, std::vector<Face>* faces) {
-  const ShadedMesh mesh =
-      Shade(ShapeMesh(ObjectShape::kCylinder, object.diameter_m, object.height_m, segments));
-  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    Face face;
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t v = mesh.indices[t + k];
-      face.corners.push_back(object.base_world + mesh.positions[v].cast<double>());
-      centroid += face.corners.back() / 3.0;
-      normal += mesh.normals[v].cast<double>();
-    }
-    face.colour = Shade(rgb, normal.normalized());
-    face.alpha = object.existence_probability;
-    face.depth = camera.Depth(centroid);
-    faces->push_back(face);
-  }
-}
-
-void DrawFloorLines(cv::Mat* image, const ViewCamera& camera, const Eigen::Vector4d& extent) {
-  const double x0 = std::floor(extent[0]), y0 = std::floor(extent[1]);
-  const double x1 = std::ceil(extent[2]), y1 = std::ceil(extent[3]);
-  auto segment = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    cv::line(*image, Rounded(camera.Project(a)), Rounded(camera.Project(b)), kGrid, 2, cv::LINE_AA);
-  };
-  for (double x = x0; x <= x1 + 1e-9; x += 1.0) segment({x, y0, 0}, {x, y1, 0});
-  for (double y = y0; y <= y1 + 1e-9; y += 1.0) segment({x0, y, 0}, {x1, y, 0});
-}
-
 // ---------------------------------------------------------------- plot
 
 // A "nice" tick step (1, 2 or 5 times a power of ten) giving about `ticks` ticks.
@@ -279,57 +196,6 @@ cv::Mat RenderBirdsEye(const ExportScene& scene, const FigureOptions& options) {
   DrawLegend(&image, trajectories, /*dotted_estimate=*/true);
   DrawScaleBar(&image, to_image.scale());
   return image;
-}
-
-cv::Mat RenderPerspective(const ExportScene& scene, const FigureOptions& options) {
-  // Drawn at twice the size and reduced: polygons are filled without
-  // anti-aliasing (AA edges would leave seams between blended faces).
-  constexpr int kSupersample = 2;
-  const cv::Size size(options.width_px * kSupersample, options.height_px * kSupersample);
-  cv::Mat image(size, CV_8UC3, kWhite);
-  const Eigen::Vector4d extent = FloorExtent(scene, options.min_existence, 0.5);
-  const std::vector<const OMapObject*> objects = ShownObjects(scene.map, options.min_existence);
-  double top = 0.0;
-  for (const OMapObject* object : objects)
-    top = std::max(top, object->base_world.z() + object->height_m);
-  const Eigen::Vector3d target(0.5 * (extent[0] + extent[2]), 0.5 * (extent[1] + extent[3]),
-                               0.5 * top);
-  const double radius =
-      0.5 * Eigen::Vector3d(extent[2] - extent[0], extent[3] - extent[1], top).norm();
-  const ViewCamera camera(target, radius, options, size);
-
-  DrawFloorLines(&image, camera, extent);
-  // Reference trajectories first, the estimate on top.
-  const std::vector<NamedTrajectory> trajectories = SceneTrajectories(scene);
-  for (auto it = trajectories.rbegin(); it != trajectories.rend(); ++it) {
-    std::vector<cv::Point> line;
-    for (const Pose2& pose : it->poses)
-      line.push_back(Rounded(camera.Project({pose.x, pose.y, 0.0})));
-    cv::polylines(image, line, false, Bgr(it->rgb), kSupersample, cv::LINE_AA);
-  }
-  std::vector<Face> faces;
-  for (const OMapObject* object : objects)
-    AppendObjectFaces(*object, ClassColour(scene.classes, object->class_name),
-                      options.cylinder_segments, camera, &faces);
-  // Far to near; ties (shared depths) keep mesh order for determinism.
-  std::stable_sort(faces.begin(), faces.end(),
-                   [](const Face& a, const Face& b) { return a.depth > b.depth; });
-  for (const Face& face : faces) {
-    std::vector<cv::Point> polygon;
-    for (const Eigen::Vector3d& corner : face.corners)
-      polygon.push_back(Rounded(camera.Project(corner)));
-    BlendPolygon(&image, polygon, face.colour, face.alpha);
-  }
-  cv::Mat reduced;
-  cv::resize(image, reduced, cv::Size(options.width_px, options.height_px), 0, 0, cv::INTER_AREA);
-  for (const OMapObject* object : objects) {
-    const cv::Point2d tip =
-        camera.Project(object->base_world + Eigen::Vector3d(0, 0, object->height_m));
-    DrawLabel(&reduced, object->class_name,
-              Rounded(tip * (1.0 / kSupersample)) + cv::Point(-10, -6), kBlack, 0.35);
-  }
-  DrawLegend(&reduced, SceneTrajectories(scene), /*dotted_estimate=*/false);
-  return reduced;
 }
 
 cv::Mat PlotTrajectoryErrors(const ExportScene& scene, const FigureOptions& options) {

@@ -2,9 +2,8 @@
 // are deterministic and golden-testable):
 //  - bird's-eye view (thesis figs. 6.3b, 6.10): objects as discs in class
 //    colour with opacity pi, class labels, trajectories, metric grid, scale;
-//  - perspective view (figs. 6.3a, 6.7a): the cylinders on a floor grid, by a
-//    small painter's-algorithm rasteriser (Debian's VTK 9.1 renders only
-//    through an X display, see docs/export.md);
+//  - perspective view (figs. 6.3a, 6.7a): the 3D scene rendered off-screen
+//    by VTK (export/vtk_view.h), objects in their class shapes;
 //  - trajectory comparison (figs. 6.4a, 6.18a as errors): position error per
 //    frame of the estimate and of odometry against ground truth.
 #pragma once

@@ -18,17 +18,6 @@ void BlendInRegion(cv::Mat* image, cv::Rect roi, double alpha,
   cv::addWeighted(layer, std::min(alpha, 1.0), target, 1.0 - std::min(alpha, 1.0), 0.0, target);
 }
 
-void BlendPolygon(cv::Mat* image, const std::vector<cv::Point>& points, const cv::Scalar& colour,
-                  double alpha) {
-  if (points.size() < 3) return;
-  const cv::Rect box = cv::boundingRect(points);
-  BlendInRegion(image, box, alpha, [&](cv::Mat* region) {
-    std::vector<cv::Point> local;
-    for (const cv::Point& p : points) local.push_back(p - box.tl());
-    cv::fillConvexPoly(*region, local, colour, cv::LINE_8);
-  });
-}
-
 void BlendDisc(cv::Mat* image, cv::Point centre, int radius, const cv::Scalar& colour, double alpha,
                int outline_thickness) {
   const int r = std::max(radius, 1);

@@ -23,9 +23,7 @@ inline cv::Scalar Bgr(const Rgb& rgb) {
 void BlendInRegion(cv::Mat* image, cv::Rect roi, double alpha,
                    const std::function<void(cv::Mat* region)>& draw);
 
-// Filled convex polygon / disc, blended with `alpha`.
-void BlendPolygon(cv::Mat* image, const std::vector<cv::Point>& points, const cv::Scalar& colour,
-                  double alpha);
+// Filled disc, blended with `alpha`.
 void BlendDisc(cv::Mat* image, cv::Point centre, int radius, const cv::Scalar& colour, double alpha,
                int outline_thickness = 1);
 

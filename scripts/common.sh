@@ -14,6 +14,9 @@ OSLAM_PACKAGES=(
   libeigen3-dev libopencv-dev libsuitesparse-dev
   libtinygltf-dev libstb-dev nlohmann-json3-dev libvtk9-dev
   libgtest-dev libbenchmark-dev
+  # Off-screen rendering of the 3D views (perspective.png, oslam view
+  # --screenshot) without an X display: Mesa's EGL and its software renderer.
+  libegl-dev libegl-mesa0 libgl1-mesa-dri
   # CHOLMOD's supernodal kernels run on the system BLAS. Debian otherwise
   # picks ATLAS's generic build, which takes about twice as long per
   # LPA-scale factorisation. The threaded OpenBLAS, which the solver limits to one

@@ -35,7 +35,10 @@ TEST(Golden, BirdsEye) {
 }
 
 TEST(Golden, Perspective) {
-  ExpectMatchesGolden(RenderPerspective(testing::FixtureScene(), SmallFigure()), "perspective.png");
+  FigureOptions options = SmallFigure();
+  options.width_px = 480;
+  options.height_px = 360;
+  ExpectMatchesGolden(RenderPerspective(testing::FixtureScene(), options), "perspective.png");
 }
 
 TEST(Golden, TrajectoryErrors) {
