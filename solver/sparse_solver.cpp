@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <mutex>
 #include <numeric>
 
 #include <cstdint>
@@ -12,9 +11,9 @@
 #include <cstring>
 
 #include <cholmod.h>
-#include <dlfcn.h>
-#include <omp.h>
 #include <SuiteSparseQR.hpp>
+
+#include "solver/serial_openmp.h"
 
 namespace oslam {
 
@@ -58,73 +57,7 @@ double LogDetOfFactor(const cholmod_factor* factor) {
   return log_det;
 }
 
-// CHOLMOD's supernodal code opens OpenMP regions of a fixed four threads for
-// its copies and clears. At our sizes a region costs more in thread hand-offs
-// than its work, and O-SLAM's chains already occupy every core (long_loop:
-// 2.5 M futex calls, a third of the run). Inside the solver, OpenMP regions
-// run on the calling thread; the setting is per thread (OpenMP 5 data
-// environment) and restored on exit, so nothing outside the solver changes.
-// The depth counter lets GOMP_parallel (below) skip libgomp altogether.
-thread_local int serial_openmp_depth = 0;
-
-class SerialOpenMpScope {
- public:
-  SerialOpenMpScope() : saved_levels_(omp_get_max_active_levels()) {
-    omp_set_max_active_levels(0);
-    ++serial_openmp_depth;
-  }
-  ~SerialOpenMpScope() {
-    --serial_openmp_depth;
-    omp_set_max_active_levels(saved_levels_);
-  }
-  SerialOpenMpScope(const SerialOpenMpScope&) = delete;
-  SerialOpenMpScope& operator=(const SerialOpenMpScope&) = delete;
-
- private:
-  int saved_levels_;
-};
-
-// CHOLMOD's dense kernels run on the system BLAS. A threaded BLAS splits
-// the larger supernodes over its own threads, so results would depend on
-// the machine's core count (summation order), and O-SLAM's chains already
-// occupy every core. OpenBLAS is therefore told, once per process, to run
-// on the calling thread; it is looked up by name, so any BLAS links. (Its
-// single-threaded build is not safe to call from two threads at once:
-// with it, long_loop's O-Map changed from run to run. The threaded build
-// limited to one thread is, and gives the same results as one chain thread.)
-void UseOneBlasThread() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    using SetNumThreads = void (*)(int);
-    if (auto set = reinterpret_cast<SetNumThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
-      set(1);
-  });
-}
-
 }  // namespace
-
-}  // namespace oslam
-
-// libgomp's entry point for `#pragma omp parallel`, interposed (the only
-// OpenMP entry point CHOLMOD uses; its loops are statically scheduled on
-// omp_get_num_threads / omp_get_thread_num). Even serialised, every region
-// of CHOLMOD's supernodal factorisation cost a futex system call in
-// libgomp's team hand-off: ~100 per LPA-scale factorisation, 163 k in 600
-// one-step proposals. Inside a SerialOpenMpScope and outside any OpenMP
-// region, the region's body runs directly on the calling thread, which is
-// what a team of one does (omp_get_num_threads() = 1, thread 0). Anything
-// else goes to libgomp.
-extern "C" void GOMP_parallel(void (*fn)(void*), void* data, unsigned num_threads, unsigned flags) {
-  using Real = void (*)(void (*)(void*), void*, unsigned, unsigned);
-  static const Real real = reinterpret_cast<Real>(dlvsym(RTLD_NEXT, "GOMP_parallel", "GOMP_4.0"));
-  if ((oslam::serial_openmp_depth > 0 && omp_get_level() == 0) || !real) {
-    fn(data);
-    return;
-  }
-  real(fn, data, num_threads, flags);
-}
-
-namespace oslam {
 
 const char* TerminationName(TerminationType type) {
   switch (type) {
@@ -263,11 +196,10 @@ struct SparseSolver::Impl {
     cc.print = 0;
     cc.error_handler = nullptr;
     // Amalgamate supernodes a little more than CHOLMOD's default (4/16/48
-    // columns, 0.8/0.1/0.05 zeros): each supernode costs OpenMP regions (a
-    // futex wake each even when serialised, see SerialOpenMpScope) and small
-    // BLAS calls. At LPA scale the pose chain's supernodes go from 61 to 33;
-    // one O-SLAM proposal: -2 % instructions, half the kernel time, -6 %
-    // cycles. More (16/32/64: 19 supernodes) adds more zeros than it saves.
+    // columns, 0.8/0.1/0.05 zeros): each supernode costs OpenMP regions (see
+    // serial_openmp.h) and small BLAS calls. At LPA scale the pose chain's supernodes go from 61 to
+    // 33; one O-SLAM proposal: -2 % instructions, half the kernel time, -6 % cycles. More
+    // (16/32/64: 19 supernodes) adds more zeros than it saves.
     cc.nrelax[0] = 8;
     cc.nrelax[1] = 24;
     cc.zrelax[1] = 0.2;
