@@ -13,6 +13,7 @@
 #include <cholmod.h>
 #include <SuiteSparseQR.hpp>
 
+#include "solver/levenberg_marquardt.h"
 #include "solver/serial_openmp.h"
 
 namespace oslam {
@@ -26,9 +27,6 @@ constexpr int kMetisMinBlocks = 2000;
 // Problems whose variable counts differ by at most this many are "similar"
 // for the choice of ordering kind.
 constexpr int kSimilarProblemBlocks = 8;
-// Gain ratio above which an accepted LM step is stretched by a line search
-// (SolverOptions::max_step_extrapolation).
-constexpr double kStretchMinGainRatio = 1.25;
 
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
@@ -958,8 +956,7 @@ struct SparseSolver::Impl {
   bool Factorize(double lambda, const SolverOptions& options) {
     auto* x = static_cast<double*>(hessian->x);
     for (int c = 0; c < n; ++c)
-      x[diagonal_position[c]] = diagonal[c] + lambda * std::clamp(diagonal[c], options.min_diagonal,
-                                                                  options.max_diagonal);
+      x[diagonal_position[c]] = diagonal[c] + lambda * DampingScale(diagonal[c], options);
     auto* px = static_cast<double*>(permuted->x);
     const int hnz = static_cast<const int*>(hessian->p)[n];
     for (int k = 0; k < hnz; ++k) px[permuted_entry[k]] = x[k];
@@ -1017,8 +1014,7 @@ struct SparseSolver::Impl {
       for (int c = 0; c < n; ++c) {
         ti[k] = m + c;
         tj[k] = c;
-        tx[k++] =
-            std::sqrt(lambda * std::clamp(diagonal[c], options.min_diagonal, options.max_diagonal));
+        tx[k++] = std::sqrt(lambda * DampingScale(diagonal[c], options));
       }
     triplet->nnz = k;
     cholmod_sparse* a = cholmod_l_triplet_to_sparse(triplet, k, &cc_long);
@@ -1072,6 +1068,15 @@ struct SparseSolver::Impl {
     cholmod_l_free_dense(&b, &cc_long);
     return ok;
   }
+
+  // `from` moved by `step` (entries of delta) into `to`.
+  void Retract(const Values& from, const Eigen::VectorXd& step, Values* to) const {
+    *to = from;
+    for (size_t key = 0; key < free_index.size(); ++key) {
+      const int v = free_index[key];
+      if (v >= 0) to->Retract(static_cast<int>(key), step.data() + offsets[v]);
+    }
+  }
 };
 
 // ---------------------------------------------------------------------------
@@ -1122,7 +1127,6 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   summary.ordering = impl.ordering_used;
   summary.num_residuals = impl.m;
   summary.num_parameters = impl.n;
-  const int num_keys = graph->num_variables();
   const bool use_qr = options_.linear_solver == LinearSolverType::kSparseQR;
 
   Values& values = graph->mutable_values();
@@ -1141,88 +1145,54 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
                   "image from a pose that saw it)");
   summary.initial_cost = summary.final_cost = cost;
 
-  // Line search beyond an accepted step (SolverOptions::max_step_extrapolation).
-  // The cost along t * delta is fitted by the parabola through f(0), its
-  // slope g'delta and f(t); where it bends less than J'J predicts (rho near
-  // 2: weakly observed objects sliding along their viewing rays, where GN
-  // converges only linearly), the parabola's minimum lies beyond t, and the
-  // step is stretched to it while that lowers the cost. On return `delta`,
-  // `trial`, impl.trial and `*trial_cost` describe the step taken; the count
-  // of stretches is returned.
+  // The line search beyond an accepted step (StepExtrapolation). On return
+  // `step`, `trial`, impl.trial and `*trial_cost` describe the step taken;
+  // the count of stretches is returned.
   Values stretched_values;
   auto extrapolate = [&](double slope, Eigen::VectorXd* step, double* trial_cost) {
-    if (!(slope < 0.0)) return 0;
+    StepExtrapolation search(cost, slope, *trial_cost, options_.max_step_extrapolation);
     const auto& factors = graph->factors();
     if (impl.stretched.errors.size() != factors.size()) impl.stretched.Resize(factors.size());
     // Candidates are evaluated without Jacobians (most are rejected); the
     // point finally taken is evaluated once more with them.
     for (size_t f = 0; f < factors.size(); ++f)
       impl.stretched.errors[f].resize(impl.current.errors[f].size());
-    // Up to three extra evaluations per step: the parabola's minimum; if the
-    // cost rises there (the parabola fits the weak directions, while the
-    // well-determined ones, pose chains, were already right at t = 1), a
-    // third of the way back to t; after a success, the refitted minimum.
-    constexpr int kMaxEvaluations = 3;
-    double t = 1.0;
-    int stretches = 0;
-    double target = 0.0;  // the next t to try; 0: from the parabola
     Eigen::VectorXd scaled;
-    for (int evaluation = 0; evaluation < kMaxEvaluations; ++evaluation) {
-      if (target == 0.0) {
-        const double bend = (*trial_cost - cost - slope * t) / (t * t);
-        // A cost that falls faster than linearly: double.
-        target = bend > 0.0 ? -slope / (2.0 * bend) : 2.0 * t;
-        target = std::min(target, options_.max_step_extrapolation);
-      }
-      if (!(target > 1.5 * t)) break;
-      scaled = target * *step;
-      stretched_values = values;
-      for (int key = 0; key < num_keys; ++key) {
-        const int v = impl.free_index[key];
-        if (v >= 0) stretched_values.Retract(key, scaled.data() + impl.offsets[v]);
-      }
+    for (double multiple; search.Next(&multiple);) {
+      scaled = multiple * *step;
+      impl.Retract(values, scaled, &stretched_values);
       double stretched_cost = 0.0;
-      if (!impl.Evaluate(*graph, stretched_values, false, &impl.stretched, &stretched_cost) ||
-          !(stretched_cost < *trial_cost)) {
-        target = t + (target - t) / 3.0;
-        continue;
-      }
-      std::swap(trial, stretched_values);
-      *trial_cost = stretched_cost;
-      t = target;
-      target = 0.0;
-      ++stretches;
+      const bool evaluated =
+          impl.Evaluate(*graph, stretched_values, false, &impl.stretched, &stretched_cost);
+      if (search.Report(evaluated, stretched_cost)) std::swap(trial, stretched_values);
     }
-    if (stretches == 0) return 0;
+    if (search.stretches() == 0) return 0;
     double check = 0.0;
     if (!impl.Evaluate(*graph, trial, true, &impl.trial, &check)) {
       // Cannot happen where the cost could be evaluated; back to the LM step.
-      trial = values;
-      for (int key = 0; key < num_keys; ++key) {
-        const int v = impl.free_index[key];
-        if (v >= 0) trial.Retract(key, step->data() + impl.offsets[v]);
-      }
+      impl.Retract(values, *step, &trial);
       impl.Evaluate(*graph, trial, true, &impl.trial, trial_cost);
       return 0;
     }
     *trial_cost = check;
-    *step *= t;
-    return stretches;
+    *step *= search.multiple();
+    return search.stretches();
   };
 
-  double lambda = options_.initial_damping, nu = 2.0;
+  LevenbergMarquardtStrategy lm(options_);
   int extrapolations = 0;
   TerminationType termination = TerminationType::kMaxIterations;
   std::string message = "reached max_iterations";
   Eigen::VectorXd delta;
   while (true) {
-    if (impl.gradient.lpNorm<Eigen::Infinity>() <= options_.gradient_tolerance) {
+    if (lm.GradientConverged(impl.gradient)) {
       termination = TerminationType::kConverged;
       message = "gradient tolerance reached";
       break;
     }
     if (summary.iterations >= options_.max_iterations) break;
     ++summary.iterations;
+    const double lambda = lm.damping();
     const auto t_factor = Clock::now();
     bool solved;
     if (use_qr) {
@@ -1234,28 +1204,16 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
     bool accepted = false;
     double new_cost = 0.0, rho = 0.0;
     if (solved) {
-      // Model reduction of 1/2||e + J d||^2 for d solving (H + lambda D) d = -g.
-      double damping_term = 0.0;
-      for (int c = 0; c < impl.n; ++c)
-        damping_term += std::clamp(impl.diagonal[c], options_.min_diagonal, options_.max_diagonal) *
-                        delta[c] * delta[c];
-      const double predicted = -0.5 * impl.gradient.dot(delta) + 0.5 * lambda * damping_term;
-      trial = values;
-      for (int key = 0; key < num_keys; ++key) {
-        const int v = impl.free_index[key];
-        if (v >= 0) trial.Retract(key, delta.data() + impl.offsets[v]);
-      }
+      const double predicted = lm.PredictedDecrease(impl.gradient, impl.diagonal, delta);
+      impl.Retract(values, delta, &trial);
       const auto t_cost = Clock::now();
       const bool evaluated = impl.Evaluate(*graph, trial, true, &impl.trial, &new_cost);
       summary.linearize_time_s += Seconds(t_cost);
       if (evaluated && predicted > 0.0) {
         rho = (cost - new_cost) / predicted;
-        accepted = rho > options_.min_relative_decrease;
+        accepted = lm.Accepts(rho);
       }
-      // Only where the step gained clearly more than the model predicted:
-      // stretching ordinary steps too (rho ~ 1) made the 10k-pose solve from
-      // odometry worse (cost 0.93e6 vs 0.31e6 after 50 iterations).
-      if (accepted && options_.max_step_extrapolation > 1.0 && rho > kStretchMinGainRatio)
+      if (accepted && lm.Extrapolates(rho))
         extrapolations += extrapolate(impl.gradient.dot(delta), &delta, &new_cost);
     }
     if (trace) {
@@ -1268,46 +1226,31 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
                    solved ? delta.lpNorm<Eigen::Infinity>() : -1.0, long(where), impl.n,
                    accepted ? "ok" : "REJ", extrapolations);
     }
-    if (!accepted) {
-      lambda *= nu;
-      nu *= 2.0;
-      if (lambda > options_.max_damping) {
-        message = "no further decrease possible (damping limit)";
-        termination = TerminationType::kConverged;
-        break;
-      }
-      continue;
-    }
-    const auto t_assemble = Clock::now();
-    if (!impl.Assemble(impl.trial)) {
-      // Non-finite Jacobians at a point with a finite cost: treat as a failed step.
-      impl.Assemble(impl.current);
+    if (accepted) {
+      const auto t_assemble = Clock::now();
+      // Non-finite Jacobians at a point with a finite cost: a failed step.
+      accepted = impl.Assemble(impl.trial);
+      if (!accepted) impl.Assemble(impl.current);
       summary.linearize_time_s += Seconds(t_assemble);
-      lambda *= nu;
-      nu *= 2.0;
-      if (lambda > options_.max_damping) {
-        message = "no further decrease possible (damping limit)";
-        termination = TerminationType::kConverged;
-        break;
-      }
-      continue;
     }
-    summary.linearize_time_s += Seconds(t_assemble);
+    if (!accepted) {
+      if (lm.StepRejected()) continue;
+      message = "no further decrease possible (damping limit)";
+      termination = TerminationType::kConverged;
+      break;
+    }
     std::swap(values, trial);
     std::swap(impl.current, impl.trial);
     ++summary.successful_steps;
     const double old_cost = cost;
     cost = new_cost;
-    lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
-    lambda = std::max(lambda, 1e-15);
-    nu = 2.0;
-    if (delta.lpNorm<Eigen::Infinity>() <= options_.step_tolerance) {
+    lm.StepAccepted(rho);
+    if (lm.StepConverged(delta)) {
       termination = TerminationType::kConverged;
       message = "step tolerance reached";
       break;
     }
-    if (old_cost - cost <=
-        std::max(options_.function_tolerance * old_cost, options_.absolute_function_tolerance)) {
+    if (lm.CostConverged(old_cost, cost)) {
       termination = TerminationType::kConverged;
       message = "function tolerance reached";
       break;
@@ -1349,11 +1292,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
     evidence.log_evidence = -0.5 * evidence.squared_residual - 0.5 * evidence.log_det_noise -
                             0.5 * evidence.log_det_information + evidence.normaliser;
   if (have_step && options_.apply_final_step && termination != TerminationType::kFailure) {
-    trial = values;
-    for (int key = 0; key < num_keys; ++key) {
-      const int v = impl.free_index[key];
-      if (v >= 0) trial.Retract(key, delta.data() + impl.offsets[v]);
-    }
+    impl.Retract(values, delta, &trial);
     double new_cost = 0.0;
     if (impl.Evaluate(*graph, trial, false, &impl.trial, &new_cost) && new_cost <= cost) {
       std::swap(values, trial);
