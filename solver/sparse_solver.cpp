@@ -14,6 +14,7 @@
 #include <SuiteSparseQR.hpp>
 
 #include "solver/levenberg_marquardt.h"
+#include "solver/linearization.h"
 #include "solver/serial_openmp.h"
 
 namespace oslam {
@@ -131,29 +132,11 @@ struct SparseSolver::Impl {
   std::vector<int> free_index;  // per key: free variable index or -1
   std::vector<int> pair_begin;  // per factor, range into pairs
   std::vector<BlockPair> pairs;
+  Linearizer linearizer;
   // Errors and Jacobians of every factor at the current point, and at the
   // trial point of a step (swapped in when the step is accepted, so an
   // accepted step costs one evaluation, not two).
-  struct Evaluation {
-    std::vector<Eigen::VectorXd> errors;
-    std::vector<Eigen::MatrixXd> jacobians;
-    void Resize(size_t size) {
-      errors.resize(size);
-      jacobians.resize(size);
-    }
-  };
   Evaluation current, trial;
-  // A slot's last linearisation (SolverOptions::reuse_linearizations): the
-  // values of the factor's variables it was made at, its error and Jacobian.
-  struct KeptLinearization {
-    std::vector<double> at;
-    Eigen::VectorXd error;
-    Eigen::MatrixXd jacobian;
-    bool valid = false;
-  };
-  std::vector<KeptLinearization> kept;
-  bool reuse_linearizations = false;
-  int reused_linearizations = 0, computed_linearizations = 0;  // this solve's counts
   Evaluation stretched;  // a line search's candidate (SolverOptions::max_step_extrapolation)
   Eigen::MatrixXd local_hessian;    // scratch: J_f^T J_f
   Eigen::VectorXd local_gradient;   // scratch: J_f^T e_f
@@ -402,20 +385,14 @@ struct SparseSolver::Impl {
         columns.push_back(total);
         total += graph.values().Dim(key);
       }
-      // Resized only when the shape changes: Eigen's resize checks for
-      // overflow with an integer division, a real cost at 2,000 factors per
-      // proposal.
       if (total > kMaxFactorColumns) {
         *why = "a " + factors[f]->Name() + " factor has more than " +
                std::to_string(kMaxFactorColumns) + " Jacobian columns";
         return false;
       }
       const int rows = (f + 1 < factors.size() ? factor_row[f + 1] : m) - factor_row[f];
-      for (Evaluation* evaluation : {&current, &trial}) {
-        if (evaluation->errors[f].size() != rows) evaluation->errors[f].resize(rows);
-        Eigen::MatrixXd& jacobian = evaluation->jacobians[f];
-        if (jacobian.rows() != rows || jacobian.cols() != total) jacobian.resize(rows, total);
-      }
+      current.Shape(f, rows, total);
+      trial.Shape(f, rows, total);
       factor_columns[f] = total;
       max_columns = std::max(max_columns, total);
       for (size_t i = 0; i < keys.size(); ++i) {
@@ -799,84 +776,6 @@ struct SparseSolver::Impl {
     return true;
   }
 
-  // Errors (and Jacobians) of every factor at `values` into `out`;
-  // 1/2 sum ||e||^2 in `cost`. False when a factor cannot be evaluated.
-  bool Evaluate(const FactorGraph& graph, const Values& values, bool with_jacobians,
-                Evaluation* out, double* cost) {
-    double sum = 0.0;
-    const auto& factors = graph.factors();
-    const bool keep = with_jacobians && reuse_linearizations;
-    for (size_t f = 0; f < factors.size(); ++f) {
-      const Factor& factor = *factors[f];
-      const int slot = keep ? factor.linearization_slot() : -1;
-      if (slot >= 0 && Reuse(slot, factor, values, out->errors[f], &out->jacobians[f])) {
-        ++reused_linearizations;
-      } else {
-        if (!factor.Linearize(values, out->errors[f],
-                              with_jacobians ? &out->jacobians[f] : nullptr))
-          return false;
-        if (with_jacobians) ++computed_linearizations;
-        if (slot >= 0) Keep(slot, factor, values, out->errors[f], out->jacobians[f]);
-      }
-      sum += SquaredNorm(out->errors[f]);
-    }
-    *cost = 0.5 * sum;
-    return std::isfinite(*cost);
-  }
-
-  // Copies slot's kept linearisation into error and jacobian if it was made
-  // at the factor's current values (bitwise: the same inputs give the same
-  // outputs) and has their shapes.
-  bool Reuse(int slot, const Factor& factor, const Values& values, Eigen::VectorXd& error,
-             Eigen::MatrixXd* jacobian) const {
-    if (slot >= static_cast<int>(kept.size())) return false;
-    const KeptLinearization& entry = kept[slot];
-    if (!entry.valid || entry.error.size() != error.size() ||
-        entry.jacobian.rows() != jacobian->rows() || entry.jacobian.cols() != jacobian->cols())
-      return false;
-    size_t at = 0;
-    for (int key : factor.keys()) {
-      const size_t dim = static_cast<size_t>(values.Dim(key));
-      if (at + dim > entry.at.size() ||
-          std::memcmp(values.Data(key), entry.at.data() + at, dim * sizeof(double)) != 0)
-        return false;
-      at += dim;
-    }
-    if (at != entry.at.size()) return false;
-    error = entry.error;
-    *jacobian = entry.jacobian;
-    return true;
-  }
-
-  void Keep(int slot, const Factor& factor, const Values& values, const Eigen::VectorXd& error,
-            const Eigen::MatrixXd& jacobian) {
-    if (slot >= static_cast<int>(kept.size())) kept.resize(slot + 1);
-    KeptLinearization& entry = kept[slot];
-    entry.at.clear();
-    for (int key : factor.keys())
-      entry.at.insert(entry.at.end(), values.Data(key), values.Data(key) + values.Dim(key));
-    entry.error = error;
-    entry.jacobian = jacobian;
-    entry.valid = true;
-  }
-
-  // ||e||^2 with Eigen's fixed-size reduction for the common factor sizes:
-  // its dynamic-size one spends ~100 instructions per call on peeling and
-  // unrolling logic, twice per factor per proposal. Same packet order, so
-  // the same bits.
-  static double SquaredNorm(const Eigen::VectorXd& error) {
-    switch (error.size()) {
-      case 4:
-        return Eigen::Map<const Eigen::Vector4d>(error.data()).squaredNorm();
-      case 3:
-        return Eigen::Map<const Eigen::Vector3d>(error.data()).squaredNorm();
-      case 2:
-        return Eigen::Map<const Eigen::Vector2d>(error.data()).squaredNorm();
-      default:
-        return error.squaredNorm();
-    }
-  }
-
   // J^T J (into hessian), the gradient J^T e and the undamped diagonal from
   // an evaluation with Jacobians; false when they are not finite.
   bool Assemble(const Evaluation& evaluation) {
@@ -1088,12 +987,11 @@ SparseSolver::~SparseSolver() = default;
 void SparseSolver::ClearCache() {
   impl_->FreeStructure();
   impl_->compared_num_blocks = -1;
-  impl_->kept.clear();
+  impl_->linearizer.Clear();
 }
 
 void SparseSolver::ClearLinearizations() {
-  // Storage kept: the next linearisations refill it in place.
-  for (auto& entry : impl_->kept) entry.valid = false;
+  impl_->linearizer.Forget();
 }
 
 SolveResult SparseSolver::Solve(FactorGraph* graph) {
@@ -1102,12 +1000,12 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   SolveResult result;
   SolverSummary& summary = result.summary;
   Impl& impl = *impl_;
-  impl.reused_linearizations = impl.computed_linearizations = 0;
+  impl.linearizer.ResetCounts();
   auto finish = [&](TerminationType type, const std::string& message) {
     summary.termination = type;
     summary.message = message;
-    summary.reused_linearizations = impl.reused_linearizations;
-    summary.computed_linearizations = impl.computed_linearizations;
+    summary.reused_linearizations = impl.linearizer.reused();
+    summary.computed_linearizations = impl.linearizer.computed();
     summary.total_time_s = Seconds(start);
     return result;
   };
@@ -1119,7 +1017,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   double analyze_s = 0.0;
   impl.requested_ordering = options_.ordering;
   impl.independent_of_history = options_.independent_of_history;
-  impl.reuse_linearizations = options_.reuse_linearizations;
+  impl.linearizer.set_reuse(options_.reuse_linearizations);
   if (!impl.SetUp(*graph, options_.reuse_symbolic_analysis, &summary.reused_symbolic_analysis,
                   &analyze_s, &why))
     return finish(TerminationType::kFailure, why);
@@ -1136,8 +1034,8 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   // (a diagnostic for convergence work; off by default).
   const bool trace = std::getenv("OSLAM_SOLVER_TRACE") != nullptr;
   const auto t_first = Clock::now();
-  const bool first_ok =
-      impl.Evaluate(*graph, values, true, &impl.current, &cost) && impl.Assemble(impl.current);
+  const bool first_ok = impl.linearizer.Evaluate(*graph, values, true, &impl.current, &cost) &&
+                        impl.Assemble(impl.current);
   summary.linearize_time_s += Seconds(t_first);
   if (!first_ok)
     return finish(TerminationType::kFailure,
@@ -1162,16 +1060,16 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
       scaled = multiple * *step;
       impl.Retract(values, scaled, &stretched_values);
       double stretched_cost = 0.0;
-      const bool evaluated =
-          impl.Evaluate(*graph, stretched_values, false, &impl.stretched, &stretched_cost);
+      const bool evaluated = impl.linearizer.Evaluate(*graph, stretched_values, false,
+                                                      &impl.stretched, &stretched_cost);
       if (search.Report(evaluated, stretched_cost)) std::swap(trial, stretched_values);
     }
     if (search.stretches() == 0) return 0;
     double check = 0.0;
-    if (!impl.Evaluate(*graph, trial, true, &impl.trial, &check)) {
+    if (!impl.linearizer.Evaluate(*graph, trial, true, &impl.trial, &check)) {
       // Cannot happen where the cost could be evaluated; back to the LM step.
       impl.Retract(values, *step, &trial);
-      impl.Evaluate(*graph, trial, true, &impl.trial, trial_cost);
+      impl.linearizer.Evaluate(*graph, trial, true, &impl.trial, trial_cost);
       return 0;
     }
     *trial_cost = check;
@@ -1207,7 +1105,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
       const double predicted = lm.PredictedDecrease(impl.gradient, impl.diagonal, delta);
       impl.Retract(values, delta, &trial);
       const auto t_cost = Clock::now();
-      const bool evaluated = impl.Evaluate(*graph, trial, true, &impl.trial, &new_cost);
+      const bool evaluated = impl.linearizer.Evaluate(*graph, trial, true, &impl.trial, &new_cost);
       summary.linearize_time_s += Seconds(t_cost);
       if (evaluated && predicted > 0.0) {
         rho = (cost - new_cost) / predicted;
@@ -1271,7 +1169,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   for (const auto& factor : graph->factors()) evidence.log_det_noise += factor->LogDetCovariance();
   evidence.normaliser = 0.5 * (impl.n - impl.m) * kLog2Pi;
   bool have_step = false;
-  const Impl::Evaluation* at_final_values = &impl.current;  // errors at `values`
+  const Evaluation* at_final_values = &impl.current;  // errors at `values`
   if (use_qr) {
     double log_abs_det_r = 0.0;
     have_step = impl.SolveByQr(0.0, options_, &delta, &evidence.squared_residual,
@@ -1294,7 +1192,8 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   if (have_step && options_.apply_final_step && termination != TerminationType::kFailure) {
     impl.Retract(values, delta, &trial);
     double new_cost = 0.0;
-    if (impl.Evaluate(*graph, trial, false, &impl.trial, &new_cost) && new_cost <= cost) {
+    if (impl.linearizer.Evaluate(*graph, trial, false, &impl.trial, &new_cost) &&
+        new_cost <= cost) {
       std::swap(values, trial);
       at_final_values = &impl.trial;
       summary.final_cost = new_cost;
