@@ -1,51 +1,25 @@
 #include "solver/sparse_solver.h"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <utility>
 
-#include <cholmod.h>
-#include <SuiteSparseQR.hpp>
-
+#include "solver/evidence.h"
 #include "solver/levenberg_marquardt.h"
 #include "solver/linearization.h"
 #include "solver/normal_equations.h"
 #include "solver/serial_openmp.h"
+#include "solver/sparse_qr.h"
 
 namespace oslam {
 
 namespace {
 
-constexpr double kLog2Pi = 1.8378770664093454836;
-
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
-// log det of the matrix factored in L (LL' or LDL', simplicial or supernodal).
-double LogDetOfFactor(const cholmod_factor* factor) {
-  double log_det = 0.0;
-  const double* x = static_cast<const double*>(factor->x);
-  if (factor->is_super) {
-    const auto* super = static_cast<const int*>(factor->super);
-    const auto* pi = static_cast<const int*>(factor->pi);
-    const auto* px = static_cast<const int*>(factor->px);
-    for (size_t s = 0; s < factor->nsuper; ++s) {
-      const int columns = super[s + 1] - super[s];
-      const int rows = pi[s + 1] - pi[s];
-      for (int j = 0; j < columns; ++j)
-        log_det += 2.0 * std::log(std::abs(x[px[s] + j + j * rows]));
-    }
-  } else {
-    const auto* p = static_cast<const int*>(factor->p);
-    const double scale = factor->is_ll ? 2.0 : 1.0;  // LDL' keeps D on the diagonal
-    for (size_t j = 0; j < factor->n; ++j) log_det += scale * std::log(std::abs(x[p[j]]));
-  }
-  return log_det;
 }
 
 }  // namespace
@@ -86,7 +60,7 @@ bool SolverOptions::Validate(std::string* why) const {
 
 struct SparseSolver::Impl {
   NormalEquations normal;
-  cholmod_common cc_long;  // SPQR works with SuiteSparse_long indices
+  SparseQr qr;
   Linearizer linearizer;
   // Errors and Jacobians of every factor at the current point, and at the
   // trial point of a step (swapped in when the step is accepted, so an
@@ -94,111 +68,7 @@ struct SparseSolver::Impl {
   Evaluation current, trial;
   Evaluation stretched;  // a line search's candidate (SolverOptions::max_step_extrapolation)
 
-  Impl() {
-    UseOneBlasThread();
-    cholmod_l_start(&cc_long);
-    cc_long.print = 0;
-    cc_long.error_handler = nullptr;
-  }
-  ~Impl() { cholmod_l_finish(&cc_long); }
-
-  // Least-squares step by SPQR on [J; sqrt(lambda D)] delta = [-e; 0]. With
-  // lambda = 0 also returns ||r||^2 and sum log|r_ii| (spec §5.3).
-  bool SolveByQr(double lambda, const SolverOptions& options, Eigen::VectorXd* delta,
-                 double* squared_residual, double* log_abs_det_r) {
-    const ProblemLayout& layout = normal.layout();
-    const int m = layout.m, n = normal.pattern().n;
-    const std::vector<int>& factor_row = layout.factor_row;
-    const std::vector<int>& pair_begin = layout.pair_begin;
-    const std::vector<BlockPair>& pairs = layout.pairs;
-    const Eigen::VectorXd& diagonal = normal.diagonal();
-    const int rows = m + (lambda > 0 ? n : 0);
-    size_t nnz = 0;
-    const auto& jacobians = current.jacobians;
-    const auto& errors = current.errors;
-    for (const auto& jacobian : jacobians) nnz += jacobian.size();
-    cholmod_triplet* triplet =
-        cholmod_l_allocate_triplet(rows, n, nnz + n, 0, CHOLMOD_REAL, &cc_long);
-    auto* ti = static_cast<SuiteSparse_long*>(triplet->i);
-    auto* tj = static_cast<SuiteSparse_long*>(triplet->j);
-    auto* tx = static_cast<double*>(triplet->x);
-    size_t k = 0;
-    cholmod_dense* b = cholmod_l_zeros(rows, 1, CHOLMOD_REAL, &cc_long);
-    auto* bx = static_cast<double*>(b->x);
-    for (size_t f = 0; f < jacobians.size(); ++f) {
-      const int row0 = factor_row[f];
-      for (int r = 0; r < errors[f].size(); ++r) bx[row0 + r] = -errors[f][r];
-      for (int pk = pair_begin[f]; pk < pair_begin[f + 1]; ++pk) {
-        const BlockPair& pair = pairs[pk];
-        if (!pair.diagonal) continue;  // each free key has exactly one diagonal pair
-        for (int c = 0; c < pair.a_dim; ++c)
-          for (int r = 0; r < errors[f].size(); ++r) {
-            const double value = jacobians[f](r, pair.a_column + c);
-            if (value == 0.0) continue;
-            ti[k] = row0 + r;
-            tj[k] = pair.a_offset + c;
-            tx[k++] = value;
-          }
-      }
-    }
-    if (lambda > 0)
-      for (int c = 0; c < n; ++c) {
-        ti[k] = m + c;
-        tj[k] = c;
-        tx[k++] = std::sqrt(lambda * DampingScale(diagonal[c], options));
-      }
-    triplet->nnz = k;
-    cholmod_sparse* a = cholmod_l_triplet_to_sparse(triplet, k, &cc_long);
-    cholmod_l_free_triplet(&triplet, &cc_long);
-    cholmod_dense* z = nullptr;
-    cholmod_sparse* r = nullptr;
-    SuiteSparse_long* e = nullptr;
-    const bool want_r = log_abs_det_r != nullptr;
-    const SuiteSparse_long rank = SuiteSparseQR<double>(
-        SPQR_ORDERING_DEFAULT, SPQR_NO_TOL, n, 2, a, nullptr, b, nullptr, &z, want_r ? &r : nullptr,
-        want_r ? &e : nullptr, nullptr, nullptr, nullptr, &cc_long);
-    bool ok = z != nullptr && rank == n;
-    if (ok) {
-      *delta = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(z->x), n);
-      ok = delta->allFinite();
-    }
-    if (ok && squared_residual) {
-      // ||J delta + e||^2 over the J rows (the damping rows are absent here).
-      double sum = 0.0;
-      for (size_t f = 0; f < jacobians.size(); ++f) {
-        Eigen::VectorXd residual = errors[f];
-        for (int pk = pair_begin[f]; pk < pair_begin[f + 1]; ++pk) {
-          const BlockPair& pair = pairs[pk];
-          if (pair.diagonal)
-            residual += jacobians[f].middleCols(pair.a_column, pair.a_dim) *
-                        delta->segment(pair.a_offset, pair.a_dim);
-        }
-        sum += residual.squaredNorm();
-      }
-      *squared_residual = sum;
-    }
-    if (ok && want_r) {
-      // |det R| = prod |r_jj|, whatever the column permutation E.
-      const auto* rp = static_cast<const SuiteSparse_long*>(r->p);
-      const auto* ri = static_cast<const SuiteSparse_long*>(r->i);
-      const auto* rx = static_cast<const double*>(r->x);
-      double sum = 0.0;
-      for (int j = 0; j < n && ok; ++j) {
-        double d = 0.0;
-        for (SuiteSparse_long q = rp[j]; q < rp[j + 1]; ++q)
-          if (ri[q] == j) d = rx[q];
-        ok = d != 0.0;
-        sum += std::log(std::abs(d));
-      }
-      *log_abs_det_r = sum;
-    }
-    if (z) cholmod_l_free_dense(&z, &cc_long);
-    if (r) cholmod_l_free_sparse(&r, &cc_long);
-    if (e) cholmod_l_free(n, sizeof(SuiteSparse_long), e, &cc_long);
-    cholmod_l_free_sparse(&a, &cc_long);
-    cholmod_l_free_dense(&b, &cc_long);
-    return ok;
-  }
+  Impl() { UseOneBlasThread(); }
 
   // `from` moved by `step` (entries of delta) into `to`.
   void Retract(const Values& from, const Eigen::VectorXd& step, Values* to) const {
@@ -334,7 +204,8 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
     const auto t_factor = Clock::now();
     bool solved;
     if (use_qr) {
-      solved = impl.SolveByQr(lambda, options_, &delta, nullptr, nullptr);
+      solved = impl.qr.Solve(layout, n, impl.current, normal.diagonal(), lambda, options_, &delta,
+                             nullptr, nullptr);
     } else {
       solved = normal.Factorize(lambda, options_) && normal.Solve(-normal.gradient(), &delta);
     }
@@ -404,31 +275,26 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   const bool factored = normal.Factorize(0.0, options_);
   normal.set_factor_is_final(factored);
   Evidence& evidence = result.evidence;
-  evidence.num_rows = m;
-  evidence.num_parameters = n;
-  for (const auto& factor : graph->factors()) evidence.log_det_noise += factor->LogDetCovariance();
-  evidence.normaliser = 0.5 * (n - m) * kLog2Pi;
+  SetEvidenceConstants(*graph, m, n, &evidence);
   bool have_step = false;
   const Evaluation* at_final_values = &impl.current;  // errors at `values`
   if (use_qr) {
     double log_abs_det_r = 0.0;
-    have_step = impl.SolveByQr(0.0, options_, &delta, &evidence.squared_residual,
-                               options_.compute_evidence ? &log_abs_det_r : nullptr);
+    have_step = impl.qr.Solve(layout, n, impl.current, normal.diagonal(), 0.0, options_, &delta,
+                              &evidence.squared_residual,
+                              options_.compute_evidence ? &log_abs_det_r : nullptr);
     evidence.valid = have_step && options_.compute_evidence;
     evidence.log_det_information = 2.0 * log_abs_det_r;
   } else if (factored && normal.Solve(normal.gradient(), &delta)) {
-    // min ||e + J d||^2 = ||e||^2 - g' H^{-1} g, at d = -H^{-1} g.
     have_step = true;
-    evidence.squared_residual = std::max(0.0, 2.0 * cost - normal.gradient().dot(delta));
+    evidence.squared_residual = MinimumSquaredResidual(cost, normal.gradient(), delta);
     delta = -delta;
     if (options_.compute_evidence) {
       evidence.log_det_information = LogDetOfFactor(normal.factor());
       evidence.valid = std::isfinite(evidence.log_det_information);
     }
   }
-  if (evidence.valid)
-    evidence.log_evidence = -0.5 * evidence.squared_residual - 0.5 * evidence.log_det_noise -
-                            0.5 * evidence.log_det_information + evidence.normaliser;
+  CompleteEvidence(&evidence);
   if (have_step && options_.apply_final_step && termination != TerminationType::kFailure) {
     impl.Retract(values, delta, &trial);
     double new_cost = 0.0;
@@ -465,10 +331,6 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
   // The scalar columns of each group.
   const std::vector<int>& free_index = normal.layout().free_index;
   const BlockPattern& pattern = normal.pattern();
-  const int n = pattern.n;
-  cholmod_common* cc = normal.common();
-  cholmod_factor* factor = normal.factor();
-  const std::vector<int>& inverse_permutation = normal.inverse_permutation();
   std::vector<std::vector<int>> columns(key_groups.size());
   for (size_t g = 0; g < key_groups.size(); ++g) {
     for (int key : key_groups[g]) {
@@ -484,52 +346,8 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
       for (int r = 0; r < pattern.dims[v]; ++r) columns[g].push_back(pattern.offsets[v] + r);
     }
   }
-  // Solve H X = E for batches of unit columns; pick the groups' rows.
-  constexpr int kBatch = 64;
-  size_t g = 0;
-  while (g < key_groups.size()) {
-    size_t end = g;
-    int width = 0;
-    while (end < key_groups.size() &&
-           (width == 0 || width + static_cast<int>(columns[end].size()) <= kBatch))
-      width += static_cast<int>(columns[end++].size());
-    cholmod_dense* unit = cholmod_zeros(n, width, CHOLMOD_REAL, cc);
-    auto* ux = static_cast<double*>(unit->x);
-    int c = 0;
-    for (size_t h = g; h < end; ++h)
-      for (int column : columns[h])
-        ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = 1.0;
-    // With H = L L' (the permuted matrix is factored in its natural order),
-    // H^-1 = L^-T L^-1, so a block is Y' Y with Y = L^-1 E: a forward solve
-    // only, half the work of solving with H. An LDL' factor solves with H.
-    const bool forward_only = factor->is_ll;
-    cholmod_dense* x = cholmod_solve(forward_only ? CHOLMOD_L : CHOLMOD_A, factor, unit, cc);
-    cholmod_free_dense(&unit, cc);
-    if (!x) {
-      if (why) *why = "CHOLMOD solve failed";
-      return false;
-    }
-    const auto* xx = static_cast<const double*>(x->x);
-    c = 0;
-    for (size_t h = g; h < end; ++h) {
-      const int size = static_cast<int>(columns[h].size());
-      Eigen::MatrixXd& block = (*blocks)[h];
-      if (forward_only) {
-        const Eigen::Map<const Eigen::MatrixXd> y(xx + static_cast<size_t>(c) * n, n, size);
-        block = y.transpose() * y;
-      } else {
-        block.resize(size, size);
-        for (int q = 0; q < size; ++q)
-          for (int r = 0; r < size; ++r)
-            block(r, q) = xx[static_cast<size_t>(c + q) * n + inverse_permutation[columns[h][r]]];
-        block = 0.5 * (block + block.transpose()).eval();
-      }
-      c += size;
-    }
-    cholmod_free_dense(&x, cc);
-    g = end;
-  }
-  return true;
+  return CovarianceBlocks(normal.factor(), normal.inverse_permutation(), normal.common(), columns,
+                          blocks, why);
 }
 
 }  // namespace oslam

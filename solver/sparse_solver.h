@@ -160,8 +160,8 @@ class SparseSolver {
 
   // Joint covariance blocks (one per group of keys, in the groups' order) of
   // the Gaussian at the last Solve's final point, i.e. the matching blocks of
-  // (J^T J)^{-1}. Fixed keys get zero rows/columns. False (with `why`) when
-  // there is no valid final factorisation or a key is unknown.
+  // (J^T J)^{-1}. False (with `why`) when there is no valid final
+  // factorisation, or a key is unknown or fixed.
   bool MarginalCovariances(const std::vector<std::vector<int>>& key_groups,
                            std::vector<Eigen::MatrixXd>* blocks, std::string* why = nullptr);
 
