@@ -14,7 +14,6 @@
 #include "solver/sparse_qr.h"
 
 namespace oslam {
-
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -58,34 +57,263 @@ bool SolverOptions::Validate(std::string* why) const {
 
 // ---------------------------------------------------------------------------
 
+// The solver's state kept across solves (the back ends' structure and work
+// space, the kept linearisations) and the phases of one Solve: set-up, the
+// Levenberg-Marquardt iterations (their policy: levenberg_marquardt.h) and
+// the undamped system at the final point.
 struct SparseSolver::Impl {
   NormalEquations normal;
   SparseQr qr;
   Linearizer linearizer;
   // Errors and Jacobians of every factor at the current point, and at the
   // trial point of a step (swapped in when the step is accepted, so an
-  // accepted step costs one evaluation, not two).
-  Evaluation current, trial;
-  Evaluation stretched;  // a line search's candidate (SolverOptions::max_step_extrapolation)
+  // accepted step costs one evaluation, not two); a line search's candidate.
+  Evaluation current, trial, stretched;
+  Values trial_values, stretched_values;
 
-  Impl() { UseOneBlasThread(); }
+  // What one LM iteration did (for the minimiser and the trace).
+  struct Step {
+    bool solved = false, accepted = false;
+    double new_cost = 0.0, rho = 0.0;
+  };
 
+  bool SetUp(const SolverOptions& options, const FactorGraph& graph, SolverSummary* summary,
+             std::string* why);
+  TerminationType Minimize(const SolverOptions& options, FactorGraph* graph, double* cost,
+                           SolverSummary* summary, std::string* message);
+  Step TryStep(const SolverOptions& options, const LevenbergMarquardtStrategy& lm,
+               const FactorGraph& graph, double cost, Eigen::VectorXd* delta,
+               SolverSummary* summary);
+  int Extrapolate(const SolverOptions& options, const FactorGraph& graph, double cost, double slope,
+                  Eigen::VectorXd* step, double* trial_cost);
+  void SolveFinalSystem(const SolverOptions& options, FactorGraph* graph, double cost,
+                        SolveResult* result, std::string* message);
+  // The damped step, by the back end the options name.
+  bool SolveDamped(const SolverOptions& options, double lambda, Eigen::VectorXd* delta);
   // `from` moved by `step` (entries of delta) into `to`.
-  void Retract(const Values& from, const Eigen::VectorXd& step, Values* to) const {
-    *to = from;
-    const std::vector<int>& free_index = normal.layout().free_index;
-    const std::vector<int>& offsets = normal.pattern().offsets;
-    for (size_t key = 0; key < free_index.size(); ++key) {
-      const int v = free_index[key];
-      if (v >= 0) to->Retract(static_cast<int>(key), step.data() + offsets[v]);
+  void Retract(const Values& from, const Eigen::VectorXd& step, Values* to) const;
+};
+
+void SparseSolver::Impl::Retract(const Values& from, const Eigen::VectorXd& step,
+                                 Values* to) const {
+  *to = from;
+  const std::vector<int>& free_index = normal.layout().free_index;
+  const std::vector<int>& offsets = normal.pattern().offsets;
+  for (size_t key = 0; key < free_index.size(); ++key) {
+    const int v = free_index[key];
+    if (v >= 0) to->Retract(static_cast<int>(key), step.data() + offsets[v]);
+  }
+}
+
+bool SparseSolver::Impl::SetUp(const SolverOptions& options, const FactorGraph& graph,
+                               SolverSummary* summary, std::string* why) {
+  linearizer.set_reuse(options.reuse_linearizations);
+  double analyze_s = 0.0;
+  if (!normal.SetUp(graph, options.ordering, options.independent_of_history,
+                    options.reuse_symbolic_analysis, &summary->reused_symbolic_analysis, &analyze_s,
+                    why))
+    return false;
+  summary->analyze_time_s = analyze_s;
+  summary->ordering = normal.ordering_used();
+  const ProblemLayout& layout = normal.layout();
+  summary->num_residuals = layout.m;
+  summary->num_parameters = normal.pattern().n;
+  const auto& factors = graph.factors();
+  for (Evaluation* evaluation : {&current, &trial}) {
+    evaluation->Resize(factors.size());
+    for (size_t f = 0; f < factors.size(); ++f)
+      evaluation->Shape(f, layout.factor_rows(f), layout.factor_columns[f]);
+  }
+  return true;
+}
+
+bool SparseSolver::Impl::SolveDamped(const SolverOptions& options, double lambda,
+                                     Eigen::VectorXd* delta) {
+  if (options.linear_solver == LinearSolverType::kSparseQR)
+    return qr.Solve(normal.layout(), normal.pattern().n, current, normal.diagonal(), lambda,
+                    options, delta, nullptr, nullptr);
+  return normal.Factorize(lambda, options) && normal.Solve(-normal.gradient(), delta);
+}
+
+TerminationType SparseSolver::Impl::Minimize(const SolverOptions& options, FactorGraph* graph,
+                                             double* cost, SolverSummary* summary,
+                                             std::string* message) {
+  // OSLAM_SOLVER_TRACE=1 prints the orderings tried and every LM step to
+  // stderr (a diagnostic for convergence work; off by default).
+  const bool trace = std::getenv("OSLAM_SOLVER_TRACE") != nullptr;
+  Values& values = graph->mutable_values();
+  LevenbergMarquardtStrategy lm(options);
+  Eigen::VectorXd delta;
+  *message = "reached max_iterations";
+  while (true) {
+    if (lm.GradientConverged(normal.gradient())) {
+      *message = "gradient tolerance reached";
+      return TerminationType::kConverged;
+    }
+    if (summary->iterations >= options.max_iterations) return TerminationType::kMaxIterations;
+    ++summary->iterations;
+    const double lambda = lm.damping();
+    Step step = TryStep(options, lm, *graph, *cost, &delta, summary);
+    if (trace) {
+      Eigen::Index where = 0;
+      if (step.solved) delta.cwiseAbs().maxCoeff(&where);
+      std::fprintf(stderr,
+                   "it %d lambda %.3g cost %.10g -> %.10g rho %.3f |d| %.3g at %ld/%d %s (%d "
+                   "stretches)\n",
+                   summary->iterations, lambda, *cost, step.new_cost, step.rho,
+                   step.solved ? delta.lpNorm<Eigen::Infinity>() : -1.0, long(where),
+                   normal.pattern().n, step.accepted ? "ok" : "REJ", summary->step_extrapolations);
+    }
+    if (step.accepted) {
+      const auto t_assemble = Clock::now();
+      // Non-finite Jacobians at a point with a finite cost: a failed step.
+      step.accepted = normal.Assemble(trial);
+      if (!step.accepted) normal.Assemble(current);
+      summary->linearize_time_s += Seconds(t_assemble);
+    }
+    if (!step.accepted) {
+      if (lm.StepRejected()) continue;
+      *message = "no further decrease possible (damping limit)";
+      return TerminationType::kConverged;
+    }
+    std::swap(values, trial_values);
+    std::swap(current, trial);
+    ++summary->successful_steps;
+    const double old_cost = *cost;
+    *cost = step.new_cost;
+    lm.StepAccepted(step.rho);
+    if (lm.StepConverged(delta)) {
+      *message = "step tolerance reached";
+      return TerminationType::kConverged;
+    }
+    if (lm.CostConverged(old_cost, *cost)) {
+      *message = "function tolerance reached";
+      return TerminationType::kConverged;
     }
   }
-};
+}
+
+// Solves the damped system at the current point, evaluates the step
+// (values + delta into trial_values and `trial`) and decides on it by its
+// gain ratio, stretching it when the policy says so.
+SparseSolver::Impl::Step SparseSolver::Impl::TryStep(const SolverOptions& options,
+                                                     const LevenbergMarquardtStrategy& lm,
+                                                     const FactorGraph& graph, double cost,
+                                                     Eigen::VectorXd* delta,
+                                                     SolverSummary* summary) {
+  Step step;
+  const auto t_factor = Clock::now();
+  step.solved = SolveDamped(options, lm.damping(), delta);
+  summary->factorize_time_s += Seconds(t_factor);
+  if (!step.solved) return step;
+  const double predicted = lm.PredictedDecrease(normal.gradient(), normal.diagonal(), *delta);
+  Retract(graph.values(), *delta, &trial_values);
+  const auto t_cost = Clock::now();
+  const bool evaluated = linearizer.Evaluate(graph, trial_values, true, &trial, &step.new_cost);
+  summary->linearize_time_s += Seconds(t_cost);
+  if (evaluated && predicted > 0.0) {
+    step.rho = (cost - step.new_cost) / predicted;
+    step.accepted = lm.Accepts(step.rho);
+  }
+  if (step.accepted && lm.Extrapolates(step.rho))
+    summary->step_extrapolations +=
+        Extrapolate(options, graph, cost, normal.gradient().dot(*delta), delta, &step.new_cost);
+  return step;
+}
+
+// The line search beyond an accepted step (StepExtrapolation). On return
+// `step`, trial_values, `trial` and `*trial_cost` describe the step taken;
+// returns the count of stretches.
+int SparseSolver::Impl::Extrapolate(const SolverOptions& options, const FactorGraph& graph,
+                                    double cost, double slope, Eigen::VectorXd* step,
+                                    double* trial_cost) {
+  StepExtrapolation search(cost, slope, *trial_cost, options.max_step_extrapolation);
+  const auto& factors = graph.factors();
+  if (stretched.errors.size() != factors.size()) stretched.Resize(factors.size());
+  // Candidates are evaluated without Jacobians (most are rejected); the
+  // point finally taken is evaluated once more with them.
+  for (size_t f = 0; f < factors.size(); ++f) stretched.errors[f].resize(current.errors[f].size());
+  Eigen::VectorXd scaled;
+  for (double multiple; search.Next(&multiple);) {
+    scaled = multiple * *step;
+    Retract(graph.values(), scaled, &stretched_values);
+    double stretched_cost = 0.0;
+    const bool evaluated =
+        linearizer.Evaluate(graph, stretched_values, false, &stretched, &stretched_cost);
+    if (search.Report(evaluated, stretched_cost)) std::swap(trial_values, stretched_values);
+  }
+  if (search.stretches() == 0) return 0;
+  double check = 0.0;
+  if (!linearizer.Evaluate(graph, trial_values, true, &trial, &check)) {
+    // Cannot happen where the cost could be evaluated; back to the LM step.
+    Retract(graph.values(), *step, &trial_values);
+    linearizer.Evaluate(graph, trial_values, true, &trial, trial_cost);
+    return 0;
+  }
+  *trial_cost = check;
+  *step *= search.multiple();
+  return search.stretches();
+}
+
+// The undamped Gauss-Newton system at the final point: the evidence, the
+// factor later used for covariances, and the final step of Algorithm 1
+// (steps 4-5: theta* = theta0 + delta), taken if it does not raise the cost.
+void SparseSolver::Impl::SolveFinalSystem(const SolverOptions& options, FactorGraph* graph,
+                                          double cost, SolveResult* result, std::string* message) {
+  SolverSummary& summary = result->summary;
+  const auto t_evidence = Clock::now();
+  const bool factored = normal.Factorize(0.0, options);
+  normal.set_factor_is_final(factored);
+  Evidence& evidence = result->evidence;
+  SetEvidenceConstants(*graph, normal.layout().m, normal.pattern().n, &evidence);
+  bool have_step = false;
+  Eigen::VectorXd delta;
+  if (options.linear_solver == LinearSolverType::kSparseQR) {
+    double log_abs_det_r = 0.0;
+    have_step = qr.Solve(normal.layout(), normal.pattern().n, current, normal.diagonal(), 0.0,
+                         options, &delta, &evidence.squared_residual,
+                         options.compute_evidence ? &log_abs_det_r : nullptr);
+    evidence.valid = have_step && options.compute_evidence;
+    evidence.log_det_information = 2.0 * log_abs_det_r;
+  } else if (factored && normal.Solve(normal.gradient(), &delta)) {
+    have_step = true;
+    evidence.squared_residual = MinimumSquaredResidual(cost, normal.gradient(), delta);
+    delta = -delta;
+    if (options.compute_evidence) {
+      evidence.log_det_information = LogDetOfFactor(normal.factor());
+      evidence.valid = std::isfinite(evidence.log_det_information);
+    }
+  }
+  CompleteEvidence(&evidence);
+
+  Values& values = graph->mutable_values();
+  const Evaluation* at_final_values = &current;  // errors at `values`
+  if (have_step && options.apply_final_step) {
+    Retract(values, delta, &trial_values);
+    double new_cost = 0.0;
+    if (linearizer.Evaluate(*graph, trial_values, false, &trial, &new_cost) && new_cost <= cost) {
+      std::swap(values, trial_values);
+      at_final_values = &trial;
+      summary.final_cost = new_cost;
+    }
+  }
+  result->squared_errors.resize(at_final_values->errors.size());
+  for (size_t f = 0; f < at_final_values->errors.size(); ++f)
+    result->squared_errors[f] = at_final_values->errors[f].squaredNorm();
+  summary.evidence_time_s = Seconds(t_evidence);
+  if (!factored)
+    *message +=
+        "; the final information matrix is not positive definite (no evidence or "
+        "covariance)";
+}
 
 // ---------------------------------------------------------------------------
 
 SparseSolver::SparseSolver(const SolverOptions& options)
-    : options_(options), impl_(std::make_unique<Impl>()) {}
+    : options_(options), impl_(std::make_unique<Impl>()) {
+  UseOneBlasThread();
+}
+
 SparseSolver::~SparseSolver() = default;
 
 void SparseSolver::ClearCache() {
@@ -116,37 +344,13 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   if (!options_.Validate(&why)) return finish(TerminationType::kFailure, "invalid options: " + why);
   if (!graph) return finish(TerminationType::kFailure, "no graph");
   summary.num_factors = static_cast<int>(graph->factors().size());
+  if (!impl.SetUp(options_, *graph, &summary, &why)) return finish(TerminationType::kFailure, why);
 
-  double analyze_s = 0.0;
-  impl.linearizer.set_reuse(options_.reuse_linearizations);
-  NormalEquations& normal = impl.normal;
-  if (!normal.SetUp(*graph, options_.ordering, options_.independent_of_history,
-                    options_.reuse_symbolic_analysis, &summary.reused_symbolic_analysis, &analyze_s,
-                    &why))
-    return finish(TerminationType::kFailure, why);
-  summary.analyze_time_s = analyze_s;
-  summary.ordering = normal.ordering_used();
-  const ProblemLayout& layout = normal.layout();
-  const int m = layout.m, n = normal.pattern().n;
-  summary.num_residuals = m;
-  summary.num_parameters = n;
-  const auto& factors = graph->factors();
-  for (Evaluation* evaluation : {&impl.current, &impl.trial}) {
-    evaluation->Resize(factors.size());
-    for (size_t f = 0; f < factors.size(); ++f)
-      evaluation->Shape(f, layout.factor_rows(f), layout.factor_columns[f]);
-  }
-  const bool use_qr = options_.linear_solver == LinearSolverType::kSparseQR;
-
-  Values& values = graph->mutable_values();
-  Values trial;
   double cost = 0.0;
-  // OSLAM_SOLVER_TRACE=1 prints the orderings tried and every LM step to stderr
-  // (a diagnostic for convergence work; off by default).
-  const bool trace = std::getenv("OSLAM_SOLVER_TRACE") != nullptr;
   const auto t_first = Clock::now();
-  const bool first_ok = impl.linearizer.Evaluate(*graph, values, true, &impl.current, &cost) &&
-                        normal.Assemble(impl.current);
+  const bool first_ok =
+      impl.linearizer.Evaluate(*graph, graph->values(), true, &impl.current, &cost) &&
+      impl.normal.Assemble(impl.current);
   summary.linearize_time_s += Seconds(t_first);
   if (!first_ok)
     return finish(TerminationType::kFailure,
@@ -154,168 +358,10 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
                   "image from a pose that saw it)");
   summary.initial_cost = summary.final_cost = cost;
 
-  // The line search beyond an accepted step (StepExtrapolation). On return
-  // `step`, `trial`, impl.trial and `*trial_cost` describe the step taken;
-  // the count of stretches is returned.
-  Values stretched_values;
-  auto extrapolate = [&](double slope, Eigen::VectorXd* step, double* trial_cost) {
-    StepExtrapolation search(cost, slope, *trial_cost, options_.max_step_extrapolation);
-    if (impl.stretched.errors.size() != factors.size()) impl.stretched.Resize(factors.size());
-    // Candidates are evaluated without Jacobians (most are rejected); the
-    // point finally taken is evaluated once more with them.
-    for (size_t f = 0; f < factors.size(); ++f)
-      impl.stretched.errors[f].resize(impl.current.errors[f].size());
-    Eigen::VectorXd scaled;
-    for (double multiple; search.Next(&multiple);) {
-      scaled = multiple * *step;
-      impl.Retract(values, scaled, &stretched_values);
-      double stretched_cost = 0.0;
-      const bool evaluated = impl.linearizer.Evaluate(*graph, stretched_values, false,
-                                                      &impl.stretched, &stretched_cost);
-      if (search.Report(evaluated, stretched_cost)) std::swap(trial, stretched_values);
-    }
-    if (search.stretches() == 0) return 0;
-    double check = 0.0;
-    if (!impl.linearizer.Evaluate(*graph, trial, true, &impl.trial, &check)) {
-      // Cannot happen where the cost could be evaluated; back to the LM step.
-      impl.Retract(values, *step, &trial);
-      impl.linearizer.Evaluate(*graph, trial, true, &impl.trial, trial_cost);
-      return 0;
-    }
-    *trial_cost = check;
-    *step *= search.multiple();
-    return search.stretches();
-  };
-
-  LevenbergMarquardtStrategy lm(options_);
-  int extrapolations = 0;
-  TerminationType termination = TerminationType::kMaxIterations;
-  std::string message = "reached max_iterations";
-  Eigen::VectorXd delta;
-  while (true) {
-    if (lm.GradientConverged(normal.gradient())) {
-      termination = TerminationType::kConverged;
-      message = "gradient tolerance reached";
-      break;
-    }
-    if (summary.iterations >= options_.max_iterations) break;
-    ++summary.iterations;
-    const double lambda = lm.damping();
-    const auto t_factor = Clock::now();
-    bool solved;
-    if (use_qr) {
-      solved = impl.qr.Solve(layout, n, impl.current, normal.diagonal(), lambda, options_, &delta,
-                             nullptr, nullptr);
-    } else {
-      solved = normal.Factorize(lambda, options_) && normal.Solve(-normal.gradient(), &delta);
-    }
-    summary.factorize_time_s += Seconds(t_factor);
-    bool accepted = false;
-    double new_cost = 0.0, rho = 0.0;
-    if (solved) {
-      const double predicted = lm.PredictedDecrease(normal.gradient(), normal.diagonal(), delta);
-      impl.Retract(values, delta, &trial);
-      const auto t_cost = Clock::now();
-      const bool evaluated = impl.linearizer.Evaluate(*graph, trial, true, &impl.trial, &new_cost);
-      summary.linearize_time_s += Seconds(t_cost);
-      if (evaluated && predicted > 0.0) {
-        rho = (cost - new_cost) / predicted;
-        accepted = lm.Accepts(rho);
-      }
-      if (accepted && lm.Extrapolates(rho))
-        extrapolations += extrapolate(normal.gradient().dot(delta), &delta, &new_cost);
-    }
-    if (trace) {
-      Eigen::Index where = 0;
-      if (solved) delta.cwiseAbs().maxCoeff(&where);
-      std::fprintf(stderr,
-                   "it %d lambda %.3g cost %.10g -> %.10g rho %.3f |d| %.3g at %ld/%d %s (%d "
-                   "stretches)\n",
-                   summary.iterations, lambda, cost, new_cost, rho,
-                   solved ? delta.lpNorm<Eigen::Infinity>() : -1.0, long(where), n,
-                   accepted ? "ok" : "REJ", extrapolations);
-    }
-    if (accepted) {
-      const auto t_assemble = Clock::now();
-      // Non-finite Jacobians at a point with a finite cost: a failed step.
-      accepted = normal.Assemble(impl.trial);
-      if (!accepted) normal.Assemble(impl.current);
-      summary.linearize_time_s += Seconds(t_assemble);
-    }
-    if (!accepted) {
-      if (lm.StepRejected()) continue;
-      message = "no further decrease possible (damping limit)";
-      termination = TerminationType::kConverged;
-      break;
-    }
-    std::swap(values, trial);
-    std::swap(impl.current, impl.trial);
-    ++summary.successful_steps;
-    const double old_cost = cost;
-    cost = new_cost;
-    lm.StepAccepted(rho);
-    if (lm.StepConverged(delta)) {
-      termination = TerminationType::kConverged;
-      message = "step tolerance reached";
-      break;
-    }
-    if (lm.CostConverged(old_cost, cost)) {
-      termination = TerminationType::kConverged;
-      message = "function tolerance reached";
-      break;
-    }
-  }
+  std::string message;
+  const TerminationType termination = impl.Minimize(options_, graph, &cost, &summary, &message);
   summary.final_cost = cost;
-  summary.step_extrapolations = extrapolations;
-
-  // The undamped Gauss-Newton system at the final point: evidence, the
-  // factor later used for covariances, and the final step of Algorithm 1
-  // (steps 4-5: theta* = theta0 + delta).
-  const auto t_evidence = Clock::now();
-  const bool factored = normal.Factorize(0.0, options_);
-  normal.set_factor_is_final(factored);
-  Evidence& evidence = result.evidence;
-  SetEvidenceConstants(*graph, m, n, &evidence);
-  bool have_step = false;
-  const Evaluation* at_final_values = &impl.current;  // errors at `values`
-  if (use_qr) {
-    double log_abs_det_r = 0.0;
-    have_step = impl.qr.Solve(layout, n, impl.current, normal.diagonal(), 0.0, options_, &delta,
-                              &evidence.squared_residual,
-                              options_.compute_evidence ? &log_abs_det_r : nullptr);
-    evidence.valid = have_step && options_.compute_evidence;
-    evidence.log_det_information = 2.0 * log_abs_det_r;
-  } else if (factored && normal.Solve(normal.gradient(), &delta)) {
-    have_step = true;
-    evidence.squared_residual = MinimumSquaredResidual(cost, normal.gradient(), delta);
-    delta = -delta;
-    if (options_.compute_evidence) {
-      evidence.log_det_information = LogDetOfFactor(normal.factor());
-      evidence.valid = std::isfinite(evidence.log_det_information);
-    }
-  }
-  CompleteEvidence(&evidence);
-  if (have_step && options_.apply_final_step && termination != TerminationType::kFailure) {
-    impl.Retract(values, delta, &trial);
-    double new_cost = 0.0;
-    if (impl.linearizer.Evaluate(*graph, trial, false, &impl.trial, &new_cost) &&
-        new_cost <= cost) {
-      std::swap(values, trial);
-      at_final_values = &impl.trial;
-      summary.final_cost = new_cost;
-    }
-  }
-  if (termination != TerminationType::kFailure) {
-    result.squared_errors.resize(at_final_values->errors.size());
-    for (size_t f = 0; f < at_final_values->errors.size(); ++f)
-      result.squared_errors[f] = at_final_values->errors[f].squaredNorm();
-  }
-  summary.evidence_time_s = Seconds(t_evidence);
-  if (!factored && termination != TerminationType::kFailure) {
-    message +=
-        "; the final information matrix is not positive definite (no evidence or "
-        "covariance)";
-  }
+  impl.SolveFinalSystem(options_, graph, cost, &result, &message);
   return finish(termination, message);
 }
 
