@@ -12,6 +12,7 @@
 
 #include "core/angles.h"
 #include "solver/sparse_solver.h"
+#include "tests/solver/cholmod_workspace.h"
 #include "tests/solver/linear_factor.h"
 
 namespace oslam {
@@ -129,18 +130,7 @@ TEST(EvidenceTest, MinimumSquaredResidualOfTheNormalEquations) {
 
 // ---- CHOLMOD factors of a known matrix ----
 
-struct Cholmod {
-  cholmod_common cc;
-  Cholmod() {
-    cholmod_start(&cc);
-    cc.print = 0;
-  }
-  ~Cholmod() { cholmod_finish(&cc); }
-};
-
-// A banded SPD matrix of size n (bandwidth 4), and the same matrix with
-// rows and columns moved to inverse_permutation's positions, as CHOLMOD's
-// lower triangle.
+// A banded SPD matrix of size n (4 entries either side of the diagonal).
 Eigen::MatrixXd BandedMatrix(int n) {
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
   for (int i = 0; i < n; ++i)
@@ -149,6 +139,8 @@ Eigen::MatrixXd BandedMatrix(int n) {
   return h;
 }
 
+// h with row and column i moved to inverse_permutation[i], as CHOLMOD's
+// lower triangle.
 cholmod_sparse* PermutedLower(const Eigen::MatrixXd& h, const std::vector<int>& inverse_permutation,
                               cholmod_common* cc) {
   const int n = static_cast<int>(h.rows());
@@ -191,7 +183,7 @@ TEST(EvidenceTest, LogDetOfFactorOfEveryKind) {
   std::vector<int> identity(40);
   for (int i = 0; i < 40; ++i) identity[i] = i;
   for (const FactorKind kind : kFactorKinds) {
-    Cholmod cholmod;
+    testing::CholmodWorkspace cholmod;
     cholmod_sparse* matrix = PermutedLower(h, identity, &cholmod.cc);
     cholmod_factor* factor = FactorNaturally(matrix, kind.ll, kind.supernodal, &cholmod.cc);
     ASSERT_EQ(static_cast<bool>(factor->is_ll), kind.ll);
@@ -215,7 +207,7 @@ TEST(EvidenceTest, CovarianceBlocksAreBlocksOfTheInverse) {
   for (int start = 0; start + 2 < n; start += 3) columns.push_back({start + 2, start, start + 1});
   columns.push_back({5, 80});  // an off-diagonal block too
   for (const FactorKind kind : kFactorKinds) {
-    Cholmod cholmod;
+    testing::CholmodWorkspace cholmod;
     cholmod_sparse* matrix = PermutedLower(h, inverse_permutation, &cholmod.cc);
     cholmod_factor* factor = FactorNaturally(matrix, kind.ll, kind.supernodal, &cholmod.cc);
     std::vector<Eigen::MatrixXd> blocks;

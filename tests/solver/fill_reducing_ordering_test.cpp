@@ -9,18 +9,10 @@
 #include <cholmod.h>
 #include <gtest/gtest.h>
 
+#include "tests/solver/cholmod_workspace.h"
+
 namespace oslam {
 namespace {
-
-// A started CHOLMOD workspace.
-struct Cholmod {
-  cholmod_common cc;
-  Cholmod() {
-    cholmod_start(&cc);
-    cc.print = 0;
-  }
-  ~Cholmod() { cholmod_finish(&cc); }
-};
 
 // An object (variable 0, 3 entries) seen from `poses` poses (3 entries
 // each) that form a chain: the object's block degree is far above the
@@ -60,7 +52,7 @@ int ComparedCandidates(FillReducingOrdering* ordering, const BlockPattern& patte
 }
 
 TEST(FillReducingOrderingTest, EveryKindGivesAPermutationOfTheVariables) {
-  Cholmod cholmod;
+  testing::CholmodWorkspace cholmod;
   const BlockPattern pattern = ObjectSeenFromAChain(40);
   for (const OrderingType kind : {OrderingType::kAutomatic, OrderingType::kAmd,
                                   OrderingType::kHighDegreeLast, OrderingType::kMetis}) {
@@ -76,7 +68,7 @@ TEST(FillReducingOrderingTest, EveryKindGivesAPermutationOfTheVariables) {
 }
 
 TEST(FillReducingOrderingTest, HighDegreeLastEliminatesTheObjectLast) {
-  Cholmod cholmod;
+  testing::CholmodWorkspace cholmod;
   const BlockPattern pattern = ObjectSeenFromAChain(40);
   FillReducingOrdering ordering;
   std::vector<int> order;
@@ -85,7 +77,7 @@ TEST(FillReducingOrderingTest, HighDegreeLastEliminatesTheObjectLast) {
 }
 
 TEST(FillReducingOrderingTest, MetisIsACandidateOnlyForBigProblems) {
-  Cholmod cholmod;
+  testing::CholmodWorkspace cholmod;
   FillReducingOrdering ordering;
   std::vector<int> order;
   for (int poses : {40, 100, 400}) {
@@ -99,7 +91,7 @@ TEST(FillReducingOrderingTest, MetisIsACandidateOnlyForBigProblems) {
 }
 
 TEST(FillReducingOrderingTest, ASimilarProblemReusesTheLastComparisonsWinner) {
-  Cholmod cholmod;
+  testing::CholmodWorkspace cholmod;
   FillReducingOrdering ordering;
   // AMD and CAMD (the object's degree is high) are compared.
   EXPECT_EQ(ComparedCandidates(&ordering, ObjectSeenFromAChain(40), false, &cholmod.cc), 2);

@@ -8,17 +8,10 @@
 #include <cholmod.h>
 #include <gtest/gtest.h>
 
+#include "tests/solver/cholmod_workspace.h"
+
 namespace oslam {
 namespace {
-
-struct Cholmod {
-  cholmod_common cc;
-  Cholmod() {
-    cholmod_start(&cc);
-    cc.print = 0;
-  }
-  ~Cholmod() { cholmod_finish(&cc); }
-};
 
 // Objects of 3 and 2 entries (a base point and a size) seen from a chain
 // of poses (3 entries): pose p sees object p % objects.
@@ -76,7 +69,7 @@ std::vector<std::vector<int>> Orders(const BlockPattern& pattern, int poses) {
 }
 
 TEST(SymbolicAnalysisTest, PermutedMatrixHoldsEveryHessianEntryOnceInTheLowerTriangle) {
-  Cholmod cholmod;
+  testing::CholmodWorkspace cholmod;
   const int poses = 12;
   const BlockPattern pattern = PosesAndObjects(poses, 3);
   const std::vector<std::pair<int, int>> entries = HessianEntries(pattern);
@@ -117,7 +110,7 @@ TEST(SymbolicAnalysisTest, PermutedMatrixHoldsEveryHessianEntryOnceInTheLowerTri
 
 TEST(SymbolicAnalysisTest, BlockwiseAnalysisEqualsCholmodsSimplicialAndSupernodal) {
   for (const int supernodal : {CHOLMOD_SIMPLICIAL, CHOLMOD_SUPERNODAL}) {
-    Cholmod cholmod;
+    testing::CholmodWorkspace cholmod;
     cholmod_common& cc = cholmod.cc;
     cc.supernodal = supernodal;
     const int poses = 30;
