@@ -106,6 +106,7 @@ bool NormalEquations::SetUp(const FactorGraph& graph, OrderingType ordering,
 bool NormalEquations::FullSetUp(const FactorGraph& graph, OrderingType ordering,
                                 bool independent_of_history, bool allow_reuse, bool* reused,
                                 double* analyze_s, std::string* why) {
+  ++layout_generation_;
   if (!builder_.FindFreeVariables(graph, &layout_, why) ||
       !builder_.FindBlocks(graph, &layout_, why))
     return false;

@@ -51,6 +51,10 @@ class NormalEquations {
              bool allow_reuse, bool* reused, double* analyze_s, std::string* why);
   const ProblemLayout& layout() const { return layout_; }
   const BlockPattern& pattern() const { return pattern_; }
+  // Changes whenever a set-up lays a graph out anew (not when it finds the
+  // last set-up's structure): buffers shaped for the layout need reshaping
+  // only then.
+  int layout_generation() const { return layout_generation_; }
   // The ordering of the kept analysis (never kAutomatic).
   OrderingType ordering_used() const { return ordering_.used(); }
 
@@ -113,6 +117,7 @@ class NormalEquations {
 
   // ---- per set-up ----
   ProblemLayout layout_;
+  int layout_generation_ = 0;
   BlockPatternBuilder builder_;
 
   // ---- numeric ----

@@ -69,6 +69,7 @@ struct SparseSolver::Impl {
   // trial point of a step (swapped in when the step is accepted, so an
   // accepted step costs one evaluation, not two); a line search's candidate.
   Evaluation current, trial, stretched;
+  int shaped_generation = -1;  // the back end's layout current and trial are shaped for
   Values trial_values, stretched_values;
 
   // What one LM iteration did (for the minimiser and the trace).
@@ -118,11 +119,14 @@ bool SparseSolver::Impl::SetUp(const SolverOptions& options, const FactorGraph& 
   const ProblemLayout& layout = normal.layout();
   summary->num_residuals = layout.m;
   summary->num_parameters = normal.pattern().n;
-  const auto& factors = graph.factors();
-  for (Evaluation* evaluation : {&current, &trial}) {
-    evaluation->Resize(factors.size());
-    for (size_t f = 0; f < factors.size(); ++f)
-      evaluation->Shape(f, layout.factor_rows(f), layout.factor_columns[f]);
+  if (shaped_generation != normal.layout_generation()) {
+    const size_t num_factors = layout.factor_columns.size();
+    for (Evaluation* evaluation : {&current, &trial}) {
+      evaluation->Resize(num_factors);
+      for (size_t f = 0; f < num_factors; ++f)
+        evaluation->Shape(f, layout.factor_rows(f), layout.factor_columns[f]);
+    }
+    shaped_generation = normal.layout_generation();
   }
   return true;
 }

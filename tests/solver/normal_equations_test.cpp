@@ -129,11 +129,14 @@ TEST(NormalEquationsTest, ReusesTheStructureForTheSameGraphAndForSubPatterns) {
   NormalEquations normal;
   const FactorGraph full = MixedGraph();
   EXPECT_FALSE(SetUpAndAssemble(&normal, full).reused);
+  const int generation = normal.layout_generation();
   EXPECT_TRUE(SetUpAndAssemble(&normal, full).reused);
+  EXPECT_EQ(normal.layout_generation(), generation);  // the same layout
   // The sparser pattern fits in the kept one: assembled into it, the
   // missing blocks zero, and solved alike.
   const FactorGraph sparser = MixedGraph(/*sparser=*/true);
   EXPECT_TRUE(SetUpAndAssemble(&normal, sparser).reused);
+  EXPECT_NE(normal.layout_generation(), generation);  // laid out anew
   ExpectSolvesDensely(&normal, sparser, 0.0);
   // Not when the solve must not depend on the solves before it,
   EXPECT_FALSE(SetUpAndAssemble(&normal, sparser, /*independent_of_history=*/true).reused);
