@@ -3,9 +3,10 @@
 //
 // 1. GOMP_parallel is replaced for the whole process. serial_openmp.cpp
 //    defines libgomp's entry point for `#pragma omp parallel` with C
-//    linkage. Every program that links the solver links that definition
-//    (SerialOpenMpScope's members live in the same object file), and the
-//    dynamic linker binds every call of GOMP_parallel in the process to it:
+//    linkage. Every program that uses SparseSolver links that definition
+//    from the static library (SparseSolver uses SerialOpenMpScope, whose
+//    members live in the same object file), and the dynamic linker then
+//    binds every call of GOMP_parallel in the process to it:
 //    the program's own regions and those of every shared library that calls
 //    libgomp (CHOLMOD among them). The replacement runs the region's body
 //    directly on the calling thread when that thread is inside a
