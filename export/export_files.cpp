@@ -89,29 +89,37 @@ void WriteModels(const ExportScene& scene, const ExportOptions& options, const f
 std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOptions& options,
                                       const fs::path& out, bool quiet) {
   Progress progress("figures", 3, "figures", quiet);
-  std::vector<std::string> written = {"birdseye.png", "perspective.png"};
-  WritePng(RenderBirdsEye(scene, options), (out / written[0]).string());
+  std::vector<std::string> written;
+  auto write = [&](const std::string& stem, const Figure& figure) {
+    for (const auto& [extension, bytes] :
+         {std::pair<std::string, std::string>{".png", EncodePng(figure.image)},
+          {".svg", figure.svg},
+          {".csv", figure.csv}}) {
+      WriteFileAtomically((out / (stem + extension)).string(), bytes);
+      written.push_back(stem + extension);
+    }
+  };
+  write("birdseye", BirdsEyeFigure(scene, options));
   progress.Update(1);
   // Without an EGL driver there is no off-screen OpenGL: the other files are
   // still worth having.
   try {
-    WritePng(RenderPerspective(scene, options), (out / written[1]).string());
+    WritePng(RenderPerspective(scene, options), (out / "perspective.png").string());
+    written.push_back("perspective.png");
   } catch (const Error& e) {
     std::fprintf(stderr, "warning: perspective.png not written: %s\n", e.what());
-    written.erase(written.begin() + 1);
   }
   progress.Update(2);
   std::string note;
   if (scene.ground_truth.empty()) {
-    note = " (no ground truth: trajectories.png skipped)";
+    note = " (no ground truth: no trajectory error plot)";
   } else {
     FigureOptions plot = options;
     plot.height_px = std::max(200, options.height_px / 2);
-    written.push_back("trajectories.png");
-    WritePng(PlotTrajectoryErrors(scene, plot), (out / written.back()).string());
+    write("trajectories", TrajectoryErrorFigure(scene, plot));
   }
   progress.Update(3);
-  progress.Done("birdseye.png, perspective.png, trajectories.png" + note);
+  progress.Done(std::to_string(written.size()) + " files" + note);
   return written;
 }
 

@@ -34,8 +34,8 @@ void CreateOutputFolder(const std::filesystem::path& out);
 void WriteModels(const ExportScene& scene, const ExportOptions& options,
                  const std::filesystem::path& out, bool ascii_ply, bool quiet);
 
-// birdseye.png, perspective.png and, when the scene has ground truth,
-// trajectories.png. Returns the names of the files written.
+// birdseye.{png,svg,csv}, perspective.png and, when the scene has ground
+// truth, trajectories.{png,svg,csv}. Returns the names of the files written.
 std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOptions& options,
                                       const std::filesystem::path& out, bool quiet);
 

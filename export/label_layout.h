@@ -1,5 +1,5 @@
 // Places text labels next to their anchors so they overlap neither each
-// other, nor the anchors of other labels, nor given obstacles (a legend),
+// other, nor what is drawn at any anchor, nor given obstacles (a legend),
 // and stay on the canvas: the overlays, the figures and the 3D views use it.
 // Greedy, in the given order: each label takes the first free spot of a ring
 // of candidates around its anchor (right, above right, above, ... ), rings
@@ -15,9 +15,11 @@
 namespace oslam {
 
 struct LabelRequest {
-  cv::Point2d anchor;      // the point the label belongs to
-  cv::Size2d size;         // the label's extent
-  double clearance = 0.0;  // keep this far from the anchor (a marker's or disc's radius)
+  cv::Point2d anchor;  // the point the label belongs to
+  cv::Size2d size;     // the label's extent
+  // Half the width and height of what is drawn at the anchor (a disc, a
+  // footprint): no label covers it, its own label starts just beyond it.
+  cv::Size2d clearance;
 };
 
 struct PlacedLabel {

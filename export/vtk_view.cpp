@@ -599,7 +599,7 @@ class ViewScene {
       }
       double extent[2];
       labels_[i].text->GetSize(renderer_, extent);
-      requests.push_back({anchor, {extent[0], extent[1]}, 0.3 * font_px_});
+      requests.push_back({anchor, {extent[0], extent[1]}, {0.3 * font_px_, 0.3 * font_px_}});
       shown.push_back(i);
     }
     const std::vector<PlacedLabel> placed =

@@ -24,14 +24,14 @@ using testing::MatchingFraction;
 
 FigureOptions SmallFigure() {
   FigureOptions options;
-  options.width_px = 320;
-  options.height_px = 240;
+  options.width_px = 480;
+  options.height_px = 400;
   options.min_existence = 0.1;
   return options;
 }
 
 TEST(Golden, BirdsEye) {
-  ExpectMatchesGolden(RenderBirdsEye(testing::FixtureScene(), SmallFigure()), "birdseye.png");
+  ExpectMatchesGolden(BirdsEyeFigure(testing::FixtureScene(), SmallFigure()).image, "birdseye.png");
 }
 
 TEST(Golden, Perspective) {
@@ -42,7 +42,7 @@ TEST(Golden, Perspective) {
 }
 
 TEST(Golden, TrajectoryErrors) {
-  ExpectMatchesGolden(PlotTrajectoryErrors(testing::FixtureScene(), SmallFigure()),
+  ExpectMatchesGolden(TrajectoryErrorFigure(testing::FixtureScene(), SmallFigure()).image,
                       "trajectories.png");
 }
 
@@ -86,10 +86,10 @@ TEST(Golden, Overlay) {
 // changed is rejected.
 TEST(Golden, ComparisonRejectsAChangedFigure) {
   ExportScene scene = testing::FixtureScene();
-  const cv::Mat original = RenderBirdsEye(scene, SmallFigure());
+  const cv::Mat original = BirdsEyeFigure(scene, SmallFigure()).image;
   scene.map.objects[0].existence_probability = 0.3;
   scene.map.objects[0].base_world.x() += 0.2;
-  const cv::Mat changed = RenderBirdsEye(scene, SmallFigure());
+  const cv::Mat changed = BirdsEyeFigure(scene, SmallFigure()).image;
   EXPECT_EQ(MatchingFraction(original, original), 1.0);
   EXPECT_LT(MatchingFraction(changed, original), kMinMatchingFraction);
 }

@@ -162,7 +162,8 @@ TEST(RenderCommand, WritesTheFiguresThatReadBack) {
   EXPECT_EQ(result.out, "");
   // No run folder, so no ground truth and no comparison plot.
   ASSERT_EQ(FilesIn(dir.Path("out")),
-            (std::vector<std::string>{"birdseye.png", "perspective.png"}));
+            (std::vector<std::string>{"birdseye.csv", "birdseye.png", "birdseye.svg",
+                                      "perspective.png"}));
   for (const char* name : {"birdseye.png", "perspective.png"}) {
     const cv::Mat image = cv::imread(dir.Path("out/") + name);
     EXPECT_EQ(image.size(), cv::Size(160, 160)) << name;
@@ -175,8 +176,10 @@ TEST(RenderCommand, RunWithGroundTruthAddsTheTrajectoryPlot) {
   const CliResult result = Oslam("render " + kOMap + " -o " + dir.Path("out") + " --run " +
                                  dir.Path("run") + " --figure-size 300 --quiet");
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  ASSERT_EQ(FilesIn(dir.Path("out")),
-            (std::vector<std::string>{"birdseye.png", "perspective.png", "trajectories.png"}));
+  ASSERT_EQ(
+      FilesIn(dir.Path("out")),
+      (std::vector<std::string>{"birdseye.csv", "birdseye.png", "birdseye.svg", "perspective.png",
+                                "trajectories.csv", "trajectories.png", "trajectories.svg"}));
   const cv::Mat plot = cv::imread(dir.Path("out/trajectories.png"));
   EXPECT_EQ(plot.cols, 300);
   EXPECT_GT(plot.rows, 0);
@@ -202,7 +205,7 @@ TEST(OverlayRenderCommands, UsageErrorsExit2AndWriteNothing) {
   ExpectUsageError("overlay " + run + " " + kOMap + " -o " + out + " --min-existence 2",
                    "min-existence");
   ExpectUsageError("render " + kOMap, "-o");
-  ExpectUsageError("render " + kOMap + " -o " + out + " --figure-size 10", "64x64");
+  ExpectUsageError("render " + kOMap + " -o " + out + " --figure-size 10", "64 to 8192 pixels");
   ExpectUsageError("render " + kOMap + " -o " + out + " --overlays", "--overlays");
   EXPECT_FALSE(fs::exists(out));
 }
