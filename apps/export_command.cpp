@@ -27,7 +27,7 @@ int RunExportCommand(const std::vector<std::string>& args) {
   arguments.AddOption("figure-size", "", "PX", "width and height of the figures", "800");
   arguments.AddFlag("no-grid", "no floor grid in the glTF");
   arguments.AddFlag("ascii-ply", "write ASCII PLY instead of binary");
-  arguments.AddFlag("overlays", "also draw the map on the run's frames (overlays/NNNNNN.png)");
+  arguments.AddFlag("overlays", "also draw the map on the run's frames (overlays/NNNNNN.jpg)");
   arguments.AddOption("frames", "", "LIST", "overlay only these frames, e.g. 0,10,20-30");
   arguments.AddOption("detections", "", "FILE", "detections drawn on the overlays",
                       "RUN_DIR/detections.csv if present");
@@ -63,11 +63,9 @@ int RunExportCommand(const std::vector<std::string>& args) {
   const std::filesystem::path out = arguments.Get("output");
   CreateOutputFolder(out);
 
-  WriteModels(scene, options, out, arguments.Flag("ascii-ply"), quiet);
-  WriteFigures(scene, figures, out, quiet);
-  if (overlays)
-    WriteOverlays(scene, *overlays, options.min_existence, out / "overlays", quiet,
-                  static_cast<int>(threads));
+  WriteExportFiles(scene, options, arguments.Flag("ascii-ply"), figures,
+                   overlays ? &*overlays : nullptr, OverlayFormat::kJpeg, out, quiet,
+                   static_cast<int>(threads));
   if (!quiet) std::printf("wrote %s\n", out.string().c_str());
   return 0;
 }

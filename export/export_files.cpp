@@ -1,15 +1,21 @@
 #include "export/export_files.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <exception>
 #include <mutex>
 #include <sstream>
+#include <thread>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "calib/camera_io.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "export/figures.h"
 #include "export/gltf_writer.h"
 #include "export/overlay.h"
 #include "export/ply_writer.h"
@@ -143,27 +149,84 @@ OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_di
   return input;
 }
 
+std::optional<OverlayFormat> ParseOverlayFormat(const std::string& text) {
+  if (text == "jpg" || text == "jpeg") return OverlayFormat::kJpeg;
+  if (text == "png") return OverlayFormat::kPng;
+  return std::nullopt;
+}
+
 void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double min_existence,
-                   const fs::path& overlays_dir, bool quiet, int threads) {
+                   const fs::path& overlays_dir, bool quiet, int threads, OverlayFormat format) {
   CreateOutputFolder(overlays_dir);
   Progress progress("overlays", input.chosen.size(), "frames", quiet);
   std::mutex progress_mutex;
   size_t done = 0;
-  // Every frame is independent: read (or taken from the frame cache), drawn
-  // and written by whichever thread takes it.
+  const char* extension = format == OverlayFormat::kJpeg ? "jpg" : "png";
+  // Every frame is independent: read (or taken from the frame cache), drawn,
+  // encoded in memory and written by whichever thread takes it.
   ParallelFor(0, input.chosen.size(), threads, [&](size_t i) {
     const long frame = input.chosen[i];
     char name[32];
-    std::snprintf(name, sizeof(name), "%06ld.png", frame);
+    std::snprintf(name, sizeof(name), "%06ld.%s", frame, extension);
     const cv::Mat image = DrawOverlay(input.frames->Read(frame), frame, *input.camera, scene,
                                       input.detections, min_existence);
-    WritePng(image, (overlays_dir / name).string(), FileSync::kDeferred);
+    const std::string path = (overlays_dir / name).string();
+    std::vector<unsigned char> bytes;
+    const bool encoded = format == OverlayFormat::kJpeg
+                             ? cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, 92})
+                             : cv::imencode(".png", image, bytes);
+    if (!encoded) throw Error::InFile(path, "cannot encode the overlay");
+    WriteFileAtomically(path,
+                        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                        FileSync::kDeferred);
     const std::lock_guard<std::mutex> lock(progress_mutex);
     progress.Update(++done);
   });
   SyncFileSystem(overlays_dir.string());
   progress.Done(std::to_string(input.chosen.size()) + " overlays" +
                 (input.detections.empty() ? " (no detections.csv: map only)" : ""));
+}
+
+void WriteExportFiles(const ExportScene& scene, const ExportOptions& models, bool ascii_ply,
+                      const FigureOptions& figures, const OverlayInput* overlays,
+                      OverlayFormat overlay_format, const fs::path& out, bool quiet, int threads) {
+  if (overlays == nullptr) {
+    WriteModels(scene, models, out, ascii_ply, quiet);
+    WriteFigures(scene, figures, out, quiet);
+    return;
+  }
+  // The models and figures on a thread of their own, quietly (two progress
+  // lines updated at once would garble a terminal); their summary follows
+  // the overlays'.
+  std::exception_ptr failure;
+  std::string summary;
+  std::thread side([&] {
+    try {
+      const auto start = std::chrono::steady_clock::now();
+      WriteModels(scene, models, out, ascii_ply, /*quiet=*/true);
+      const std::vector<std::string> written = WriteFigures(scene, figures, out, /*quiet=*/true);
+      char line[160];
+      std::snprintf(
+          line, sizeof(line),
+          "[models, figures] %zu figure files and the 3D models in %.2f s, beside "
+          "the overlays\n",
+          written.size(),
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      summary = line;
+    } catch (...) {
+      failure = std::current_exception();
+    }
+  });
+  try {
+    WriteOverlays(scene, *overlays, models.min_existence, out / "overlays", quiet, threads,
+                  overlay_format);
+  } catch (...) {
+    side.join();
+    throw;
+  }
+  side.join();
+  if (failure) std::rethrow_exception(failure);
+  if (!quiet) std::fputs(summary.c_str(), stderr);
 }
 
 }  // namespace oslam

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,10 +56,30 @@ OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_di
                              const std::string& frame_list,
                              const std::string& detections_path = "");
 
-// One PNG per chosen frame: `overlays_dir`/NNNNNN.png (folder created),
-// `threads` frames at a time (0 = one per core); the files do not depend on
-// it. On an error the files of the frames before the failing one are written.
+// JPEG by default: the overlays are camera frames with thin drawings, for
+// which quality 92 shows no artefacts and encodes about eight times faster
+// than the fastest PNG (docs/benchmarks.md, "export"); PNG when the frames
+// must stay lossless.
+enum class OverlayFormat { kJpeg, kPng };
+
+// "jpg" or "png"; nullopt otherwise.
+std::optional<OverlayFormat> ParseOverlayFormat(const std::string& text);
+
+// One image per chosen frame: `overlays_dir`/NNNNNN.jpg (or .png; folder
+// created), `threads` frames at a time (0 = one per core); the files do not
+// depend on it. On an error the files of the frames before the failing one
+// are written.
 void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double min_existence,
-                   const std::filesystem::path& overlays_dir, bool quiet, int threads = 2);
+                   const std::filesystem::path& overlays_dir, bool quiet, int threads = 2,
+                   OverlayFormat format = OverlayFormat::kJpeg);
+
+// Everything `oslam export` writes: WriteModels and WriteFigures, and with
+// `overlays` the overlays into `out`/overlays. The models and figures are
+// made on a thread of their own while the overlays take `threads` others, so
+// the whole takes about as long as the overlays alone.
+void WriteExportFiles(const ExportScene& scene, const ExportOptions& models, bool ascii_ply,
+                      const FigureOptions& figures, const OverlayInput* overlays,
+                      OverlayFormat overlay_format, const std::filesystem::path& out, bool quiet,
+                      int threads = 2);
 
 }  // namespace oslam
