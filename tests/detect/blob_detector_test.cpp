@@ -1,18 +1,15 @@
 // Colour-blob detection on synthetic omnidirectional frames with known slices.
 #include "detect/blob_detector.h"
 
-#include <fstream>
 #include <random>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "calib/hyperbolic_camera.h"
 #include "core/angles.h"
 #include "core/error.h"
 #include "detect/colour_classifier.h"
-#include "detect/colour_training.h"
 #include "detect/painted_slices.h"
 #include "test_util.h"
 
@@ -214,54 +211,6 @@ TEST(BlobDetector, ShapeGateDropsOnlyDetectionsFarFromTheirClassShape) {
   EXPECT_EQ(ClassesOn(detections, scene.blue), Names{});
   gated.max_shape_distance = -1.0;
   EXPECT_THROW(BlobDetector(scene.camera, scene.classes, gated), Error);
-}
-
-TEST(ImageShapes, LearntFromOutlineExamplesAsTheDetectorMeasuresBlobs) {
-  const LookAlikeScene scene;
-  testing::TempDir dir;
-  std::ofstream yaml(dir.Path("examples.yaml"));
-  yaml << "examples:\n";
-  // Three views of a bucket-shaped slice (elongation 1.4) at other places in the image.
-  const std::vector<BoundingSlice> views = {{100.0, 0.3, 24.0, 24.0 / (1.4 * 112.0)},
-                                            {140.0, 2.0, 30.0, 30.0 / (1.4 * 155.0)},
-                                            {80.0, -2.5, 20.0, 20.0 / (1.4 * 90.0)}};
-  for (size_t i = 0; i < views.size(); ++i) {
-    cv::Mat image(scene.camera.image_height(), scene.camera.image_width(), CV_8UC3,
-                  cv::Scalar(128, 128, 128));
-    PaintSlice(&image, scene.camera, views[i], scene.orange);
-    cv::Mat mask;
-    cv::inRange(image, scene.orange, scene.orange, mask);
-    const std::string name = "view" + std::to_string(i);
-    cv::imwrite(dir.Path(name + ".png"), image);
-    cv::imwrite(dir.Path(name + "_mask.png"), mask);
-    yaml << "  - {image: " << name << ".png, class: orange bucket, mask: " << name
-         << "_mask.png, outline: 1}\n";
-  }
-  // A plain colour example teaches no shape.
-  yaml << "  - {image: view0.png, class: orange ball, roi: [0, 0, 8, 8]}\n";
-  yaml.close();
-  const std::vector<ColourExample> examples =
-      ReadColourExamples(dir.Path("examples.yaml"), scene.classes);
-  std::vector<ObjectClass> classes = scene.classes;
-  for (ObjectClass& c : classes) c.image_shape.reset();
-  const std::vector<ObjectClass> learnt =
-      LearnImageShapesFromExamples(classes, examples, scene.camera);
-  ASSERT_TRUE(learnt[1].image_shape.has_value());
-  EXPECT_NEAR(learnt[1].image_shape->elongation_mean, 1.4, 0.08);
-  EXPECT_GE(learnt[1].image_shape->elongation_std, 0.05);  // the floor for few views
-  EXPECT_FALSE(learnt[0].image_shape.has_value());
-  // Fewer than three outlines: no model.
-  const std::vector<ColourExample> two(examples.begin(), examples.begin() + 2);
-  EXPECT_FALSE(LearnImageShapesFromExamples(classes, two, scene.camera)[1].image_shape);
-
-  std::ofstream(dir.Path("bad.yaml"))
-      << "examples:\n  - {image: view0.png, class: orange ball, roi: [0, 0, 8, 8], outline: 1}\n";
-  try {
-    ReadColourExamples(dir.Path("bad.yaml"), scene.classes);
-    ADD_FAILURE() << "an ROI passed as an outline";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("examples[0].outline"), std::string::npos) << e.what();
-  }
 }
 
 TEST(BlobDetector, ShapeDistanceGrowsWithTheElongationErrorAndShrinksWithBlobSize) {
