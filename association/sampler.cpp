@@ -10,13 +10,10 @@
 #include <unordered_map>
 
 #include "core/error.h"
+#include "core/text.h"
 
 namespace oslam {
 namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 bool ValidProbabilities(const MoveProbabilities& p) {
   return p.merge >= 0 && p.split >= 0 && p.switch_class >= 0 &&
@@ -99,7 +96,7 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
     if (approximate && approximate->valid &&
         approximate->log_target - current->log_target < -rule.greedy_screen_nats) {
       ++stat.screened_out;
-      stat.time_s += Seconds(start);
+      stat.time_s += SecondsSince(start);
       return current;
     }
   }
@@ -118,7 +115,7 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
     }
     if (log_u_screen >= log_screen_forward) {
       ++stat.screened_out;
-      stat.time_s += Seconds(start);
+      stat.time_s += SecondsSince(start);
       return current;
     }
   }
@@ -126,7 +123,7 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
   EvaluationPtr proposed = evaluator.Evaluate(proposal.state, current.get());
   stat.cache_hits += static_cast<long>(evaluator.num_cache_hits() - hits_before);
   if (!proposed || !proposed->valid) {
-    stat.time_s += Seconds(start);
+    stat.time_s += SecondsSince(start);
     return current;
   }
   const double delta = proposed->log_target - current->log_target;
@@ -152,7 +149,7 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
     }
     accept = std::isfinite(log_reverse) && log_u < std::min(0.0, log_alpha);
   }
-  stat.time_s += Seconds(start);
+  stat.time_s += SecondsSince(start);
   if (!accept) return current;
   ++stat.accepted;
   return proposed;
@@ -237,7 +234,7 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
   summary.hill_climb_steps = step;
   result.hill_climbed = current;
   summary.hill_climbed_log_target = current->log_target;
-  summary.hill_climb_time_s = Seconds(clock);
+  summary.hill_climb_time_s = SecondsSince(clock);
 
   // Algorithm 8: every chain starts from the hill-climbed state.
   clock = std::chrono::steady_clock::now();
@@ -444,7 +441,7 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
   }
   stop_threads();
   summary.sampling = chain[0].stats;
-  summary.sampling_time_s = Seconds(clock);
+  summary.sampling_time_s = SecondsSince(clock);
   if (completer) summary.num_solves += completer->num_solves();
   for (const auto& evaluator : evaluators) {
     summary.num_solves += evaluator->num_solves();
