@@ -139,6 +139,19 @@ Eigen::VectorXd VectorFromMei(const MeiParameters& p) {
   return v;
 }
 
+// Mirror parameters of a hyperbolic intrinsic vector (focus height 1 m, the
+// image not mirrored: the caller mounts the camera).
+HyperbolicMirrorParameters HyperbolicFromVector(const Eigen::VectorXd& v) {
+  HyperbolicMirrorParameters p;
+  p.focal_px = v[0];
+  p.center_x_px = v[1];
+  p.center_y_px = v[2];
+  p.mirror_a_m = v[3];
+  p.mirror_b_m = v[4];
+  p.focus_height_m = 1.0;
+  return p;
+}
+
 // Projects mirror-frame points for one intrinsic vector.
 class Projector {
  public:
@@ -146,13 +159,7 @@ class Projector {
     if (model == Model::kMei) {
       mei_.set_parameters(MeiFromVector(intrinsics));
     } else {
-      HyperbolicMirrorParameters p;
-      p.focal_px = intrinsics[0];
-      p.center_x_px = intrinsics[1];
-      p.center_y_px = intrinsics[2];
-      p.mirror_a_m = intrinsics[3];
-      p.mirror_b_m = intrinsics[4];
-      p.focus_height_m = 1.0;
+      const HyperbolicMirrorParameters p = HyperbolicFromVector(intrinsics);
       hyperbolic_.set_parameters(p);
       valid_ = p.focal_px > 0 && p.mirror_b_m > 0;
     }
@@ -429,6 +436,200 @@ Problem InitialMeiProblem(const std::vector<Eigen::Vector3d>& object,
   return best;
 }
 
+// The views whose board was found, as corner lists (same order as `used`).
+void UsedViews(const std::vector<CalibrationView>& views, size_t corners_per_view,
+               std::vector<const Corners*>* observed, std::vector<size_t>* used) {
+  for (size_t v = 0; v < views.size(); ++v) {
+    if (!views[v].board_found) continue;
+    if (views[v].corners.size() != corners_per_view)
+      throw Error("calibration: view " + views[v].name + " has " +
+                  std::to_string(views[v].corners.size()) + " corners, expected " +
+                  std::to_string(corners_per_view));
+    observed->push_back(&views[v].corners);
+    used->push_back(v);
+  }
+  if (observed->size() < 3)
+    throw Error("calibration: need at least 3 views with a detected board, got " +
+                std::to_string(observed->size()));
+}
+
+// The Mei model fitted to every view (also the initial guess of the
+// hyperbolic model).
+Problem FitMei(const std::vector<Eigen::Vector3d>& object,
+               const std::vector<const Corners*>& observed, int image_width, int image_height,
+               const CalibrationOptions& options, SolveReport* report) {
+  const double cx =
+      std::isfinite(options.initial_cx_px) ? options.initial_cx_px : 0.5 * (image_width - 1);
+  const double cy =
+      std::isfinite(options.initial_cy_px) ? options.initial_cy_px : 0.5 * (image_height - 1);
+  Problem problem = InitialMeiProblem(object, observed, cx, cy, image_width, image_height);
+  problem.free = {0, 1, 2, 4, 5};
+  if (!options.fix_skew) problem.free.push_back(3);
+  if (options.estimate_distortion && options.model == "mei")
+    for (int k : {6, 7, 8, 9}) problem.free.push_back(k);
+  std::sort(problem.free.begin(), problem.free.end());
+  *report = SolveLevenbergMarquardt(&problem, options.max_iterations, options.function_tolerance);
+  return problem;
+}
+
+// Radial profile of a Mei fit: the elevation of each corner's ray (in the
+// hyperbolic frame, z up) and its image radius.
+std::vector<std::pair<double, double>> RadialProfile(const Problem& mei_fit) {
+  const MeiParameters mei = MeiFromVector(mei_fit.intrinsics);
+  std::vector<std::pair<double, double>> profile;
+  for (size_t v = 0; v < mei_fit.observed.size(); ++v) {
+    const Eigen::Matrix3d rotation = RotationOf(mei_fit.poses[v].head<3>());
+    for (size_t i = 0; i < mei_fit.object.size(); ++i) {
+      const Eigen::Vector3d p = rotation * mei_fit.object[i] + mei_fit.poses[v].tail<3>();
+      profile.emplace_back(
+          std::atan2(-p.z(), std::hypot(p.x(), p.y())),
+          ((*mei_fit.observed[v])[i] - Eigen::Vector2d(mei.cx_px, mei.cy_px)).norm());
+    }
+  }
+  return profile;
+}
+
+// For each mirror b/a candidate the focal length is a linear least-squares
+// fit of the profile; the best b and its focal length. False when none fits.
+bool BestMirrorForProfile(const std::vector<std::pair<double, double>>& profile, double a,
+                          const std::vector<double>& candidates, int image_width, int image_height,
+                          double* best_b, double* best_f) {
+  double best_error = std::numeric_limits<double>::infinity();
+  for (double b : candidates) {
+    HyperbolicMirrorParameters hp;
+    hp.mirror_a_m = a;
+    hp.mirror_b_m = b;
+    hp.focal_px = 1.0;
+    hp.focus_height_m = 1.0;
+    HyperbolicCamera unit(hp, image_width, image_height, {});
+    double sum_rg = 0, sum_gg = 0;
+    std::vector<double> g;
+    bool ok = true;
+    for (const auto& [elevation, radius] : profile) {
+      double value = 0;
+      if (!unit.ImageRadius(std::cos(elevation), 1.0 + std::sin(elevation), &value)) {
+        ok = false;
+        break;
+      }
+      g.push_back(value);
+      sum_rg += radius * value;
+      sum_gg += value * value;
+    }
+    if (!ok || !(sum_gg > 0)) continue;
+    const double f = sum_rg / sum_gg;
+    double error = 0;
+    for (size_t i = 0; i < g.size(); ++i) error += std::pow(profile[i].second - f * g[i], 2);
+    if (error < best_error) {
+      best_error = error;
+      *best_b = b;
+      *best_f = f;
+    }
+  }
+  return std::isfinite(best_error);
+}
+
+// The hyperbolic model started from a Mei fit: mirror b (unless given) and
+// focal length from its radial profile, then refined with the Mei fit's poses.
+Problem FitHyperbolicFromMei(const Problem& mei_fit, int image_width, int image_height,
+                             const CalibrationOptions& options, SolveReport* report) {
+  const double a = options.mirror_a_m;
+  std::vector<double> candidates;
+  if (options.mirror_b_m > 0)
+    candidates = {options.mirror_b_m};
+  else
+    for (int k = 0; k <= 120; ++k) candidates.push_back(a * 0.05 * std::pow(100.0, k / 120.0));
+  double best_b = options.mirror_b_m, best_f = 0;
+  if (!BestMirrorForProfile(RadialProfile(mei_fit), a, candidates, image_width, image_height,
+                            &best_b, &best_f))
+    throw Error("calibration: no hyperbolic mirror fits the Mei profile of these views");
+  const MeiParameters mei = MeiFromVector(mei_fit.intrinsics);
+  Problem hyperbolic;
+  hyperbolic.model = Model::kHyperbolic;
+  hyperbolic.intrinsics.resize(5);
+  hyperbolic.intrinsics << best_f, mei.cx_px, mei.cy_px, a, best_b;
+  hyperbolic.free = {0, 1, 2};
+  if (!(options.mirror_b_m > 0)) hyperbolic.free.push_back(4);
+  hyperbolic.object = mei_fit.object;
+  hyperbolic.observed = mei_fit.observed;
+  hyperbolic.poses = mei_fit.poses;
+  *report =
+      SolveLevenbergMarquardt(&hyperbolic, options.max_iterations, options.function_tolerance);
+  return hyperbolic;
+}
+
+// Per-view RMS, reprojected corners and outlier flags of the fitted views
+// (`used[k]` is the index in result->views of the problem's view k).
+void ScoreViews(const Problem& problem, const std::vector<size_t>& used,
+                const CalibrationOptions& options, CalibrationResult* result) {
+  const Projector projector(problem.model, problem.intrinsics);
+  std::vector<double> view_rms;
+  Eigen::VectorXd residuals;
+  for (size_t k = 0; k < used.size(); ++k) {
+    CalibrationView& view = result->views[used[k]];
+    problem.ViewResiduals(projector, problem.poses[k], k, &residuals);
+    view.rms_px = RmsOf(residuals);
+    view.rotation_mirror_from_board = problem.poses[k].head<3>();
+    view.translation_mirror_from_board_m = problem.poses[k].tail<3>();
+    view.reprojected.clear();
+    for (size_t i = 0; i < problem.object.size(); ++i)
+      view.reprojected.push_back(view.corners[i] + residuals.segment<2>(2 * i));
+    view_rms.push_back(view.rms_px);
+  }
+  const double median = Median(view_rms);
+  for (size_t k : used)
+    result->views[k].outlier =
+        result->views[k].rms_px > std::max(options.outlier_view_factor * median, 1.0);
+}
+
+// The estimated intrinsics with their standard deviations:
+// sigma² (JᵀJ)⁻¹ with sigma² = |r|² / (m - n).
+void EstimatedParameters(const Problem& problem, const std::vector<std::string>& names,
+                         CalibrationResult* result) {
+  const Eigen::MatrixXd jacobian = problem.Jacobian();
+  Eigen::VectorXd all_residuals;
+  problem.Residuals(&all_residuals);
+  const int dof = std::max(1, problem.NumResiduals() - problem.NumParameters());
+  const double sigma_sq = all_residuals.squaredNorm() / dof;
+  const Eigen::MatrixXd covariance =
+      sigma_sq *
+      (jacobian.transpose() * jacobian)
+          .ldlt()
+          .solve(Eigen::MatrixXd::Identity(problem.NumParameters(), problem.NumParameters()));
+  result->parameter_names.clear();
+  result->parameters.resize(problem.free.size());
+  result->standard_deviations.resize(problem.free.size());
+  for (size_t i = 0; i < problem.free.size(); ++i) {
+    result->parameter_names.push_back(names[problem.free[i]]);
+    result->parameters[i] = problem.intrinsics[problem.free[i]];
+    result->standard_deviations[i] = std::sqrt(std::max(0.0, covariance(i, i)));
+  }
+}
+
+// The calibrated camera, mounted with the mirror axis vertical at the given
+// height, with a first annulus from the centre to the farthest image corner
+// (the rim detector refines it).
+std::unique_ptr<CameraModel> CalibratedCamera(const Problem& problem, int image_width,
+                                              int image_height, double focus_height_m) {
+  std::unique_ptr<CameraModel> camera;
+  if (problem.model == Model::kMei) {
+    MeiParameters p = MeiFromVector(problem.intrinsics);
+    p.focus_height_m = focus_height_m;
+    camera = MeiCamera(p, image_width, image_height, {}).Clone();
+  } else {
+    HyperbolicMirrorParameters p = HyperbolicFromVector(problem.intrinsics);
+    p.focus_height_m = focus_height_m;
+    p.flip_image_angle = true;
+    camera = HyperbolicCamera(p, image_width, image_height, {}).Clone();
+  }
+  const Eigen::Vector2d centre = camera->ImageCenter();
+  double far = 0;
+  for (double x : {0.0, image_width - 1.0})
+    for (double y : {0.0, image_height - 1.0})
+      far = std::max(far, (Eigen::Vector2d(x, y) - centre).norm());
+  camera->set_annulus({0.0, far});
+  return camera;
+}
+
 }  // namespace
 
 CalibrationResult CalibrateFromCorners(const std::vector<CalibrationView>& views,
@@ -442,170 +643,21 @@ CalibrationResult CalibrateFromCorners(const std::vector<CalibrationView>& views
   const std::vector<Eigen::Vector3d> object = pattern.ObjectPoints();
   std::vector<const Corners*> observed;
   std::vector<size_t> used;
-  for (size_t v = 0; v < views.size(); ++v) {
-    if (!views[v].board_found) continue;
-    if (views[v].corners.size() != object.size())
-      throw Error("calibration: view " + views[v].name + " has " +
-                  std::to_string(views[v].corners.size()) + " corners, expected " +
-                  std::to_string(object.size()));
-    observed.push_back(&views[v].corners);
-    used.push_back(v);
-  }
-  if (observed.size() < 3)
-    throw Error("calibration: need at least 3 views with a detected board, got " +
-                std::to_string(observed.size()));
-  const double cx =
-      std::isfinite(options.initial_cx_px) ? options.initial_cx_px : 0.5 * (image_width - 1);
-  const double cy =
-      std::isfinite(options.initial_cy_px) ? options.initial_cy_px : 0.5 * (image_height - 1);
+  UsedViews(views, object.size(), &observed, &used);
 
-  // Mei first (also the initial guess of the hyperbolic model).
-  Problem problem = InitialMeiProblem(object, observed, cx, cy, image_width, image_height);
-  problem.free = {0, 1, 2, 4, 5};
-  if (!options.fix_skew) problem.free.push_back(3);
-  if (options.estimate_distortion && options.model == "mei")
-    for (int k : {6, 7, 8, 9}) problem.free.push_back(k);
-  std::sort(problem.free.begin(), problem.free.end());
-  SolveReport report =
-      SolveLevenbergMarquardt(&problem, options.max_iterations, options.function_tolerance);
-
+  SolveReport report;
+  Problem problem = FitMei(object, observed, image_width, image_height, options, &report);
   std::vector<std::string> names = kMeiNames;
   if (options.model == "hyperbolic") {
-    // Radial profile from the Mei fit: elevation of each corner's ray (in the
-    // hyperbolic frame, z up) -> image radius. For each b/a on a grid, the
-    // focal length is a linear least-squares fit; keep the best b.
-    const MeiParameters mei = MeiFromVector(problem.intrinsics);
-    std::vector<std::pair<double, double>> profile;  // elevation, radius
-    for (size_t v = 0; v < observed.size(); ++v) {
-      const Eigen::Matrix3d rotation = RotationOf(problem.poses[v].head<3>());
-      for (size_t i = 0; i < object.size(); ++i) {
-        const Eigen::Vector3d p = rotation * object[i] + problem.poses[v].tail<3>();
-        profile.emplace_back(std::atan2(-p.z(), std::hypot(p.x(), p.y())),
-                             ((*observed[v])[i] - Eigen::Vector2d(mei.cx_px, mei.cy_px)).norm());
-      }
-    }
-    const double a = options.mirror_a_m;
-    double best_b = options.mirror_b_m, best_f = 0,
-           best_error = std::numeric_limits<double>::infinity();
-    std::vector<double> candidates;
-    if (options.mirror_b_m > 0)
-      candidates = {options.mirror_b_m};
-    else
-      for (int k = 0; k <= 120; ++k) candidates.push_back(a * 0.05 * std::pow(100.0, k / 120.0));
-    for (double b : candidates) {
-      HyperbolicMirrorParameters hp;
-      hp.mirror_a_m = a;
-      hp.mirror_b_m = b;
-      hp.focal_px = 1.0;
-      hp.focus_height_m = 1.0;
-      HyperbolicCamera unit(hp, image_width, image_height, {});
-      double sum_rg = 0, sum_gg = 0;
-      std::vector<double> g;
-      bool ok = true;
-      for (const auto& [elevation, radius] : profile) {
-        double value = 0;
-        if (!unit.ImageRadius(std::cos(elevation), 1.0 + std::sin(elevation), &value)) {
-          ok = false;
-          break;
-        }
-        g.push_back(value);
-        sum_rg += radius * value;
-        sum_gg += value * value;
-      }
-      if (!ok || !(sum_gg > 0)) continue;
-      const double f = sum_rg / sum_gg;
-      double error = 0;
-      for (size_t i = 0; i < g.size(); ++i) error += std::pow(profile[i].second - f * g[i], 2);
-      if (error < best_error) {
-        best_error = error;
-        best_b = b;
-        best_f = f;
-      }
-    }
-    if (!std::isfinite(best_error))
-      throw Error("calibration: no hyperbolic mirror fits the Mei profile of these views");
-    Problem hyperbolic;
-    hyperbolic.model = Model::kHyperbolic;
-    hyperbolic.intrinsics.resize(5);
-    hyperbolic.intrinsics << best_f, mei.cx_px, mei.cy_px, a, best_b;
-    hyperbolic.free = {0, 1, 2};
-    if (!(options.mirror_b_m > 0)) hyperbolic.free.push_back(4);
-    hyperbolic.object = object;
-    hyperbolic.observed = observed;
-    hyperbolic.poses = problem.poses;
-    report =
-        SolveLevenbergMarquardt(&hyperbolic, options.max_iterations, options.function_tolerance);
-    problem = hyperbolic;
+    problem = FitHyperbolicFromMei(problem, image_width, image_height, options, &report);
     names = kHyperbolicNames;
   }
 
   CalibrationResult result;
-  // Residuals, per-view RMS, outliers.
   result.views = views;
-  const Projector projector(problem.model, problem.intrinsics);
-  std::vector<double> view_rms;
-  Eigen::VectorXd residuals;
-  for (size_t k = 0; k < used.size(); ++k) {
-    CalibrationView& view = result.views[used[k]];
-    problem.ViewResiduals(projector, problem.poses[k], k, &residuals);
-    view.rms_px = RmsOf(residuals);
-    view.rotation_mirror_from_board = problem.poses[k].head<3>();
-    view.translation_mirror_from_board_m = problem.poses[k].tail<3>();
-    view.reprojected.clear();
-    for (size_t i = 0; i < object.size(); ++i)
-      view.reprojected.push_back(view.corners[i] + residuals.segment<2>(2 * i));
-    view_rms.push_back(view.rms_px);
-  }
-  const double median = Median(view_rms);
-  for (size_t k : used)
-    result.views[k].outlier =
-        result.views[k].rms_px > std::max(options.outlier_view_factor * median, 1.0);
-
-  // Standard deviations: sigma² (JᵀJ)⁻¹ with sigma² = |r|² / (m - n).
-  const Eigen::MatrixXd jacobian = problem.Jacobian();
-  Eigen::VectorXd all_residuals;
-  problem.Residuals(&all_residuals);
-  const int dof = std::max(1, problem.NumResiduals() - problem.NumParameters());
-  const double sigma_sq = all_residuals.squaredNorm() / dof;
-  const Eigen::MatrixXd covariance =
-      sigma_sq *
-      (jacobian.transpose() * jacobian)
-          .ldlt()
-          .solve(Eigen::MatrixXd::Identity(problem.NumParameters(), problem.NumParameters()));
-  result.parameter_names.clear();
-  result.parameters.resize(problem.free.size());
-  result.standard_deviations.resize(problem.free.size());
-  for (size_t i = 0; i < problem.free.size(); ++i) {
-    result.parameter_names.push_back(names[problem.free[i]]);
-    result.parameters[i] = problem.intrinsics[problem.free[i]];
-    result.standard_deviations[i] = std::sqrt(std::max(0.0, covariance(i, i)));
-  }
-
-  // The camera, mounted with the mirror axis vertical at the given height.
-  if (problem.model == Model::kMei) {
-    MeiParameters p = MeiFromVector(problem.intrinsics);
-    p.focus_height_m = options.focus_height_m;
-    result.camera = MeiCamera(p, image_width, image_height, {}).Clone();
-  } else {
-    HyperbolicMirrorParameters p;
-    p.focal_px = problem.intrinsics[0];
-    p.center_x_px = problem.intrinsics[1];
-    p.center_y_px = problem.intrinsics[2];
-    p.mirror_a_m = problem.intrinsics[3];
-    p.mirror_b_m = problem.intrinsics[4];
-    p.focus_height_m = options.focus_height_m;
-    p.flip_image_angle = true;
-    result.camera = HyperbolicCamera(p, image_width, image_height, {}).Clone();
-  }
-  // A first annulus: from the centre to the farthest image corner; the rim
-  // detector refines it.
-  const Eigen::Vector2d centre = result.camera->ImageCenter();
-  double far = 0;
-  for (double x : {0.0, image_width - 1.0})
-    for (double y : {0.0, image_height - 1.0})
-      far = std::max(far, (Eigen::Vector2d(x, y) - centre).norm());
-  result.camera->set_annulus({0.0, far});
-
+  ScoreViews(problem, used, options, &result);
+  EstimatedParameters(problem, names, &result);
+  result.camera = CalibratedCamera(problem, image_width, image_height, options.focus_height_m);
   result.summary.iterations = report.iterations;
   result.summary.views_used = static_cast<int>(used.size());
   result.summary.points_used = static_cast<int>(used.size() * object.size());

@@ -6,9 +6,9 @@
 #include <map>
 
 #include "core/error.h"
-#include "solver/factor_graph.h"
 #include "slam/factors.h"
 #include "slam/landmark_factors.h"
+#include "solver/factor_graph.h"
 
 namespace oslam {
 
@@ -47,21 +47,16 @@ bool LandmarkSlamOptions::Validate(std::string* why) const {
 LandmarkSlam::LandmarkSlam(const LandmarkSlamOptions& options)
     : options_(options), solver_(options.solver) {}
 
-LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
-                                       const std::vector<int>& association,
-                                       const LandmarkSlamResult* warm_start) {
-  const auto start_time = std::chrono::steady_clock::now();
-  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-  };
-  std::string why;
-  if (!options_.Validate(&why)) throw Error("landmark SLAM options: " + why);
-  if (data.num_poses < 1) throw Error("landmark SLAM: no poses");
-  if (association.size() != data.sightings.size())
-    throw Error("landmark SLAM: the association has " + std::to_string(association.size()) +
-                " entries for " + std::to_string(data.sightings.size()) + " sightings");
+namespace {
 
-  // Sightings per landmark, in pose order (the first one initialises it).
+double SecondsSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Sightings per landmark id, in pose order (the first one initialises the
+// landmark). Throws oslam::Error on ids < -1 and poses outside the data set.
+std::map<int, std::vector<int>> SightingsByLandmark(const LandmarkDataset& data,
+                                                    const std::vector<int>& association) {
   std::map<int, std::vector<int>> by_landmark;
   for (size_t k = 0; k < association.size(); ++k) {
     if (association[k] < -1)
@@ -76,34 +71,25 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
   for (auto& [id, list] : by_landmark)
     std::stable_sort(list.begin(), list.end(),
                      [&](int a, int b) { return data.sightings[a].pose < data.sightings[b].pose; });
+  return by_landmark;
+}
 
-  LandmarkSlamResult staged;
-  if (!warm_start && options_.initialisation_window_poses > 0 &&
-      data.num_poses > options_.initialisation_window_poses) {
-    staged = StagedInitialisation(data, association);
-    if (!staged.trajectory.empty()) warm_start = &staged;
-  }
-  const double initialisation_time_s = seconds_since(start_time);
+// A landmark's variables in the graph.
+struct LandmarkKeys {
+  int id, position, diameter;  // diameter -1: none measured
+  int count;
+};
 
-  // ---- variables ----
-  FactorGraph graph;
-  const bool warm_poses =
-      warm_start && static_cast<int>(warm_start->trajectory.size()) == data.num_poses;
-  const std::vector<Pose2>& initial = warm_poses ? warm_start->trajectory : data.dead_reckoning;
-  if (static_cast<int>(initial.size()) != data.num_poses)
-    throw Error("landmark SLAM: the data set's dead reckoning does not cover its poses");
-  std::vector<int> pose_keys(data.num_poses);
-  for (int i = 0; i < data.num_poses; ++i)
-    pose_keys[i] = graph.AddPose(initial[i].x, initial[i].y, initial[i].theta,
-                                 /*fixed=*/i == 0 || i < options_.held_poses);  // gauge
-
+// Adds every landmark's position (and measured diameter) variable, started
+// where `warm_start` has it, else at its first sighting with a range.
+std::vector<LandmarkKeys> AddLandmarkVariables(const LandmarkDataset& data,
+                                               const std::map<int, std::vector<int>>& by_landmark,
+                                               const std::vector<Pose2>& initial,
+                                               const LandmarkSlamResult* warm_start,
+                                               FactorGraph* graph) {
   std::map<int, const MappedLandmark*> previous;
   if (warm_start)
     for (const auto& landmark : warm_start->landmarks) previous[landmark.id] = &landmark;
-  struct LandmarkKeys {
-    int id, position, diameter;  // diameter -1: none measured
-    int count;
-  };
   std::vector<LandmarkKeys> landmarks;
   landmarks.reserve(by_landmark.size());
   for (const auto& [id, list] : by_landmark) {
@@ -119,59 +105,66 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
         found != previous.end() ? found->second->position_m
                                 : LandmarkFromRangeBearing(initial[first.pose], first.range_m,
                                                            first.bearing_rad, data.sensor_offset_m);
-    LandmarkKeys keys{id, graph.AddVariable(start), -1, static_cast<int>(list.size())};
+    LandmarkKeys keys{id, graph->AddVariable(start), -1, static_cast<int>(list.size())};
     if (const std::optional<double> measured = MeanMeasuredDiameter(data.sightings, list)) {
       const double d = found != previous.end() && std::isfinite(found->second->diameter_m)
                            ? found->second->diameter_m
                            : *measured;
-      keys.diameter = graph.AddVariable(Eigen::Matrix<double, 1, 1>(d));
+      keys.diameter = graph->AddVariable(Eigen::Matrix<double, 1, 1>(d));
     }
     landmarks.push_back(keys);
   }
+  return landmarks;
+}
 
-  // ---- factors ----
+void AddOdometryFactors(const LandmarkDataset& data, const std::vector<int>& pose_keys,
+                        FactorGraph* graph) {
   for (const RelativePoseMeasurement& edge : data.odometry) {
     if (edge.from < 0 || edge.from >= data.num_poses || edge.to < 0 || edge.to >= data.num_poses)
       throw Error("landmark SLAM: odometry between poses " + std::to_string(edge.from) + " and " +
                   std::to_string(edge.to) + " outside the data set");
-    graph.Emplace<RelativePoseFactor>(pose_keys[edge.from], pose_keys[edge.to], edge.delta,
-                                      edge.covariance);
+    graph->Emplace<RelativePoseFactor>(pose_keys[edge.from], pose_keys[edge.to], edge.delta,
+                                       edge.covariance);
   }
-  const Eigen::Matrix<double, 1, 1> diameter_variance(options_.diameter_std_m *
-                                                      options_.diameter_std_m);
+}
+
+// The location prior, range-bearing and diameter factors of every landmark;
+// returns the number of sightings used.
+int AddLandmarkFactors(const LandmarkDataset& data, const LandmarkSlamOptions& options,
+                       const std::map<int, std::vector<int>>& by_landmark,
+                       const std::vector<LandmarkKeys>& landmarks,
+                       const std::vector<int>& pose_keys, FactorGraph* graph) {
+  const Eigen::Matrix<double, 1, 1> diameter_variance(options.diameter_std_m *
+                                                      options.diameter_std_m);
   int used = 0;
   for (const LandmarkKeys& landmark : landmarks) {
-    if (options_.landmark_prior_std_m > 0)
-      graph.Emplace<PriorFactor>(
-          landmark.position, Eigen::VectorXd(options_.landmark_prior_mean_m),
-          Eigen::MatrixXd(Eigen::Matrix2d::Identity() * options_.landmark_prior_std_m *
-                          options_.landmark_prior_std_m),
+    if (options.landmark_prior_std_m > 0)
+      graph->Emplace<PriorFactor>(
+          landmark.position, Eigen::VectorXd(options.landmark_prior_mean_m),
+          Eigen::MatrixXd(Eigen::Matrix2d::Identity() * options.landmark_prior_std_m *
+                          options.landmark_prior_std_m),
           "landmark prior");
-    for (int k : by_landmark[landmark.id]) {
+    for (int k : by_landmark.at(landmark.id)) {
       const LandmarkSighting& s = data.sightings[k];
-      graph.Emplace<RangeBearingFactor>(pose_keys[s.pose], landmark.position, s.range_m,
-                                        s.bearing_rad, s.range_std_m, s.bearing_std_rad,
-                                        data.sensor_offset_m);
+      graph->Emplace<RangeBearingFactor>(pose_keys[s.pose], landmark.position, s.range_m,
+                                         s.bearing_rad, s.range_std_m, s.bearing_std_rad,
+                                         data.sensor_offset_m);
       if (landmark.diameter >= 0 && std::isfinite(s.diameter_m))
-        graph.Emplace<PriorFactor>(landmark.diameter, Eigen::Matrix<double, 1, 1>(s.diameter_m),
-                                   diameter_variance, "diameter");
+        graph->Emplace<PriorFactor>(landmark.diameter, Eigen::Matrix<double, 1, 1>(s.diameter_m),
+                                    diameter_variance, "diameter");
       ++used;
     }
   }
+  return used;
+}
 
-  // ---- solve and read out ----
-  solver_.set_options(options_.solver);
-  const SolveResult solved = solver_.Solve(&graph);
-  LandmarkSlamResult result;
-  result.summary = solved.summary;
-  result.evidence = solved.evidence;
-  result.num_sightings_used = used;
-  result.initialisation_time_s = initialisation_time_s;
-  const Values& values = graph.values();
-  result.trajectory.reserve(data.num_poses);
+// The solved trajectory and landmarks read out of the graph's values.
+void ReadSolution(const Values& values, const std::vector<int>& pose_keys,
+                  const std::vector<LandmarkKeys>& landmarks, LandmarkSlamResult* result) {
+  result->trajectory.reserve(pose_keys.size());
   for (int key : pose_keys) {
     const double* p = values.Data(key);
-    result.trajectory.push_back({p[0], p[1], p[2]});
+    result->trajectory.push_back({p[0], p[1], p[2]});
   }
   for (const LandmarkKeys& landmark : landmarks) {
     MappedLandmark mapped;
@@ -179,37 +172,86 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
     mapped.position_m = values.Get(landmark.position);
     if (landmark.diameter >= 0) mapped.diameter_m = values.Data(landmark.diameter)[0];
     mapped.num_sightings = landmark.count;
-    result.landmarks.push_back(mapped);
-    result.landmark_position_keys.push_back(landmark.position);
+    result->landmarks.push_back(mapped);
+    result->landmark_position_keys.push_back(landmark.position);
   }
-  if (!result.summary.IsUsable()) {
-    result.total_time_s = seconds_since(start_time);
-    return result;
-  }
+}
 
-  if (options_.compute_landmark_covariances && !landmarks.empty()) {
+}  // namespace
+
+LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
+                                       const std::vector<int>& association,
+                                       const LandmarkSlamResult* warm_start) {
+  const auto start_time = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options_.Validate(&why)) throw Error("landmark SLAM options: " + why);
+  if (data.num_poses < 1) throw Error("landmark SLAM: no poses");
+  if (association.size() != data.sightings.size())
+    throw Error("landmark SLAM: the association has " + std::to_string(association.size()) +
+                " entries for " + std::to_string(data.sightings.size()) + " sightings");
+  const std::map<int, std::vector<int>> by_landmark = SightingsByLandmark(data, association);
+
+  LandmarkSlamResult staged;
+  if (!warm_start && options_.initialisation_window_poses > 0 &&
+      data.num_poses > options_.initialisation_window_poses) {
+    staged = StagedInitialisation(data, association);
+    if (!staged.trajectory.empty()) warm_start = &staged;
+  }
+  const double initialisation_time_s = SecondsSince(start_time);
+
+  FactorGraph graph;
+  const bool warm_poses =
+      warm_start && static_cast<int>(warm_start->trajectory.size()) == data.num_poses;
+  const std::vector<Pose2>& initial = warm_poses ? warm_start->trajectory : data.dead_reckoning;
+  if (static_cast<int>(initial.size()) != data.num_poses)
+    throw Error("landmark SLAM: the data set's dead reckoning does not cover its poses");
+  std::vector<int> pose_keys(data.num_poses);
+  for (int i = 0; i < data.num_poses; ++i)
+    pose_keys[i] = graph.AddPose(initial[i].x, initial[i].y, initial[i].theta,
+                                 /*fixed=*/i == 0 || i < options_.held_poses);  // gauge
+  const std::vector<LandmarkKeys> landmarks =
+      AddLandmarkVariables(data, by_landmark, initial, warm_start, &graph);
+  AddOdometryFactors(data, pose_keys, &graph);
+  const int used = AddLandmarkFactors(data, options_, by_landmark, landmarks, pose_keys, &graph);
+
+  solver_.set_options(options_.solver);
+  const SolveResult solved = solver_.Solve(&graph);
+  LandmarkSlamResult result;
+  result.summary = solved.summary;
+  result.evidence = solved.evidence;
+  result.num_sightings_used = used;
+  result.initialisation_time_s = initialisation_time_s;
+  ReadSolution(graph.values(), pose_keys, landmarks, &result);
+  if (result.summary.IsUsable()) {
     std::vector<std::vector<int>> groups;
     for (const LandmarkKeys& landmark : landmarks) {
       groups.push_back({landmark.position});
       if (landmark.diameter >= 0) groups.back().push_back(landmark.diameter);
     }
+    Covariances(groups, pose_keys, &result);
+  }
+  result.total_time_s = SecondsSince(start_time);
+  return result;
+}
+
+void LandmarkSlam::Covariances(const std::vector<std::vector<int>>& landmark_groups,
+                               const std::vector<int>& pose_keys, LandmarkSlamResult* result) {
+  if (options_.compute_landmark_covariances && !landmark_groups.empty()) {
     std::vector<Eigen::MatrixXd> blocks;
-    if (solver_.MarginalCovariances(groups, &blocks, &result.covariance_message))
-      for (size_t j = 0; j < landmarks.size(); ++j) {
+    if (solver_.MarginalCovariances(landmark_groups, &blocks, &result->covariance_message))
+      for (size_t j = 0; j < landmark_groups.size(); ++j) {
         const int n = static_cast<int>(blocks[j].rows());
-        result.landmarks[j].covariance.topLeftCorner(n, n) = blocks[j];
+        result->landmarks[j].covariance.topLeftCorner(n, n) = blocks[j];
       }
   }
   if (options_.compute_pose_covariances) {
     std::vector<std::vector<int>> groups;
-    for (int i = 1; i < data.num_poses; ++i) groups.push_back({pose_keys[i]});
+    for (size_t i = 1; i < pose_keys.size(); ++i) groups.push_back({pose_keys[i]});
     std::vector<Eigen::MatrixXd> blocks;
-    result.pose_covariances.assign(data.num_poses, Eigen::Matrix3d::Zero());
-    if (groups.empty() || solver_.MarginalCovariances(groups, &blocks, &result.covariance_message))
-      for (size_t i = 0; i < blocks.size(); ++i) result.pose_covariances[i + 1] = blocks[i];
+    result->pose_covariances.assign(pose_keys.size(), Eigen::Matrix3d::Zero());
+    if (groups.empty() || solver_.MarginalCovariances(groups, &blocks, &result->covariance_message))
+      for (size_t i = 0; i < blocks.size(); ++i) result->pose_covariances[i + 1] = blocks[i];
   }
-  result.total_time_s = seconds_since(start_time);
-  return result;
 }
 
 LandmarkSlamResult LandmarkSlam::StagedInitialisation(const LandmarkDataset& data,

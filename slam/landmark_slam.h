@@ -105,6 +105,10 @@ class LandmarkSlam {
  private:
   LandmarkSlamResult StagedInitialisation(const LandmarkDataset& data,
                                           const std::vector<int>& association) const;
+  // Marginal covariances of the landmarks (their variable groups, parallel
+  // to result->landmarks) and, when asked, of every pose but the first.
+  void Covariances(const std::vector<std::vector<int>>& landmark_groups,
+                   const std::vector<int>& pose_keys, LandmarkSlamResult* result);
 
   LandmarkSlamOptions options_;
   SparseSolver solver_;
