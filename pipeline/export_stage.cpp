@@ -6,26 +6,23 @@
 #include "export/export_files.h"
 
 namespace oslam {
-namespace {
 
-ExportOptions ModelOptions(const ExportStageOptions& options) {
+ExportOptions ExportStageOptions::Models() const {
   ExportOptions models;
-  models.min_existence = options.min_existence;
-  models.floor_grid = options.floor_grid;
+  models.min_existence = min_existence;
+  models.floor_grid = floor_grid;
   return models;
 }
 
-FigureOptions Figures(const ExportStageOptions& options) {
+FigureOptions ExportStageOptions::Figures() const {
   FigureOptions figures;
-  figures.min_existence = options.min_existence;
-  figures.width_px = figures.height_px = options.figure_size_px;
+  figures.min_existence = min_existence;
+  figures.width_px = figures.height_px = figure_size_px;
   return figures;
 }
 
-}  // namespace
-
 bool ExportStageOptions::Validate(std::string* why) const {
-  if (!ModelOptions(*this).Validate(why) || !Figures(*this).Validate(why)) return false;
+  if (!Models().Validate(why) || !Figures().Validate(why)) return false;
   if (threads < 0) {
     if (why) *why = "the overlay threads must be >= 0 (0 = one per core)";
     return false;
@@ -48,8 +45,8 @@ void RunExportStage(const OMap& map, const ExportStageInput& input,
     overlays = PrepareOverlays(scene, input.run_dir, options.overlay_frames, input.detections_path);
   CreateOutputFolder(out);
 
-  WriteModels(scene, ModelOptions(options), out, options.ascii_ply, output.quiet);
-  WriteFigures(scene, Figures(options), out, output.quiet);
+  WriteModels(scene, options.Models(), out, options.ascii_ply, output.quiet);
+  WriteFigures(scene, options.Figures(), out, output.quiet);
   if (overlays)
     WriteOverlays(scene, *overlays, options.min_existence, out / "overlays", output.quiet,
                   options.threads);

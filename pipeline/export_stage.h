@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <string>
 
+#include "export/export_scene.h"
+#include "export/figures.h"
 #include "omap/omap.h"
 #include "pipeline/stage_output.h"
 
@@ -19,6 +21,8 @@ struct ExportStageOptions {
   std::string overlay_frames;  // "" = every frame with an estimated pose; e.g. "0,10,20-30"
   int threads = 2;             // overlays drawn and written at once, 0 = one per core
 
+  ExportOptions Models() const;   // glTF and PLY
+  FigureOptions Figures() const;  // bird's-eye, perspective, trajectories
   bool Validate(std::string* why) const;
 };
 
