@@ -208,6 +208,33 @@ Proposal ProposeSwitch(const StateEvaluation& s, const ClassConfusionModel& mode
   return p;
 }
 
+// The forward and the reverse probability of a move are the probabilities
+// of a merge or a split given by the track sets involved, evaluated on the
+// state the move starts from or on the state it proposed.
+
+// log q of merging the objects that hold `part_a` and `part_b` in `s` into
+// one of class `merged_class`.
+double LogMergeOfParts(const StateEvaluation& s, const std::vector<int>& part_a,
+                       const std::vector<int>& part_b, int merged_class,
+                       const ClassConfusionModel& model, const MoveOptions& options,
+                       const MoveProbabilities& probabilities) {
+  return LogMergeProbability(s, s.state.BlockOf(part_a.front()), s.state.BlockOf(part_b.front()),
+                             merged_class, model, options, probabilities);
+}
+
+// log q of splitting the object that holds `part_a` and `part_b` in `s` into
+// the two with classes `class_a` and `class_b`; whichever holds the earliest
+// track is the split's first part (Algorithm 6 step 4).
+double LogSplitIntoParts(const StateEvaluation& s, const std::vector<int>& part_a,
+                         const std::vector<int>& part_b, int class_a, int class_b,
+                         const ClassConfusionModel& model, const MoveOptions& options,
+                         const MoveProbabilities& probabilities) {
+  const bool a_first = part_a.front() < part_b.front();
+  return LogSplitProbability(s, s.state.BlockOf(part_a.front()), a_first ? part_a : part_b,
+                             a_first ? part_b : part_a, a_first ? class_a : class_b,
+                             a_first ? class_b : class_a, model, options, probabilities);
+}
+
 }  // namespace
 
 const char* MoveName(MoveType type) {
@@ -286,22 +313,16 @@ Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& 
 double LogReverseProbability(const Proposal& p, const StateEvaluation& proposed,
                              const ClassConfusionModel& model, const MoveOptions& options,
                              const MoveProbabilities& probabilities) {
-  const AssociationState& s = proposed.state;
   switch (p.type) {
-    case MoveType::kMerge: {
-      // The split that undoes it: the part holding the earliest track comes first.
-      const bool a_first = p.part_a.front() < p.part_b.front();
-      return LogSplitProbability(
-          proposed, s.BlockOf(p.part_a.front()), a_first ? p.part_a : p.part_b,
-          a_first ? p.part_b : p.part_a, a_first ? p.old_class_a : p.old_class_b,
-          a_first ? p.old_class_b : p.old_class_a, model, options, probabilities);
-    }
+    case MoveType::kMerge:  // the split that undoes it
+      return LogSplitIntoParts(proposed, p.part_a, p.part_b, p.old_class_a, p.old_class_b, model,
+                               options, probabilities);
     case MoveType::kSplit:
-      return LogMergeProbability(proposed, s.BlockOf(p.part_a.front()), s.BlockOf(p.part_b.front()),
-                                 p.old_class_a, model, options, probabilities);
+      return LogMergeOfParts(proposed, p.part_a, p.part_b, p.old_class_a, model, options,
+                             probabilities);
     case MoveType::kSwitch:
-      return LogSwitchProbability(proposed, s.BlockOf(p.track), p.old_class_a, model, options,
-                                  probabilities);
+      return LogSwitchProbability(proposed, proposed.state.BlockOf(p.track), p.old_class_a, model,
+                                  options, probabilities);
   }
   return kNegInf;
 }
@@ -309,20 +330,18 @@ double LogReverseProbability(const Proposal& p, const StateEvaluation& proposed,
 double LogForwardProbability(const Proposal& p, const StateEvaluation& from,
                              const ClassConfusionModel& model, const MoveOptions& options,
                              const MoveProbabilities& probabilities) {
-  const AssociationState& s = from.state;
   const AssociationState& to = p.state;
   auto new_class = [&to](int track) { return to.classes[to.BlockOf(track)]; };
   switch (p.type) {
     case MoveType::kMerge:
-      return LogMergeProbability(from, s.BlockOf(p.part_a.front()), s.BlockOf(p.part_b.front()),
-                                 new_class(p.part_a.front()), model, options, probabilities);
-    case MoveType::kSplit:  // part_a holds the earliest track (Algorithm 6 step 4)
-      return LogSplitProbability(from, s.BlockOf(p.part_a.front()), p.part_a, p.part_b,
-                                 new_class(p.part_a.front()), new_class(p.part_b.front()), model,
-                                 options, probabilities);
+      return LogMergeOfParts(from, p.part_a, p.part_b, new_class(p.part_a.front()), model, options,
+                             probabilities);
+    case MoveType::kSplit:
+      return LogSplitIntoParts(from, p.part_a, p.part_b, new_class(p.part_a.front()),
+                               new_class(p.part_b.front()), model, options, probabilities);
     case MoveType::kSwitch:
-      return LogSwitchProbability(from, s.BlockOf(p.track), new_class(p.track), model, options,
-                                  probabilities);
+      return LogSwitchProbability(from, from.state.BlockOf(p.track), new_class(p.track), model,
+                                  options, probabilities);
   }
   return kNegInf;
 }

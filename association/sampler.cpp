@@ -1,5 +1,6 @@
 #include "association/sampler.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -27,6 +28,20 @@ Rng ChainRng(unsigned long seed, int chain) {
   return Rng(sequence);
 }
 
+// Delayed acceptance's first stage for a move from `from` to the state that
+// `approximate` stands for: min(0, log alpha1), 0 (accept) when the evaluator
+// has no approximation or the ratio is NaN. `log_alpha1(approximate,
+// tempered)` completes the ratio from its first term, tempered = beta
+// (log pi~(to) - log pi(from)), with the proposal probabilities.
+template <typename LogAlpha1>
+double LogScreenAcceptance(const EvaluationPtr& approximate, const StateEvaluation& from,
+                           double beta, const LogAlpha1& log_alpha1) {
+  if (!approximate || !approximate->valid) return 0.0;
+  const double log_alpha =
+      log_alpha1(*approximate, beta * (approximate->log_target - from.log_target));
+  return std::isnan(log_alpha) ? 0.0 : std::min(0.0, log_alpha);
+}
+
 // One MC3 chain: its state, temperature, random stream, statistics and evaluator.
 struct Chain {
   EvaluationPtr state;
@@ -43,6 +58,274 @@ struct ChainCheckpoint {
   std::array<MoveStatistics, 3> stats{};
   size_t mark = 0;                         // the evaluator's
   std::vector<EvaluationPtr> cold_states;  // chain 0: its state after each iteration
+};
+
+// The iterations of a block: chains may swap after each block of
+// `swap_every` iterations (the last block may be shorter).
+struct BlockIterations {
+  int first = 1, last = 1;
+};
+
+BlockIterations IterationsOf(int block, const SamplerOptions& options) {
+  const int first = 1 + block * options.swap_every;
+  return {first, std::min(options.num_iterations, first + options.swap_every - 1)};
+}
+
+int NumBlocks(const SamplerOptions& options) {
+  return (options.num_iterations + options.swap_every - 1) / options.swap_every;
+}
+
+// Steps `chain` through the iterations of `block`; `cold`: the checkpoint
+// keeps the state after each iteration, for the record.
+ChainCheckpoint StepBlock(Chain* chain, bool cold, int block, const ClassConfusionModel& model,
+                          const SamplerOptions& options) {
+  const BlockIterations iterations = IterationsOf(block, options);
+  ChainCheckpoint done;
+  for (int t = iterations.first; t <= iterations.last; ++t) {
+    StepRule sample;
+    sample.beta = chain->beta;
+    sample.delayed_acceptance = options.delayed_acceptance;
+    chain->state = MetropolisStep(chain->state, sample, *chain->evaluator, model, options.moves,
+                                  options.sampling_moves, chain->rng, &chain->stats);
+    if (cold) done.cold_states.push_back(chain->state);
+  }
+  done.state = chain->state;
+  done.rng = chain->rng;
+  done.stats = chain->stats;
+  done.mark = chain->evaluator->Mark();
+  return done;
+}
+
+// Steps the chains block by block and hands each block's checkpoints to the
+// swap decisions, in order. With threads every chain runs in its own, up to
+// `depth` blocks ahead of the decisions (speculation); a chain that an
+// accepted swap reaches is held between blocks while the caller sends it
+// back to its checkpoint at that swap, and goes on from the next block, so
+// the result is the one of stepping the chains one after another. Without
+// threads the chains step one after another when a block is asked for.
+class ChainStepper {
+ public:
+  ChainStepper(std::vector<Chain>* chains, const ClassConfusionModel& model,
+               const SamplerOptions& options, bool threaded, int depth)
+      : chains_(*chains),
+        model_(model),
+        options_(options),
+        num_blocks_(NumBlocks(options)),
+        depth_(depth),
+        published_(chains_.size()),
+        next_block_(chains_.size(), 0),
+        hold_(chains_.size(), 0),
+        held_(chains_.size(), 0),
+        release_pending_(chains_.size(), 0),
+        release_mark_(chains_.size(), 0) {
+    if (threaded)
+      for (size_t i = 0; i < chains_.size(); ++i)
+        threads_.emplace_back(&ChainStepper::ChainThread, this, i);
+  }
+  ~ChainStepper() { Stop(); }
+  ChainStepper(const ChainStepper&) = delete;
+  ChainStepper& operator=(const ChainStepper&) = delete;
+
+  int num_blocks() const { return num_blocks_; }
+
+  // The chains' checkpoints after `block`, the block after the last one
+  // decided. Rethrows what a chain's thread threw.
+  std::vector<ChainCheckpoint> Next(int block) {
+    std::vector<ChainCheckpoint> at(chains_.size());
+    if (threads_.empty()) {
+      for (size_t i = 0; i < chains_.size(); ++i)
+        at[i] = StepBlock(&chains_[i], i == 0, block, model_, options_);
+      return at;
+    }
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [&] {
+      if (failure_) return true;
+      for (const auto& queue : published_)
+        if (queue.empty()) return false;
+      return true;
+    });
+    if (failure_) std::rethrow_exception(failure_);
+    for (size_t i = 0; i < chains_.size(); ++i) {
+      at[i] = std::move(published_[i].front());
+      published_[i].pop_front();
+    }
+    return at;
+  }
+
+  // Returns once the `swapped` chains are between blocks, so that the caller
+  // may send them back. Rethrows what a chain's thread threw.
+  void Hold(const std::vector<char>& swapped) {
+    if (threads_.empty()) return;
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (size_t i = 0; i < chains_.size(); ++i) hold_[i] = swapped[i];
+    changed_.notify_all();
+    changed_.wait(lock, [&] {
+      if (failure_) return true;
+      for (size_t i = 0; i < chains_.size(); ++i)
+        if (swapped[i] && !held_[i]) return false;
+      return true;
+    });
+    if (failure_) std::rethrow_exception(failure_);
+  }
+
+  // The swaps after `block` are decided: the swapped chains (sent back by
+  // the caller) go on from the next block, dropping what they did ahead;
+  // the others' evaluators may forget what going back before `at` needs.
+  void Decided(int block, const std::vector<char>& swapped,
+               const std::vector<ChainCheckpoint>& at) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (size_t i = 0; i < chains_.size(); ++i) {
+        if (swapped[i]) {
+          published_[i].clear();
+          next_block_[i] = block + 1;
+          hold_[i] = held_[i] = 0;
+        } else if (!threads_.empty()) {  // the evaluator is the chain's thread's
+          release_pending_[i] = 1;
+          release_mark_[i] = at[i].mark;
+        } else {
+          chains_[i].evaluator->Release(at[i].mark);
+        }
+      }
+      decided_ = block + 1;
+    }
+    changed_.notify_all();
+  }
+
+  void Stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    changed_.notify_all();
+    for (auto& thread : threads_)
+      if (thread.joinable()) thread.join();
+  }
+
+ private:
+  // Chain i's thread: steps the next block when it is at most depth_ ahead
+  // of the decisions, parks while held.
+  void ChainThread(size_t i) {
+    for (;;) {
+      int block;
+      size_t release = 0;
+      bool do_release = false;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        for (;;) {
+          if (stop_) return;
+          if (hold_[i]) {
+            held_[i] = 1;
+            changed_.notify_all();
+          } else if (next_block_[i] < num_blocks_ && next_block_[i] <= decided_ + depth_) {
+            break;
+          }
+          changed_.wait(lock);
+        }
+        block = next_block_[i];
+        do_release = release_pending_[i];
+        release_pending_[i] = 0;
+        release = release_mark_[i];
+      }
+      ChainCheckpoint done;
+      try {
+        if (do_release) chains_[i].evaluator->Release(release);
+        done = StepBlock(&chains_[i], i == 0, block, model_, options_);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!failure_) failure_ = std::current_exception();
+        changed_.notify_all();
+        return;
+      }
+      std::lock_guard<std::mutex> lock(mutex_);
+      published_[i].push_back(std::move(done));
+      ++next_block_[i];
+      changed_.notify_all();
+    }
+  }
+
+  std::vector<Chain>& chains_;
+  const ClassConfusionModel& model_;
+  const SamplerOptions& options_;
+  const int num_blocks_, depth_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  // Guarded by mutex_: the chains' checkpoints not yet taken, the block each
+  // chain steps next, held chains, and marks a chain's thread is to release.
+  std::vector<std::deque<ChainCheckpoint>> published_;
+  std::vector<int> next_block_;
+  std::vector<char> hold_, held_, release_pending_;
+  std::vector<size_t> release_mark_;
+  int decided_ = 0;  // blocks whose swaps are decided
+  bool stop_ = false;
+  std::exception_ptr failure_;  // thrown in a chain's thread, rethrown by the caller
+  std::vector<std::thread> threads_;
+};
+
+// Swaps of adjacent chains after a block, hottest pair first (5.3), on the
+// chains' `states` then: whole states move. Returns each chain that received
+// a state, with that state, in the order the swaps were accepted.
+std::vector<std::pair<int, EvaluationPtr>> DecideSwaps(const std::vector<Chain>& chains,
+                                                       std::vector<EvaluationPtr>* states,
+                                                       Rng* swap_rng, SamplerSummary* summary) {
+  std::vector<EvaluationPtr>& s = *states;
+  std::vector<std::pair<int, EvaluationPtr>> learnt;
+  for (int i = static_cast<int>(chains.size()) - 1; i >= 1; --i) {
+    ++summary->swaps_proposed;
+    const double log_alpha =
+        (chains[i - 1].beta - chains[i].beta) * (s[i]->log_target - s[i - 1]->log_target);
+    const double u = std::uniform_real_distribution<double>(0.0, 1.0)(*swap_rng);
+    if (std::log(u) < std::min(0.0, log_alpha)) {
+      std::swap(s[i], s[i - 1]);
+      learnt.emplace_back(i, s[i]);
+      learnt.emplace_back(i - 1, s[i - 1]);
+      ++summary->swaps_accepted;
+    }
+  }
+  return learnt;
+}
+
+// Sends a chain that an accepted swap reached back to its checkpoint `at`
+// at that swap (its evaluator rolls back), with the state it received.
+// Returns the solves undone.
+size_t SendBack(Chain* chain, const ChainCheckpoint& at, const EvaluationPtr& received) {
+  const size_t solves = chain->evaluator->num_solves();
+  chain->evaluator->RollBack(at.mark);
+  const size_t undone = solves - chain->evaluator->num_solves();
+  chain->evaluator->Release(at.mark);
+  chain->state = received;
+  chain->rng = at.rng;
+  chain->stats = at.stats;
+  return undone;
+}
+
+// The cold chain's record: its trace, the best state, and after the burn-in
+// the samples. These get their covariances from an evaluator of their own,
+// so that the chains never wait for it; a state is completed once.
+class ColdChainRecorder {
+ public:
+  ColdChainRecorder(const EvaluatorFactory& factory, int burn_in, SamplerResult* result)
+      : factory_(factory), burn_in_(burn_in), result_(*result) {}
+
+  void Record(int t, const EvaluationPtr& cold) {
+    result_.summary.cold_trace.push_back(cold->log_target);
+    if (cold->log_target > result_.best->log_target) result_.best = cold;
+    if (t <= burn_in_) return;
+    EvaluationPtr& done = completed_[cold->state];
+    if (!done) {
+      if (!completer_) completer_ = factory_();
+      done = completer_->Complete(cold);
+    }
+    result_.samples.push_back(done);
+  }
+  size_t num_solves() const { return completer_ ? completer_->num_solves() : 0; }
+
+ private:
+  const EvaluatorFactory& factory_;
+  const int burn_in_;
+  SamplerResult& result_;
+  std::unique_ptr<StateEvaluator> completer_;
+  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> completed_;
 };
 
 }  // namespace
@@ -105,14 +388,13 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
   // y~ = the evaluator's approximation of y made from x; 1 where it has none.
   double log_screen_forward = 0.0;
   if (screen) {
-    const EvaluationPtr approximate = evaluator.Approximate(proposal.state, *current);
-    if (approximate && approximate->valid) {
-      const double log_reverse =
-          LogReverseProbability(proposal, *approximate, model, options, probabilities);
-      const double log_alpha = beta * (approximate->log_target - current->log_target) +
-                               log_reverse - proposal.log_q_forward;
-      if (!std::isnan(log_alpha)) log_screen_forward = std::min(0.0, log_alpha);
-    }
+    log_screen_forward = LogScreenAcceptance(
+        evaluator.Approximate(proposal.state, *current), *current, beta,
+        [&](const StateEvaluation& approximate, double tempered) {
+          return tempered +
+                 LogReverseProbability(proposal, approximate, model, options, probabilities) -
+                 proposal.log_q_forward;
+        });
     if (log_u_screen >= log_screen_forward) {
       ++stat.screened_out;
       stat.time_s += SecondsSince(start);
@@ -137,14 +419,12 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
     if (screen) {
       // Stage 2: times alpha1(y, x) / alpha1(x, y), the reverse move's
       // screen as the sampler would compute it standing at y.
-      double log_screen_reverse = 0.0;
-      const EvaluationPtr approximate = evaluator.Approximate(current->state, *proposed);
-      if (approximate && approximate->valid) {
-        const double log_alpha1 =
-            beta * (approximate->log_target - proposed->log_target) - log_reverse +
-            LogForwardProbability(proposal, *approximate, model, options, probabilities);
-        if (!std::isnan(log_alpha1)) log_screen_reverse = std::min(0.0, log_alpha1);
-      }
+      const double log_screen_reverse = LogScreenAcceptance(
+          evaluator.Approximate(current->state, *proposed), *proposed, beta,
+          [&](const StateEvaluation& approximate, double tempered) {
+            return tempered - log_reverse +
+                   LogForwardProbability(proposal, approximate, model, options, probabilities);
+          });
       log_alpha += log_screen_reverse - log_screen_forward;
     }
     accept = std::isfinite(log_reverse) && log_u < std::min(0.0, log_alpha);
@@ -182,267 +462,20 @@ Sampler::Sampler(const ClassConfusionModel& model, EvaluatorFactory factory,
                  const SamplerOptions& options)
     : model_(model), factory_(std::move(factory)), options_(options) {}
 
-SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCallback& progress) {
+SamplerResult Sampler::Run(const AssociationState& start, const ProgressCallback& progress) {
   std::string why;
   if (!options_.Validate(&why)) throw Error("sampler options: " + why);
-  SamplerResult result;
-  SamplerSummary& summary = result.summary;
-  const int chains = options_.num_chains;
   std::vector<std::unique_ptr<StateEvaluator>> evaluators;
   std::vector<Rng> rngs;
-  for (int i = 0; i < chains; ++i) {
+  for (int i = 0; i < options_.num_chains; ++i) {
     evaluators.push_back(factory_());
     rngs.push_back(ChainRng(options_.seed, i));
   }
-  Rng swap_rng = ChainRng(options_.seed, -1);
-
-  // Algorithm 9 steps 3-4: full optimisation, then greedy moves, refining
-  // every K_NL steps (and replacing the cached value, spec §9.3).
-  auto clock = std::chrono::steady_clock::now();
-  AssociationState start = start_state;
-  start.Canonicalize();
-  EvaluationPtr current = evaluators[0]->Refine(start, nullptr);
-  if (!current || !current->valid) throw Error("the start state could not be evaluated");
-  summary.initial_log_target = current->log_target;
-  auto refine = [&] {
-    EvaluationPtr refined = evaluators[0]->Refine(current->state, current.get());
-    if (refined && refined->valid) current = refined;
-  };
-  int last_accepted = 0, step = 0;
-  auto go_on = [&] {
-    if (step < options_.hill_climb_steps) return true;
-    return options_.hill_climb_steps > 0 && options_.hill_climb_patience > 0 &&
-           step < options_.hill_climb_max_steps &&
-           step - last_accepted < options_.hill_climb_patience;
-  };
-  while (go_on()) {
-    ++step;
-    const EvaluationPtr before = current;
-    StepRule climb;
-    climb.greedy = true;
-    climb.greedy_screen_nats = options_.hill_climb_screen_nats;
-    current = MetropolisStep(current, climb, *evaluators[0], model_, options_.moves,
-                             options_.hill_climb_moves, rngs[0], &summary.hill_climb);
-    if (current != before) last_accepted = step;
-    const bool last = !go_on();
-    if (step % options_.refine_every == 0 || last) refine();
-    summary.hill_climb_trace.push_back(current->log_target);
-    if (progress)
-      progress("hill climbing", std::min(step, options_.hill_climb_steps),
-               options_.hill_climb_steps);
-  }
-  summary.hill_climb_steps = step;
-  result.hill_climbed = current;
-  summary.hill_climbed_log_target = current->log_target;
-  summary.hill_climb_time_s = SecondsSince(clock);
-
-  // Algorithm 8: every chain starts from the hill-climbed state.
-  clock = std::chrono::steady_clock::now();
-  std::vector<Chain> chain(chains);
-  bool all_roll_back = true;
-  for (int i = 0; i < chains; ++i) {
-    chain[i].state = current;
-    chain[i].beta = 1.0 / (1.0 + options_.delta_temperature * i);
-    chain[i].rng = rngs[i];
-    chain[i].evaluator = evaluators[i].get();
-    chain[i].evaluator->Remember(current);
-    all_roll_back = all_roll_back && chain[i].evaluator->SupportsRollBack();
-  }
-  result.best = current;
-  // Recorded samples get their covariances from an evaluator of their own,
-  // so that the chains never wait for it; a state is completed once.
-  std::unique_ptr<StateEvaluator> completer;
-  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> completed;
-  auto record = [&](int t, const EvaluationPtr& cold) {
-    summary.cold_trace.push_back(cold->log_target);
-    if (cold->log_target > result.best->log_target) result.best = cold;
-    if (t <= options_.burn_in) return;
-    EvaluationPtr& done = completed[cold->state];
-    if (!done) {
-      if (!completer) completer = factory_();
-      done = completer->Complete(cold);
-    }
-    result.samples.push_back(done);
-  };
-  const int swap_every = options_.swap_every;
-  const int num_blocks = (options_.num_iterations + swap_every - 1) / swap_every;
-  auto run_block = [&](int i, int block) {
-    const int first = 1 + block * swap_every;
-    const int last = std::min(options_.num_iterations, first + swap_every - 1);
-    Chain& c = chain[i];
-    ChainCheckpoint done;
-    for (int t = first; t <= last; ++t) {
-      StepRule sample;
-      sample.beta = c.beta;
-      sample.delayed_acceptance = options_.delayed_acceptance;
-      c.state = MetropolisStep(c.state, sample, *c.evaluator, model_, options_.moves,
-                               options_.sampling_moves, c.rng, &c.stats);
-      if (i == 0) done.cold_states.push_back(c.state);
-    }
-    done.state = c.state;
-    done.rng = c.rng;
-    done.stats = c.stats;
-    done.mark = c.evaluator->Mark();
-    return done;
-  };
-  // With threads every chain runs in its own, up to `depth` blocks ahead of
-  // the swap decisions (speculation); a chain that an accepted swap reaches
-  // goes back to its checkpoint at that swap, so the result is the one of
-  // stepping the chains one after another.
-  const bool threaded = options_.parallel_chains && chains > 1;
-  const int depth = all_roll_back ? options_.speculation_depth : 0;
-  std::mutex mutex;
-  std::condition_variable changed;
-  std::vector<std::deque<ChainCheckpoint>> published(chains);
-  std::vector<int> next_block(chains, 0);
-  std::vector<char> hold(chains, 0), held(chains, 0), release_pending(chains, 0);
-  std::vector<size_t> release_mark(chains, 0);
-  int decided = 0;  // blocks whose swaps are decided
-  bool stop = false;
-  std::exception_ptr failure;  // thrown in a chain's thread, rethrown here
-  auto chain_thread = [&](int i) {
-    for (;;) {
-      int block;
-      size_t release = 0;
-      bool do_release = false;
-      {
-        std::unique_lock<std::mutex> lock(mutex);
-        for (;;) {
-          if (stop) return;
-          if (hold[i]) {
-            held[i] = 1;
-            changed.notify_all();
-          } else if (next_block[i] < num_blocks && next_block[i] <= decided + depth) {
-            break;
-          }
-          changed.wait(lock);
-        }
-        block = next_block[i];
-        do_release = release_pending[i];
-        release_pending[i] = 0;
-        release = release_mark[i];
-      }
-      ChainCheckpoint done;
-      try {
-        if (do_release) chain[i].evaluator->Release(release);
-        done = run_block(i, block);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (!failure) failure = std::current_exception();
-        changed.notify_all();
-        return;
-      }
-      std::lock_guard<std::mutex> lock(mutex);
-      published[i].push_back(std::move(done));
-      ++next_block[i];
-      changed.notify_all();
-    }
-  };
-  std::vector<std::thread> threads;
-  if (threaded)
-    for (int i = 0; i < chains; ++i) threads.emplace_back(chain_thread, i);
-  auto stop_threads = [&] {
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      stop = true;
-    }
-    changed.notify_all();
-    for (auto& thread : threads) thread.join();
-  };
-  try {
-    for (int block = 0; block < num_blocks; ++block) {
-      const int first = 1 + block * swap_every;
-      const int last = std::min(options_.num_iterations, first + swap_every - 1);
-      std::vector<ChainCheckpoint> at(chains);
-      if (threaded) {
-        std::unique_lock<std::mutex> lock(mutex);
-        changed.wait(lock, [&] {
-          if (failure) return true;
-          for (const auto& queue : published)
-            if (queue.empty()) return false;
-          return true;
-        });
-        if (failure) std::rethrow_exception(failure);
-        for (int i = 0; i < chains; ++i) {
-          at[i] = std::move(published[i].front());
-          published[i].pop_front();
-        }
-      } else {
-        for (int i = 0; i < chains; ++i) at[i] = run_block(i, block);
-      }
-      for (int t = first; t < last; ++t) record(t, at[0].cold_states[t - first]);
-      // Swaps of adjacent chains, hottest pair first (5.3); whole states
-      // move, and each evaluator learns the state it receives.
-      std::vector<EvaluationPtr> states(chains);
-      for (int i = 0; i < chains; ++i) states[i] = at[i].state;
-      std::vector<std::pair<int, EvaluationPtr>> learnt;
-      for (int i = chains - 1; i >= 1; --i) {
-        ++summary.swaps_proposed;
-        const double log_alpha = (chain[i - 1].beta - chain[i].beta) *
-                                 (states[i]->log_target - states[i - 1]->log_target);
-        const double u = std::uniform_real_distribution<double>(0.0, 1.0)(swap_rng);
-        if (std::log(u) < std::min(0.0, log_alpha)) {
-          std::swap(states[i], states[i - 1]);
-          learnt.emplace_back(i, states[i]);
-          learnt.emplace_back(i - 1, states[i - 1]);
-          ++summary.swaps_accepted;
-        }
-      }
-      std::vector<char> swapped(chains, 0);
-      for (const auto& entry : learnt) swapped[entry.first] = 1;
-      if (!learnt.empty()) {
-        if (threaded) {  // wait until the swapped chains are between blocks
-          std::unique_lock<std::mutex> lock(mutex);
-          for (int i = 0; i < chains; ++i) hold[i] = swapped[i];
-          changed.notify_all();
-          changed.wait(lock, [&] {
-            if (failure) return true;
-            for (int i = 0; i < chains; ++i)
-              if (swapped[i] && !held[i]) return false;
-            return true;
-          });
-          if (failure) std::rethrow_exception(failure);
-        }
-        for (int i = 0; i < chains; ++i) {
-          if (!swapped[i]) continue;
-          const size_t solves = chain[i].evaluator->num_solves();
-          chain[i].evaluator->RollBack(at[i].mark);
-          summary.speculative_solves_undone += solves - chain[i].evaluator->num_solves();
-          chain[i].evaluator->Release(at[i].mark);
-          chain[i].state = states[i];
-          chain[i].rng = at[i].rng;
-          chain[i].stats = at[i].stats;
-        }
-        for (const auto& [i, state] : learnt) chain[i].evaluator->Remember(state);
-      }
-      record(last, states[0]);
-      {
-        std::lock_guard<std::mutex> lock(mutex);
-        for (int i = 0; i < chains; ++i) {
-          if (swapped[i]) {
-            published[i].clear();
-            next_block[i] = block + 1;
-            hold[i] = held[i] = 0;
-          } else if (threaded) {
-            release_pending[i] = 1;
-            release_mark[i] = at[i].mark;
-          } else {
-            chain[i].evaluator->Release(at[i].mark);
-          }
-        }
-        decided = block + 1;
-      }
-      changed.notify_all();
-      if (progress) progress("MC3", last, options_.num_iterations);
-    }
-  } catch (...) {
-    stop_threads();
-    throw;
-  }
-  stop_threads();
-  summary.sampling = chain[0].stats;
-  summary.sampling_time_s = SecondsSince(clock);
-  if (completer) summary.num_solves += completer->num_solves();
+  SamplerResult result;
+  SamplerSummary& summary = result.summary;
+  // The cold chain climbs with its own evaluator and random stream.
+  result.hill_climbed = HillClimb(start, evaluators[0].get(), &rngs[0], &summary, progress);
+  SampleChains(evaluators, rngs, &result, progress);
   for (const auto& evaluator : evaluators) {
     summary.num_solves += evaluator->num_solves();
     summary.num_cache_hits += evaluator->num_cache_hits();
@@ -451,6 +484,100 @@ SamplerResult Sampler::Run(const AssociationState& start_state, const ProgressCa
       std::vector<double>(summary.cold_trace.begin() + options_.burn_in, summary.cold_trace.end()));
   summary.message = "ok";
   return result;
+}
+
+EvaluationPtr Sampler::HillClimb(const AssociationState& start_state, StateEvaluator* evaluator,
+                                 Rng* rng, SamplerSummary* summary,
+                                 const ProgressCallback& progress) const {
+  // Algorithm 9 steps 3-4: full optimisation, then greedy moves, refining
+  // every K_NL steps (and replacing the cached value, spec §9.3).
+  const auto clock = std::chrono::steady_clock::now();
+  AssociationState start = start_state;
+  start.Canonicalize();
+  EvaluationPtr current = evaluator->Refine(start, nullptr);
+  if (!current || !current->valid) throw Error("the start state could not be evaluated");
+  summary->initial_log_target = current->log_target;
+  int last_accepted = 0, step = 0;
+  auto go_on = [&] {
+    if (step < options_.hill_climb_steps) return true;
+    return options_.hill_climb_steps > 0 && options_.hill_climb_patience > 0 &&
+           step < options_.hill_climb_max_steps &&
+           step - last_accepted < options_.hill_climb_patience;
+  };
+  StepRule climb;
+  climb.greedy = true;
+  climb.greedy_screen_nats = options_.hill_climb_screen_nats;
+  while (go_on()) {
+    ++step;
+    const EvaluationPtr before = current;
+    current = MetropolisStep(current, climb, *evaluator, model_, options_.moves,
+                             options_.hill_climb_moves, *rng, &summary->hill_climb);
+    if (current != before) last_accepted = step;
+    const bool last = !go_on();
+    if (step % options_.refine_every == 0 || last) {
+      EvaluationPtr refined = evaluator->Refine(current->state, current.get());
+      if (refined && refined->valid) current = refined;
+    }
+    summary->hill_climb_trace.push_back(current->log_target);
+    if (progress)
+      progress("hill climbing", std::min(step, options_.hill_climb_steps),
+               options_.hill_climb_steps);
+  }
+  summary->hill_climb_steps = step;
+  summary->hill_climbed_log_target = current->log_target;
+  summary->hill_climb_time_s = SecondsSince(clock);
+  return current;
+}
+
+void Sampler::SampleChains(const std::vector<std::unique_ptr<StateEvaluator>>& evaluators,
+                           const std::vector<Rng>& rngs, SamplerResult* result,
+                           const ProgressCallback& progress) const {
+  // Algorithm 8: every chain starts from the hill-climbed state.
+  const auto clock = std::chrono::steady_clock::now();
+  SamplerSummary& summary = result->summary;
+  const int num_chains = options_.num_chains;
+  std::vector<Chain> chains(num_chains);
+  bool all_roll_back = true;
+  for (int i = 0; i < num_chains; ++i) {
+    chains[i].state = result->hill_climbed;
+    chains[i].beta = 1.0 / (1.0 + options_.delta_temperature * i);
+    chains[i].rng = rngs[i];
+    chains[i].evaluator = evaluators[i].get();
+    chains[i].evaluator->Remember(result->hill_climbed);
+    all_roll_back = all_roll_back && chains[i].evaluator->SupportsRollBack();
+  }
+  result->best = result->hill_climbed;
+  ColdChainRecorder recorder(factory_, options_.burn_in, result);
+  Rng swap_rng = ChainRng(options_.seed, -1);
+  // Declared after the chains, so that its threads stop (also on an
+  // exception) before the chains go.
+  ChainStepper stepper(&chains, model_, options_, options_.parallel_chains && num_chains > 1,
+                       all_roll_back ? options_.speculation_depth : 0);
+  for (int block = 0; block < stepper.num_blocks(); ++block) {
+    const std::vector<ChainCheckpoint> at = stepper.Next(block);
+    const BlockIterations iterations = IterationsOf(block, options_);
+    for (int t = iterations.first; t < iterations.last; ++t)
+      recorder.Record(t, at[0].cold_states[t - iterations.first]);
+    std::vector<EvaluationPtr> states(num_chains);
+    for (int i = 0; i < num_chains; ++i) states[i] = at[i].state;
+    const auto learnt = DecideSwaps(chains, &states, &swap_rng, &summary);
+    std::vector<char> swapped(num_chains, 0);
+    for (const auto& entry : learnt) swapped[entry.first] = 1;
+    if (!learnt.empty()) {
+      stepper.Hold(swapped);
+      for (int i = 0; i < num_chains; ++i)
+        if (swapped[i]) summary.speculative_solves_undone += SendBack(&chains[i], at[i], states[i]);
+      // Each evaluator learns the state it receives.
+      for (const auto& [i, state] : learnt) chains[i].evaluator->Remember(state);
+    }
+    recorder.Record(iterations.last, states[0]);
+    stepper.Decided(block, swapped, at);
+    if (progress) progress("MC3", iterations.last, options_.num_iterations);
+  }
+  stepper.Stop();
+  summary.sampling = chains[0].stats;
+  summary.sampling_time_s = SecondsSince(clock);
+  summary.num_solves += recorder.num_solves();
 }
 
 }  // namespace oslam

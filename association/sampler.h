@@ -107,6 +107,16 @@ class Sampler {
   SamplerResult Run(const AssociationState& start, const ProgressCallback& progress = {});
 
  private:
+  // Algorithm 9 steps 3-4 from `start`; returns the hill-climbed state.
+  EvaluationPtr HillClimb(const AssociationState& start, StateEvaluator* evaluator, Rng* rng,
+                          SamplerSummary* summary, const ProgressCallback& progress) const;
+  // Algorithm 8 from result->hill_climbed: chain i steps with evaluators[i]
+  // and a copy of rngs[i]; fills the samples, the best state and the summary's
+  // sampling part.
+  void SampleChains(const std::vector<std::unique_ptr<StateEvaluator>>& evaluators,
+                    const std::vector<Rng>& rngs, SamplerResult* result,
+                    const ProgressCallback& progress) const;
+
   const ClassConfusionModel& model_;
   EvaluatorFactory factory_;
   SamplerOptions options_;

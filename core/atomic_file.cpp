@@ -1,5 +1,7 @@
 #include "core/atomic_file.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -9,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 #include "core/error.h"
 
@@ -48,36 +51,92 @@ extern "C" void RemoveTempFilesAndDie(int signal_number) {
   std::raise(signal_number);
 }
 
-std::string TempPathFor(const std::string& path) {
+std::string Reason(int error_number) {
+  return error_number == ENOSPC ? "no space left on device" : std::strerror(error_number);
+}
+
+void CreateParentFolder(const std::string& path) {
+  const fs::path parent = fs::path(path).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) fs::create_directories(parent, ec);
+  if (ec) throw Error::InFile(path, "cannot create folder: " + ec.message());
+}
+
+// A new, empty temp file beside `path`, opened for writing; its name in
+// `temp_path`. mkstemps' O_EXCL refuses an existing name, symlinks included.
+int CreateTempFile(const std::string& path, std::string* temp_path) {
   const fs::path target(path);
-  // Unique per process and write, so two writers never share a temp file.
-  static std::atomic<unsigned> counter{0};
-  const std::string stem = "." + target.stem().string() + ".tmp" + std::to_string(::getpid()) +
-                           "-" + std::to_string(counter++);
-  return (target.parent_path() / (stem + target.extension().string())).string();
+  const std::string suffix = target.extension().string();
+  std::string name =
+      (target.parent_path() / ("." + target.stem().string() + ".tmp-XXXXXX" + suffix)).string();
+  const int fd = ::mkstemps(name.data(), static_cast<int>(suffix.size()));
+  if (fd < 0) throw Error::InFile(path, "cannot create a temp file beside it: " + Reason(errno));
+  // mkstemps creates 0600; give the file the permissions a plain create would.
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  ::fchmod(fd, 0666 & ~mask);
+  *temp_path = name;
+  return fd;
+}
+
+// Writes all of `bytes`, then fsync (when `sync`) and close; false with
+// errno set on failure.
+bool WriteAllAndClose(int fd, std::string_view bytes, bool sync) {
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int saved = n < 0 ? errno : ENOSPC;
+      ::close(fd);
+      errno = saved;
+      return false;
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (sync && ::fsync(fd) != 0) {
+    const int saved = errno;
+    ::close(fd);
+    errno = saved;
+    return false;
+  }
+  return ::close(fd) == 0;
+}
+
+// Makes a rename in the folder durable; best effort (some file systems refuse).
+void SyncFolderOf(const std::string& path) {
+  const fs::path parent = fs::path(path).parent_path();
+  const int fd = ::open(parent.empty() ? "." : parent.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
 }
 
 }  // namespace
 
 void WriteAtomically(const std::string& path,
                      const std::function<void(const std::string& temp_path)>& write) {
-  const fs::path parent = fs::path(path).parent_path();
-  std::error_code ec;
-  if (!parent.empty()) fs::create_directories(parent, ec);
-  if (ec) throw Error::InFile(path, "cannot create folder: " + ec.message());
-  const std::string temp_path = TempPathFor(path);
+  CreateParentFolder(path);
+  std::string temp_path;
+  ::close(CreateTempFile(path, &temp_path));
   const int slot = ClaimSlot(temp_path);
+  std::error_code ec;
   try {
     write(temp_path);
-    if (!fs::exists(temp_path)) throw Error::InFile(path, "nothing was written");
-    fs::rename(temp_path, path, ec);
-    if (ec) throw Error::InFile(path, "cannot move the written file into place: " + ec.message());
+    if (fs::file_size(temp_path, ec) == 0 || ec) throw Error::InFile(path, "nothing was written");
+    const int fd = ::open(temp_path.c_str(), O_RDONLY);
+    const bool synced = fd >= 0 && ::fsync(fd) == 0;
+    if (fd >= 0) ::close(fd);
+    if (!synced) throw Error::InFile(path, "write failed: " + Reason(errno));
+    if (::rename(temp_path.c_str(), path.c_str()) != 0)
+      throw Error::InFile(path, "cannot move the written file into place: " + Reason(errno));
   } catch (...) {
-    fs::remove(temp_path, ec);
+    ::unlink(temp_path.c_str());
     ReleaseSlot(slot);
     throw;
   }
   ReleaseSlot(slot);
+  SyncFolderOf(path);
 }
 
 void InstallInterruptCleanup() {
@@ -85,14 +144,34 @@ void InstallInterruptCleanup() {
   std::signal(SIGTERM, RemoveTempFilesAndDie);
 }
 
+void WriteFileAtomically(const std::string& path, std::string_view bytes, FileSync sync) {
+  CreateParentFolder(path);
+  std::string temp_path;
+  const int fd = CreateTempFile(path, &temp_path);
+  const int slot = ClaimSlot(temp_path);
+  const auto fail = [&](const std::string& what) {
+    ::unlink(temp_path.c_str());
+    ReleaseSlot(slot);
+    throw Error::InFile(path, what);
+  };
+  if (!WriteAllAndClose(fd, bytes, sync == FileSync::kEach)) fail("write failed: " + Reason(errno));
+  if (::rename(temp_path.c_str(), path.c_str()) != 0)
+    fail("cannot move the written file into place: " + Reason(errno));
+  ReleaseSlot(slot);
+  if (sync == FileSync::kEach) SyncFolderOf(path);
+}
+
+void SyncFileSystem(const std::string& folder) {
+  const int fd = ::open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) throw Error::InFile(folder, "cannot open the folder: " + Reason(errno));
+  const bool synced = ::syncfs(fd) == 0;
+  const int saved = errno;
+  ::close(fd);
+  if (!synced) throw Error::InFile(folder, "flushing the written files failed: " + Reason(saved));
+}
+
 void WriteTextFileAtomically(const std::string& path, const std::string& contents) {
-  WriteAtomically(path, [&](const std::string& temp_path) {
-    std::ofstream out(temp_path, std::ios::binary);
-    if (!out) throw Error::InFile(path, std::string("cannot open for writing: ") + std::strerror(errno));
-    out << contents;
-    out.close();
-    if (!out) throw Error::InFile(path, "write failed (disk full?)");
-  });
+  WriteFileAtomically(path, contents);
 }
 
 std::string ReadTextFile(const std::string& path) {

@@ -1,9 +1,10 @@
-// Atomic output: write beside the target, then rename, so a crash or Ctrl-C
-// never leaves a half-written file under the final name.
+// Atomic output: write beside the target, then rename, so a crash, Ctrl-C or
+// a full disk never leaves a half-written file under the final name.
 #pragma once
 
 #include <functional>
 #include <string>
+#include <string_view>
 
 namespace oslam {
 
@@ -19,7 +20,29 @@ void WriteAtomically(const std::string& path,
 // files nor stray temp files. Call once, from main().
 void InstallInterruptCleanup();
 
-// Writes `contents` to `path` atomically.
+// When a written file reaches the disk: kEach syncs it before the rename
+// (durable when the call returns); kDeferred leaves that to one
+// SyncFileSystem call after a batch of files (an overlay per frame: one
+// fsync each would cost more than drawing them).
+enum class FileSync { kEach, kDeferred };
+
+// Writes `bytes` to `path` atomically: a new temp file beside the target
+// (created with O_CREAT | O_EXCL, so a file or symlink planted at its name is
+// never followed), every write and the close checked, fsync (kEach), rename
+// over the target, fsync of the folder. On any failure (a full disk
+// included) the temp file is removed, `path` is left as it was, and
+// oslam::Error names `path` and the reason. Writers that can produce their
+// file in memory use this rather than WriteAtomically: a library writing to
+// a path may not report a failed write.
+void WriteFileAtomically(const std::string& path, std::string_view bytes,
+                         FileSync sync = FileSync::kEach);
+
+// Flushes every file written on the file system holding `folder` (syncfs),
+// after a batch of FileSync::kDeferred writes. Throws oslam::Error naming
+// `folder` when the flush reports a failure.
+void SyncFileSystem(const std::string& folder);
+
+// Writes `contents` to `path` as WriteFileAtomically does.
 void WriteTextFileAtomically(const std::string& path, const std::string& contents);
 
 // Reads a whole text file; throws oslam::Error naming the file on failure.

@@ -126,10 +126,11 @@ void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double m
     std::snprintf(name, sizeof(name), "%06ld.png", frame);
     const cv::Mat image = DrawOverlay(input.frames->Read(frame), frame, *input.camera, scene,
                                       input.detections, min_existence);
-    WritePng(image, (overlays_dir / name).string());
+    WritePng(image, (overlays_dir / name).string(), FileSync::kDeferred);
     const std::lock_guard<std::mutex> lock(progress_mutex);
     progress.Update(++done);
   });
+  SyncFileSystem(overlays_dir.string());
   progress.Done(std::to_string(input.chosen.size()) + " overlays" +
                 (input.detections.empty() ? " (no detections.csv: map only)" : ""));
 }

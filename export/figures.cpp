@@ -387,10 +387,13 @@ cv::Mat PlotTrajectoryErrors(const ExportScene& scene, const FigureOptions& opti
   return image;
 }
 
-void WritePng(const cv::Mat& image, const std::string& path) {
-  WriteAtomically(path, [&](const std::string& temp) {
-    if (!cv::imwrite(temp, image)) throw Error::InFile(path, "cannot write PNG");
-  });
+void WritePng(const cv::Mat& image, const std::string& path, FileSync sync) {
+  // Encoded in memory, so the only write is WriteFileAtomically's, checked.
+  std::vector<unsigned char> png;
+  if (image.empty() || !cv::imencode(".png", image, png))
+    throw Error::InFile(path, "cannot encode the image as PNG");
+  WriteFileAtomically(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()),
+                      sync);
 }
 
 }  // namespace oslam

@@ -11,6 +11,7 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "core/atomic_file.h"
 #include "export/export_scene.h"
 
 namespace oslam {
@@ -32,7 +33,8 @@ cv::Mat RenderPerspective(const ExportScene& scene, const FigureOptions& options
 // Throws oslam::Error when the scene has no ground truth to compare with.
 cv::Mat PlotTrajectoryErrors(const ExportScene& scene, const FigureOptions& options);
 
-// Writes a PNG atomically; throws oslam::Error naming the file on failure.
-void WritePng(const cv::Mat& image, const std::string& path);
+// Writes a PNG atomically (core/atomic_file.h); throws oslam::Error naming
+// the file on failure.
+void WritePng(const cv::Mat& image, const std::string& path, FileSync sync = FileSync::kEach);
 
 }  // namespace oslam

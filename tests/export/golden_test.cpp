@@ -12,11 +12,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "calib/hyperbolic_camera.h"
+#include "calib/observation_model.h"
 #include "core/error.h"
 #include "export/export_fixture.h"
 #include "export/figures.h"
 #include "export/overlay.h"
-#include "calib/observation_model.h"
 
 namespace oslam {
 namespace {
@@ -143,29 +143,6 @@ TEST(Overlay, FrameWithoutEstimatedPoseIsAnError) {
   EXPECT_THROW(
       DrawOverlay(frame, static_cast<long>(scene.map.trajectory.size()), camera, scene, {}, 0.1),
       Error);
-}
-
-// A map 300 m across (the fixture scaled by 100): the grid and scale bar
-// follow the extent, so the floor stays mostly background instead of a
-// solid 1 m grid, and the many-object labels do not pile up.
-TEST(Figures, BirdsEyeOfALargeMapKeepsTheGridSparse) {
-  ExportScene scene = testing::FixtureScene();
-  for (OMapObject& object : scene.map.objects) object.base_world *= 100.0;
-  for (auto* trajectory : {&scene.map.trajectory, &scene.ground_truth, &scene.odometry})
-    for (Pose2& pose : *trajectory) pose.x *= 100.0, pose.y *= 100.0;
-  const cv::Mat image = RenderBirdsEye(scene, SmallFigure());
-  cv::Mat background;
-  cv::inRange(image, cv::Scalar(250, 250, 250), cv::Scalar(255, 255, 255), background);
-  const double background_fraction =
-      static_cast<double>(cv::countNonZero(background)) / static_cast<double>(image.total());
-  std::printf("large map: %.1f %% background\n", 100.0 * background_fraction);
-  EXPECT_GT(background_fraction, 0.7);
-}
-
-TEST(Figures, TrajectoryPlotNeedsGroundTruth) {
-  ExportScene scene = testing::FixtureScene();
-  scene.ground_truth.clear();
-  EXPECT_THROW(PlotTrajectoryErrors(scene, SmallFigure()), Error);
 }
 
 }  // namespace
