@@ -3,12 +3,15 @@
 // program with the oslam program, and fast O-SLAM settings for it.
 #pragma once
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "omap/omap.h"
+#include "pipeline/detect_stage.h"
 #include "pipeline/slam_stage.h"
 #include "test_util.h"
 
@@ -41,6 +44,25 @@ inline void MakeFast(SlamStageOptions* options) {
   options->sampler.hill_climb_steps = 20;
 }
 inline constexpr char kFastFlags[] = " --samples 60 --burn-in 10 --hill-climb 20 ";
+
+// A copy of `run` at `copy` (replaced), to break.
+inline std::string CopyOfRun(const std::string& run, const std::string& copy) {
+  std::filesystem::remove_all(copy);
+  std::filesystem::copy(run, copy, std::filesystem::copy_options::recursive);
+  return copy;
+}
+
+// The simulated run's O-Map from the detect and (fast) O-SLAM stages; the
+// detections in `dir`/d.csv, the map in `dir`/omap.json.
+inline OMap MapOfSimulatedRun(const TempDir& dir) {
+  StageOutput quiet;
+  quiet.quiet = true;
+  RunDetectStage(SimulatedRun(), dir.Path("d.csv"), {}, quiet);
+  SlamStageOptions slam;
+  MakeFast(&slam);
+  RunSlamStage({SimulatedRun(), dir.Path("d.csv"), nullptr}, dir.Path("omap.json"), slam, quiet);
+  return ReadOMap(dir.Path("omap.json"));
+}
 
 inline std::string ReadFile(const std::string& path) {
   std::stringstream text;
