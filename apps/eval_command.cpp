@@ -7,6 +7,7 @@
 #include "apps/commands.h"
 #include "apps/stage_bindings.h"
 #include "core/error.h"
+#include "omap/omap_json.h"
 
 namespace oslam {
 

@@ -9,10 +9,12 @@
 #include <sstream>
 
 #include "apps/map_modes.h"
+#include "association/association_metrics.h"
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
-#include "slam/omap_json.h"
+#include "omap/omap_json.h"
+#include "slam/slam_omap.h"
 #include "solver/summary_report.h"
 
 namespace oslam {
@@ -52,8 +54,8 @@ std::string WriteMapAndTrajectory(const std::string& output, std::string traject
                                   const std::string& class_name, const std::string& association) {
   if (trajectory_path.empty())
     trajectory_path = (std::filesystem::path(output).parent_path() / "trajectory.csv").string();
-  const OMapSource source{data.path, association, std::nan(""), 0};
-  WriteOMap(output, LandmarkResultAsOMap(result), {class_name}, source);
+  const OMapSource source{data.path, association, std::nullopt, std::nan(""), 0};
+  WriteOMap(output, ToOMap(result, class_name, source));
   WriteTextFileAtomically(trajectory_path, TrajectoryCsv(data, result));
   return trajectory_path;
 }

@@ -10,7 +10,9 @@
 #include "core/error.h"
 #include "core/run_folder.h"
 #include "core/text.h"
-#include "slam/omap_json.h"
+#include "omap/evaluation.h"
+#include "omap/omap_json.h"
+#include "slam/slam_omap.h"
 #include "solver/summary_report.h"
 
 namespace oslam {
@@ -61,8 +63,10 @@ int KnownAssociationMode::Run(const Arguments& arguments) {
   GeometricSlam slam(*camera, slam_);
   const GeometricSlamResult result = slam.Solve(input.problem);
 
-  const OMapSource source{run_dir, "known (ground truth)", input_.pixel_noise_px, input_.seed};
-  WriteOMap(arguments.Get("output"), result, input.class_names, source);
+  const OMapSource source{run_dir, "known (ground truth)", std::nullopt, input_.pixel_noise_px,
+                          input_.seed};
+  const OMap map = ToOMap(result, input.class_names, source);
+  WriteOMap(arguments.Get("output"), map);
   if (!arguments.Flag("quiet")) {
     const SolverSummary& s = result.summary;
     std::printf("%zu objects from %zu detections (%d sightings skipped), %zu poses\n",
@@ -78,12 +82,17 @@ int KnownAssociationMode::Run(const Arguments& arguments) {
     if (result.evidence.valid)
       std::printf("log evidence %.3f (residual %.3f, log det %.3f)\n", result.evidence.log_evidence,
                   result.evidence.squared_residual, result.evidence.log_det_information);
-    const MapErrors errors = EvaluateMap(result, input.problem, input.truth);
+    MapMetricsOptions by_id;  // the map keeps the true object ids
+    by_id.matching = ObjectMatching::kById;
+    const MapMetrics errors =
+        EvaluateMap(map, ComposeOdometry(input.problem.first_pose, input.problem.increments),
+                    input.truth, by_id);
     std::printf(
         "vs ground truth: ATE %.3f m (odometry %.3f m); object position median %.3f m, "
         "max %.3f m; |diameter| %.3f m, |height| %.3f m (means)\n",
-        errors.trajectory_rmse_m, errors.odometry_rmse_m, errors.object_median_m,
-        errors.object_max_m, errors.diameter_mean_abs_m, errors.height_mean_abs_m);
+        errors.estimate.ate_rmse_m, errors.odometry.ate_rmse_m,
+        errors.object_position_error_median_m, errors.object_position_error_max_m,
+        errors.diameter_error_mean_m, errors.height_error_mean_m);
     std::printf("wrote %s\n", arguments.Get("output").c_str());
   }
   return result.summary.IsUsable() ? 0 : 1;

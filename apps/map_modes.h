@@ -10,8 +10,8 @@
 
 #include "apps/arguments.h"
 #include "apps/bindings.h"
-#include "association/landmark_target.h"
 #include "pipeline/known_association.h"
+#include "pipeline/landmark_association.h"
 #include "pipeline/slam_stage.h"
 #include "slam/geometric_slam.h"
 #include "slam/landmark_data.h"

@@ -8,6 +8,7 @@
 #include "apps/commands.h"
 #include "core/error.h"
 #include "export/export_files.h"
+#include "omap/omap_json.h"
 #include "pipeline/export_stage.h"
 
 namespace oslam {

@@ -12,8 +12,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include "association/landmark_evaluator.h"
+#include "association/landmark_tracks.h"
 #include "bench/victoria_park_data.h"
-#include "association/landmark_target.h"
 
 namespace oslam {
 namespace {

@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "omap/map_metrics.h"
+#include "omap/evaluation.h"
 #include "omap/omap.h"
 
 namespace oslam {

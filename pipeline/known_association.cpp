@@ -1,6 +1,5 @@
 #include "pipeline/known_association.h"
 
-#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
@@ -88,43 +87,6 @@ KnownAssociationInput LoadKnownAssociation(const std::string& run_dir,
     input.problem.object_class[sighting.object_id] = found->second;
   }
   return input;
-}
-
-MapErrors EvaluateMap(const GeometricSlamResult& result, const GeometricSlamProblem& problem,
-                      const GroundTruth& truth) {
-  MapErrors errors;
-  const std::vector<Pose2> odometry = ComposeOdometry(problem.first_pose, problem.increments);
-  const size_t n = std::min({truth.trajectory.size(), result.trajectory.size(), odometry.size()});
-  double sum = 0, sum_odometry = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const Pose2& t = truth.trajectory[i];
-    sum += std::pow(result.trajectory[i].x - t.x, 2) + std::pow(result.trajectory[i].y - t.y, 2);
-    sum_odometry += std::pow(odometry[i].x - t.x, 2) + std::pow(odometry[i].y - t.y, 2);
-  }
-  if (n > 0) {
-    errors.trajectory_rmse_m = std::sqrt(sum / n);
-    errors.odometry_rmse_m = std::sqrt(sum_odometry / n);
-  }
-  std::map<int, const GroundTruthObject*> by_id;
-  for (const auto& object : truth.objects) by_id[object.id] = &object;
-  std::vector<double> position;
-  for (const MappedObject& object : result.objects) {
-    const auto found = by_id.find(object.id);
-    if (found == by_id.end()) continue;
-    position.push_back((object.geometry.base_world - found->second->base_world).norm());
-    errors.diameter_mean_abs_m += std::abs(object.geometry.diameter_m - found->second->diameter_m);
-    errors.height_mean_abs_m += std::abs(object.geometry.height_m - found->second->height_m);
-  }
-  if (!position.empty()) {
-    std::sort(position.begin(), position.end());
-    const size_t k = position.size();
-    errors.object_median_m =
-        k % 2 ? position[k / 2] : 0.5 * (position[k / 2 - 1] + position[k / 2]);
-    errors.object_max_m = position.back();
-    errors.diameter_mean_abs_m /= k;
-    errors.height_mean_abs_m /= k;
-  }
-  return errors;
 }
 
 }  // namespace oslam

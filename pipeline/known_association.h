@@ -32,14 +32,4 @@ struct KnownAssociationInput {
 KnownAssociationInput LoadKnownAssociation(const std::string& run_dir,
                                            const KnownAssociationOptions& options);
 
-// Errors of a map against ground truth (by object id).
-struct MapErrors {
-  double trajectory_rmse_m = 0;  // ATE (positions), no alignment: both start at frame 0
-  double odometry_rmse_m = 0;    // the same for raw odometry
-  double object_median_m = 0, object_max_m = 0;
-  double diameter_mean_abs_m = 0, height_mean_abs_m = 0;
-};
-MapErrors EvaluateMap(const GeometricSlamResult& result, const GeometricSlamProblem& problem,
-                      const GroundTruth& truth);
-
 }  // namespace oslam

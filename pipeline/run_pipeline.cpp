@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/run_folder.h"
 #include "core/text.h"
+#include "omap/omap_json.h"
 
 namespace oslam {
 namespace {

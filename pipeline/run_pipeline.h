@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "omap/map_metrics.h"
+#include "omap/evaluation.h"
 #include "omap/omap.h"
 #include "pipeline/detect_stage.h"
 #include "pipeline/eval_stage.h"

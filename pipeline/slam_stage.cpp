@@ -11,7 +11,8 @@
 #include "core/progress.h"
 #include "core/run_folder.h"
 #include "core/text.h"
-#include "omap/omap_evaluation.h"
+#include "omap/evaluation.h"
+#include "omap/omap_json.h"
 
 namespace oslam {
 namespace {
@@ -112,13 +113,14 @@ void ReportMap(const SlamStageResult& result, const std::vector<Pose2>& odometry
   output.Print(Format("%zu map objects (from %zu sample identities), %d with pi > 0.5; %.2f s",
                       result.fused.map.objects.size(), members, above, result.seconds));
   if (const auto truth = ReadGroundTruth(run_dir)) {
-    const OMapScore s = ScoreOMap(result.fused.map, odometry, *truth);
+    const MapMetrics s = EvaluateMap(result.fused.map, odometry, *truth);
     output.Print(
         Format("vs ground truth: ATE %.3f m (odometry %.3f m); found %d/%d at pi > 0.5, "
-               "spurious %d; class correct %d/%d; position median %.3f m, max %.3f m",
-               s.trajectory_rmse_m, s.odometry_rmse_m, s.found, s.true_objects, s.spurious,
-               s.class_correct, s.found, s.position_median_m, s.position_max_m));
-    for (const std::string& name : s.missed) output.Print("  missed: " + name);
+               "spurious %d; class correct %d/%d; horizontal position median %.3f m, max %.3f m",
+               s.estimate.ate_rmse_m, s.odometry.ate_rmse_m, s.true_objects_found,
+               s.true_objects_total, s.spurious_objects, s.class_correct, s.true_objects_found,
+               s.object_horizontal_error_median_m, s.object_horizontal_error_max_m));
+    for (const std::string& name : s.missed_classes) output.Print("  missed: " + name);
   }
 }
 
@@ -184,7 +186,7 @@ SlamStageResult RunSlamStage(const SlamStageInput& input, const std::string& out
              ts.num_detections, result.num_tracks, ts.num_links, ts.num_gap_links,
              ts.num_dropped_detections, options.tracks.min_length));
 
-  result.source = {input.run_dir, input.detections_path, "", 0};
+  result.source = {input.run_dir, "", input.detections_path, std::nullopt, 0};
   const AssociationState start = SeparateTracksState(track_class);
   const auto clock = std::chrono::steady_clock::now();
   const bool baseline = options.method == SlamMethod::kNearestNeighbour;
@@ -212,8 +214,8 @@ SlamStageResult RunSlamStage(const SlamStageInput& input, const std::string& out
   result.seconds = SecondsSince(clock);
   result.fused =
       FuseSamples(result.sampler.samples, loaded.data.classes, track_detections, options.fusion);
-  WriteSampledOMap(output_json, result.fused, result.source,
-                   baseline ? nullptr : &result.sampler.summary);
+  WriteOMap(output_json,
+            ToOMap(result.fused, result.source, baseline ? nullptr : &result.sampler.summary));
   if (output.quiet) return result;
   if (!baseline) ReportSampler(result.sampler, output);
   ReportMap(result, loaded.odometry, input.run_dir, output);

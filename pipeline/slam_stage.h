@@ -10,7 +10,7 @@
 
 #include "association/nn_baseline.h"
 #include "association/omap_fusion.h"
-#include "association/sampled_omap_json.h"
+#include "association/sampled_omap.h"
 #include "association/sampler.h"
 #include "association/slam_target.h"
 #include "association/tracks.h"
@@ -62,7 +62,7 @@ struct SlamStageInput {
 struct SlamStageResult {
   FusionResult fused;
   SamplerResult sampler;  // the baseline: its one solved state as the only sample
-  SampledOMapSource source;
+  OMapSource source;
   TrackSummary tracks;
   size_t num_tracks = 0;
   double seconds = 0;  // association and sampling

@@ -304,32 +304,6 @@ LandmarkDataset PosePrefix(const LandmarkDataset& data, int num_poses,
   return prefix;
 }
 
-GeometricSlamResult LandmarkResultAsOMap(const LandmarkSlamResult& result) {
-  GeometricSlamResult map;
-  map.trajectory = result.trajectory;
-  map.pose_covariances = result.pose_covariances;
-  map.summary = result.summary;
-  map.evidence = result.evidence;
-  map.covariance_message = result.covariance_message;
-  for (const MappedLandmark& landmark : result.landmarks) {
-    MappedObject object;
-    object.id = landmark.id;
-    object.class_index = 0;
-    object.geometry.base_world =
-        Eigen::Vector3d(landmark.position_m.x(), landmark.position_m.y(), 0);
-    const bool measured = std::isfinite(landmark.diameter_m);
-    object.geometry.diameter_m = measured ? landmark.diameter_m : 0.0;
-    object.geometry.height_m = 0.0;
-    // (x, y, d) -> rows/columns (0, 1, 3) of (x, y, z, d, h).
-    const int index[3] = {0, 1, 3};
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) object.covariance(index[r], index[c]) = landmark.covariance(r, c);
-    object.num_observations = landmark.num_sightings;
-    map.objects.push_back(object);
-  }
-  return map;
-}
-
 double TrajectoryLength(const std::vector<Pose2>& trajectory) {
   double length = 0;
   for (size_t i = 1; i < trajectory.size(); ++i)

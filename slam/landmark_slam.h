@@ -120,11 +120,6 @@ class LandmarkSlam {
 LandmarkDataset PosePrefix(const LandmarkDataset& data, int num_poses,
                            std::vector<int>* kept_sightings = nullptr);
 
-// The result as an O-Map (one object per landmark, class `class_name`,
-// base point (x, y, 0), diameter when measured else 0, height 0 = not
-// observed; covariance rows (x, y, diameter) filled), for WriteOMap.
-GeometricSlamResult LandmarkResultAsOMap(const LandmarkSlamResult& result);
-
 // `solved` (the first poses) followed by the later poses of `dead_reckoning`
 // moved rigidly so that they continue from the last solved pose.
 std::vector<Pose2> ExtendByOdometry(const std::vector<Pose2>& solved,

@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "core/csv.h"
-#include "omap/omap.h"
+#include "omap/omap_json.h"
 #include "test_util.h"
 
 namespace oslam {

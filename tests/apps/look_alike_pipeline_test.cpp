@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "core/run_folder.h"
-#include "omap/omap.h"
+#include "omap/omap_json.h"
 #include "test_util.h"
 
 namespace oslam {

@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "omap/omap.h"
+#include "omap/omap_json.h"
 #include "test_util.h"
 
 namespace oslam {

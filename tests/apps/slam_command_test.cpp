@@ -16,7 +16,7 @@
 #include "calib/hyperbolic_camera.h"
 #include "core/error.h"
 #include "detect/blob_detector.h"
-#include "omap/omap.h"
+#include "omap/omap_json.h"
 #include "slam/synthetic_scene.h"
 #include "test_util.h"
 

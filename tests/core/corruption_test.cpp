@@ -14,7 +14,7 @@
 #include "calib/hyperbolic_camera.h"
 #include "core/error.h"
 #include "core/run_folder.h"
-#include "omap/omap.h"
+#include "omap/omap_json.h"
 #include "test_util.h"
 
 namespace oslam {

@@ -9,6 +9,7 @@
 
 #include "export/export_fixture.h"
 #include "export/gltf_writer.h"
+#include "omap/omap_json.h"
 #include "test_util.h"
 
 namespace oslam {

@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "omap/omap.h"
+#include "omap/omap_json.h"
 #include "pipeline/detect_stage.h"
 #include "pipeline/slam_stage.h"
 #include "test_util.h"

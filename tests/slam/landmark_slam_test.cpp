@@ -15,6 +15,7 @@
 #include "core/angles.h"
 #include "core/error.h"
 #include "slam/landmark_factors.h"
+#include "slam/slam_omap.h"
 #include "tests/test_util.h"
 
 namespace oslam {
@@ -284,20 +285,32 @@ TEST(LandmarkSlamTest, OMapHasOneTreePerLandmark) {
   const World world = SimulateWorld(8);
   LandmarkSlam slam;
   const LandmarkSlamResult result = slam.Solve(world.data, GivenAssociation(world.data));
-  const GeometricSlamResult map = LandmarkResultAsOMap(result);
+  const OMap map = ToOMap(result, "tree", {"park.txt", "known", std::nullopt, std::nan(""), 0});
   ASSERT_EQ(map.objects.size(), result.landmarks.size());
   for (size_t j = 0; j < map.objects.size(); ++j) {
-    const MappedObject& object = map.objects[j];
+    const OMapObject& object = map.objects[j];
     const MappedLandmark& landmark = result.landmarks[j];
     EXPECT_EQ(object.id, landmark.id);
-    EXPECT_EQ(object.geometry.base_world.head<2>(), landmark.position_m);
-    EXPECT_EQ(object.geometry.base_world.z(), 0.0);
-    EXPECT_EQ(object.geometry.diameter_m,
-              std::isfinite(landmark.diameter_m) ? landmark.diameter_m : 0.0);
+    EXPECT_EQ(object.class_name, "tree");
+    EXPECT_EQ(object.base_world.head<2>(), landmark.position_m);
+    EXPECT_EQ(object.base_world.z(), 0.0);
+    EXPECT_EQ(object.diameter_m, std::isfinite(landmark.diameter_m) ? landmark.diameter_m : 0.0);
+    EXPECT_EQ(object.height_m, 0.0);
+    EXPECT_EQ(object.existence_probability, 1.0);
+    EXPECT_EQ(object.num_detections, landmark.num_sightings);
     EXPECT_EQ(object.covariance(1, 1), landmark.covariance(1, 1));
     EXPECT_EQ(object.covariance(3, 0), landmark.covariance(2, 0));
     EXPECT_EQ(object.covariance(2, 2), 0.0);
+    EXPECT_FALSE(object.identity);
   }
+  EXPECT_EQ(map.trajectory.size(), result.trajectory.size());
+  EXPECT_EQ(map.source->run, "park.txt");
+  ASSERT_EQ(map.reports.size(), 2u);
+  EXPECT_EQ(map.reports[0].name, "solver");
+  EXPECT_NE(map.reports[0].json.find("\"iterations\":" + std::to_string(result.summary.iterations)),
+            std::string::npos);
+  EXPECT_EQ(map.reports[0].json.find("keyframe_start"), std::string::npos);
+  EXPECT_EQ(map.reports[1].name, "evidence");
   EXPECT_NEAR(TrajectoryLength(result.trajectory), 3.0 * (result.trajectory.size() - 1), 10.0);
 }
 

@@ -1,175 +1,30 @@
-// O-SLAM with unknown association on planar landmark data (issue 10 items
-// 2-3): sightings are grouped into atomic tracks, the sampler's state is a
-// partition of the tracks into landmarks (one class, "tree"), and the target
-// is LandmarkSlam's Laplace log-evidence with a landmark location prior (so
-// states with different landmark counts compare).
-//
-// Two evaluations of a proposed state:
-//  * exact: the whole problem (all poses and landmarks) re-solved from the
-//    current state's solution with a few Levenberg-Marquardt iterations, its
-//    evidence the target (spec §9.6);
-//  * local (approximation): the poses are held at the trajectory of the last
-//    full solve (the reference state R, refined every K steps). Given the
-//    poses the landmarks are independent, so the log-evidence splits into a
-//    sum over landmarks; a state S scores
-//        log_target(R) + sum_{b in S \ R} L(b) - sum_{b in R \ S} L(b),
-//    where L(b) is the Laplace log-evidence of landmark b alone (its
-//    sightings, the location prior, poses fixed). Only the landmarks a move
-//    changes are solved (2-D problems of their sightings), so a proposal
-//    costs the same at any trajectory length. It ignores the pose
-//    uncertainty (how much a merge would bend the trajectory), which is why
-//    the driver below works in growing temporal windows: the poses a new
-//    track is seen from are then only a short drive from well-estimated ones.
+// O-SLAM with unknown association on planar landmark data: sightings grouped
+// into tracks (association/landmark_tracks.h), the tracks partitioned into
+// landmarks by hill climbing on the Laplace log-evidence
+// (association/landmark_evaluator.h), optionally sampled by MC³, and the best
+// partition solved in full.
 #pragma once
 
+#include <array>
+#include <chrono>
 #include <functional>
-#include <map>
 #include <memory>
+#include <optional>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "association/association_state.h"
-#include "slam/landmark_slam.h"
+#include "association/landmark_evaluator.h"
+#include "association/landmark_tracks.h"
 #include "association/moves.h"
+#include "association/rigid_alignment.h"
 #include "association/sampler.h"
+#include "slam/landmark_data.h"
+#include "slam/landmark_slam.h"
 
 namespace oslam {
-
-// Pre-association of sightings into tracks: a sighting joins a track when the
-// track's last sighting is from an earlier pose at most max_pose_gap poses
-// back and its world position (sighting placed by the trajectory) is within
-// gate_m of the track's last one. A sighting with two or more tracks inside
-// the gate, or a track claimed by two sightings of one scan, starts afresh
-// (tracks must be certain; the sampler merges what is left apart).
-struct LandmarkTrackOptions {
-  double gate_m = 1.0;
-  int max_pose_gap = 20;
-
-  bool Validate(std::string* why) const;
-};
-
-// Sighting indices per track in pose order, tracks ordered by their first
-// sighting. Sightings at range 0 (no bearing) are in no track. Throws
-// oslam::Error when the trajectory does not cover the data set's poses.
-std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
-                                                  const std::vector<Pose2>& trajectory,
-                                                  const LandmarkTrackOptions& options);
-
-// kMarginal (for hill climbing): a merge of two landmarks of the reference
-// (the last full solve) is scored in closed form from their joint marginal
-// covariance at the reference, i.e. the exact answer of the linearised
-// problem (one linear system, spec §9.6), pose uncertainty and loop
-// correlations included; other proposals as kLocal. The driver re-solves
-// after each accepted move so the next merge is again against a reference.
-enum class LandmarkEvaluationMode { kExact, kLocal, kMarginal };
-
-struct LandmarkTargetOptions {
-  LandmarkTargetOptions() { slam.landmark_prior_std_m = 100.0; }
-  // The full solves (Refine, and exact proposals with fewer iterations).
-  // landmark_prior_std_m must be > 0.
-  LandmarkSlamOptions slam;
-  LandmarkEvaluationMode mode = LandmarkEvaluationMode::kMarginal;
-  int proposal_iterations = 5;  // exact: LM iterations of a proposal's warm re-solve
-  int local_iterations = 10;    // local: LM iterations of one landmark's solve
-  size_t max_cache_entries = 5000;
-  // A scan sees a landmark at most once: a state putting two sightings of
-  // one pose on one landmark is invalid (P = 0), so no such merge is made.
-  bool one_sighting_per_scan = true;
-
-  bool Validate(std::string* why) const;
-};
-
-struct LandmarkTargetData {
-  const LandmarkDataset* data = nullptr;
-  std::vector<std::vector<int>> tracks;  // sighting indices into *data
-};
-
-// The evaluations: locations (x, y, 0) and residual2 per block; solution
-// holds the trajectory they belong to (a full solve's own, for local ones the
-// reference's) and no objects.
-class LandmarkEvaluator : public StateEvaluator {
- public:
-  // data (and its data set) must outlive the evaluator. Throws oslam::Error
-  // on invalid options.
-  LandmarkEvaluator(const LandmarkTargetData& data, const LandmarkTargetOptions& options);
-
-  EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation* from) override;
-  EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override;
-  void Remember(const EvaluationPtr& evaluation) override;
-  size_t num_solves() const override { return solves_; }
-  size_t num_cache_hits() const override { return hits_; }
-  size_t num_marginal_merges() const { return marginal_merges_; }  // marginal: closed-form merges
-
-  // The landmark id of every sighting under `state` (a block's id is its
-  // earliest track), -1 for sightings in no track.
-  std::vector<int> Association(const AssociationState& state) const;
-  // A full solve of `state` (the refine iterations) from `from` that leaves
-  // the reference (and so the marginal merges) alone: for trying a state far
-  // from the current one, e.g. a joint re-entry merge, before Refine-ing it.
-  EvaluationPtr Trial(const AssociationState& state, const StateEvaluation* from);
-  // The full solution of `state` with landmark covariances, warm-started
-  // from `from` when given (for the output map).
-  LandmarkSlamResult Solve(const AssociationState& state, const StateEvaluation* from);
-
- private:
-  struct BlockValue {
-    double log_evidence = 0, residual2 = 0;
-    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
-  };
-  struct BlockHash {
-    size_t operator()(const std::vector<int>& block) const;
-  };
-  enum class Solver { kStep, kRefine, kTrial };
-  EvaluationPtr FullEvaluation(const AssociationState& state, const StateEvaluation* from,
-                               Solver solver);
-  EvaluationPtr LocalEvaluation(const AssociationState& state, const StateEvaluation* from);
-  const BlockValue& LocalBlock(const std::vector<int>& block, const StateEvaluation* from);
-  LandmarkSlamResult WarmStart(const StateEvaluation& from) const;
-  void Store(const EvaluationPtr& evaluation);
-
-  const LandmarkTargetData& data_;
-  LandmarkTargetOptions options_;
-  LandmarkSlam full_, step_, trial_;
-  SparseSolver local_solver_;
-  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
-  // Local mode: the reference (last full solve) and L(b) at its trajectory.
-  EvaluationPtr reference_;
-  bool reference_factorised_ = false;         // reference_ is full_'s last solve
-  std::vector<int> reference_position_keys_;  // per reference block
-  std::vector<int> last_refine_keys_;         // per block of full_'s last solve
-  std::unordered_map<std::vector<int>, int, BlockHash> reference_blocks_;  // block -> index
-  std::unordered_map<std::vector<int>, BlockValue, BlockHash> block_cache_;
-  void SetReference(const EvaluationPtr& evaluation);
-  // True when two of the block's sightings are from one pose.
-  bool SharesAScan(const std::vector<int>& block) const;
-  // log_target(merged) - log_target(reference) for merging reference blocks
-  // ja and jb, and the merged landmark's mean; false when not computable.
-  bool MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean);
-  size_t solves_ = 0, hits_ = 0, marginal_merges_ = 0;
-};
-
-// Squared whitened range-bearing residuals of the sightings `sightings` of a
-// landmark at `landmark_m`, seen from `trajectory`.
-double SightingResidual2(const LandmarkDataset& data, const std::vector<Pose2>& trajectory,
-                         const std::vector<int>& sightings, const Eigen::Vector2d& landmark_m);
-
-// Pairwise comparison of two associations of the same sightings (ids need
-// not match; -1 = a landmark of its own): over all pairs of sightings,
-// "same landmark" in one vs the other.
-struct PairwiseAgreement {
-  long long pairs = 0, same_both = 0, same_estimate = 0, same_truth = 0;
-  double agreement = 0;  // share of pairs on which both agree (same or different)
-  double precision = 0;  // same_both / same_estimate (1 when no pair is "same")
-  double recall = 0;     // same_both / same_truth (1 when no pair is "same")
-};
-// Throws oslam::Error when the sizes differ.
-PairwiseAgreement ComparePairwise(const std::vector<int>& estimate, const std::vector<int>& truth);
-
-// RMS of the position differences of two trajectories of the same poses (m).
-double TrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b);
 
 // The whole pipeline: tracks on the dead reckoning, then hill climbing in
 // growing windows of poses (each window's new tracks start separate and are
@@ -312,5 +167,108 @@ using LandmarkProgress = std::function<void(const std::string& line)>;
 UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
                                                  const UnknownAssociationOptions& options,
                                                  const LandmarkProgress& progress = {});
+
+// One solve of SolveUnknownAssociation: its phases as methods sharing the
+// search's state (the current evaluation, the window's evaluator, the random
+// stream), in the order Run() calls them.
+class LandmarkAssociation {
+ public:
+  // `data` must outlive the object. Throws oslam::Error on invalid options.
+  LandmarkAssociation(const LandmarkDataset& data, const UnknownAssociationOptions& options,
+                      LandmarkProgress progress = {});
+  // Once per object (else throws oslam::Error). Throws oslam::Error on an
+  // unsolvable start.
+  UnknownAssociationResult Run();
+
+ private:
+  // The recent or the old part of a landmark, for the joint re-entry merges.
+  struct Unit {
+    std::vector<int> tracks;
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  };
+  // A joint re-entry merge found by RANSAC: recent units matched to old ones.
+  struct JointAlignment {
+    std::vector<Unit> recent, old;
+    RigidMatch match;                                 // from recent onto old units
+    Eigen::Vector2d pivot = Eigen::Vector2d::Zero();  // mean of the matched recent units
+  };
+  struct MergeCandidate {
+    double delta;  // linearised gain in log target
+    int a, b;      // blocks of the current state
+    EvaluationPtr evaluation;
+  };
+
+  // Tracks on the dead reckoning, clutter left out, the location prior's
+  // centre, the windows' ends.
+  void BuildTracks();
+  // A window: its start state and first solve, targeted merges, duplicate
+  // sweep, joint re-entry merge, random hill climbing.
+  void RunWindow(size_t w);
+  void StartWindow(size_t w);
+  void OpenWindowProblem(int n, int previous_end);
+  void SplitSharedScans(int previous_end, int n);
+  // Random greedy moves, re-solved after each accepted one (marginal mode)
+  // and every refine_every steps; returns the moves accepted.
+  long HillClimb(long steps);
+  // Targeted merges of the landmarks holding tracks >= first_new; the
+  // duplicate sweep: the same for every pair of landmarks within
+  // sweep_radius_m. Both return the merges made.
+  long TargetedMerges(int first_new);
+  long DuplicateSweep();
+  long MergeRounds(int first_new, double sweep_m);
+  std::vector<MergeCandidate> BestMerges(int first_new, double sweep_m);
+  bool MakeMerges(const std::vector<MergeCandidate>& best, double sweep_m, int* made);
+  // Joint re-entry merge at window end n; returns the pairs merged.
+  long JointMerge(int n);
+  long TryJointMerge(int n);
+  std::optional<JointAlignment> AlignRecentOntoOld(const StateEvaluation& before, int n);
+  EvaluationPtr TryAnchor(const StateEvaluation& before, const JointAlignment& alignment,
+                          const std::vector<double>& driven, int anchor, int n);
+  AssociationState ReleasedAndMerged(const AssociationState& s, const JointAlignment& alignment,
+                                     int anchor) const;
+  long KeepJointMerge(const EvaluationPtr& before, const EvaluationPtr& best, int best_anchor,
+                      int n, size_t pairs);
+  // Where the sightings of `tracks` before pose n put their landmark.
+  Eigen::Vector2d PlacedBy(const std::vector<int>& tracks, const std::vector<Pose2>& poses,
+                           int n) const;
+  // After the windows: every pose freed, the final sweep, the global pass.
+  void FinalGlobalPass();
+  // MC³ from the hill-climbing state; the better of its best and `best`.
+  EvaluationPtr SampleMc3(EvaluationPtr best);
+  void FinalSolve(const EvaluationPtr& best);
+  // A full solve of a window's state, timed.
+  EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from);
+  void Say(const std::string& line) const;
+
+  const LandmarkDataset& input_;
+  bool ran_ = false;
+  UnknownAssociationOptions options_;  // the location prior's centre set from the tracks
+  LandmarkProgress progress_;
+  std::chrono::steady_clock::time_point start_, climb_start_;
+  UnknownAssociationResult result_;
+
+  LandmarkDataset per_track_;              // diameter_per_track: the diameters per track
+  const LandmarkDataset* data_ = nullptr;  // input_ or per_track_
+  int num_tracks_ = 0;
+  std::vector<int> first_pose_, last_pose_, track_size_;  // per track
+  std::optional<ClassConfusionModel> model_;
+  std::vector<int> ends_;  // of the windows (pose counts)
+
+  Rng rng_;
+  AssociationState state_;  // the last window's (or the global pass's) final state
+  EvaluationPtr previous_;  // the last window's final full solve
+  EvaluationPtr current_;
+  int tracks_before_ = 0, tracks_now_ = 0;  // tracks of the earlier windows, and with this one
+  std::array<MoveStatistics, 3> stats_{};
+  // The window's data, kept alive as long as its evaluator.
+  std::unique_ptr<LandmarkDataset> window_dataset_;
+  std::unique_ptr<LandmarkTargetData> window_data_;
+  std::unique_ptr<LandmarkEvaluator> evaluator_;
+  int held_poses_ = 0;  // the current window's (free_poses)
+
+  int last_ransac_;   // window end of the last RANSAC
+  int joint_needed_;  // inliers the next joint merge needs
+  int last_failure_ = 0;
+};
 
 }  // namespace oslam

@@ -1,9 +1,10 @@
-#include "omap/map_metrics.h"
+#include "omap/evaluation.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -85,7 +86,8 @@ std::vector<int> MinCostAssignment(const std::vector<std::vector<double>>& cost,
 
 namespace {
 
-TrajectoryMetrics TrajectoryErrors(const std::vector<Pose2>& estimate, const std::vector<Pose2>& truth) {
+TrajectoryMetrics TrajectoryErrors(const std::vector<Pose2>& estimate,
+                                   const std::vector<Pose2>& truth) {
   TrajectoryMetrics m;
   double ate = 0, rpe_t = 0, rpe_r = 0;
   for (size_t i = 0; i < truth.size(); ++i) {
@@ -117,8 +119,8 @@ double Median(std::vector<double> values) {
 
 }  // namespace
 
-MapMetrics EvaluateMap(const OMap& map, const std::vector<Pose2>& odometry, const GroundTruth& truth,
-                       const MapMetricsOptions& options) {
+MapMetrics EvaluateMap(const OMap& map, const std::vector<Pose2>& odometry,
+                       const GroundTruth& truth, const MapMetricsOptions& options) {
   std::string why;
   if (!options.Validate(&why)) throw Error("evaluation: " + why);
   if (truth.trajectory.empty()) throw Error("evaluation: the ground truth has no trajectory");
@@ -140,38 +142,63 @@ MapMetrics EvaluateMap(const OMap& map, const std::vector<Pose2>& odometry, cons
     if (o.existence_probability > options.existence_threshold) map_objects.push_back(&o);
   metrics.true_objects_total = static_cast<int>(true_objects.size());
 
-  const double forbidden = 1e9;
-  std::vector<std::vector<double>> cost(true_objects.size(),
-                                        std::vector<double>(map_objects.size(), forbidden));
-  for (size_t t = 0; t < true_objects.size(); ++t)
-    for (size_t m = 0; m < map_objects.size(); ++m) {
-      const double distance =
-          (true_objects[t]->base_world.head<2>() - map_objects[m]->base_world.head<2>()).norm();
-      if (distance <= options.match_gate_m) cost[t][m] = distance;
+  auto horizontal = [](const GroundTruthObject& t, const OMapObject& m) {
+    return (t.base_world.head<2>() - m.base_world.head<2>()).norm();
+  };
+  // The map object of every true object, or -1.
+  std::vector<int> assignment(true_objects.size(), -1);
+  if (options.matching == ObjectMatching::kById) {
+    std::map<int, int> by_id;
+    for (size_t m = 0; m < map_objects.size(); ++m)
+      by_id.emplace(map_objects[m]->id, static_cast<int>(m));
+    for (size_t t = 0; t < true_objects.size(); ++t) {
+      const auto found = by_id.find(true_objects[t]->id);
+      if (found != by_id.end()) assignment[t] = found->second;
     }
-  const std::vector<int> assignment = MinCostAssignment(cost, forbidden);
-  std::vector<double> position, diameter, height;
-  int class_right = 0;
+  } else {
+    const double forbidden = 1e9;
+    std::vector<std::vector<double>> cost(true_objects.size(),
+                                          std::vector<double>(map_objects.size(), forbidden));
+    for (size_t t = 0; t < true_objects.size(); ++t)
+      for (size_t m = 0; m < map_objects.size(); ++m) {
+        const double distance = horizontal(*true_objects[t], *map_objects[m]);
+        if (distance <= options.match_gate_m) cost[t][m] = distance;
+      }
+    assignment = MinCostAssignment(cost, forbidden);
+  }
+
+  std::vector<double> position, flat, diameter, height;
   for (size_t t = 0; t < true_objects.size(); ++t) {
-    if (assignment[t] < 0) continue;
     const GroundTruthObject& truth_object = *true_objects[t];
+    if (assignment[t] < 0) {
+      metrics.missed_classes.push_back(truth_object.class_name);
+      continue;
+    }
     const OMapObject& map_object = *map_objects[assignment[t]];
     ObjectMatch match{truth_object.id,
                       map_object.id,
                       truth_object.class_name,
                       map_object.class_name,
                       (truth_object.base_world - map_object.base_world).norm(),
+                      horizontal(truth_object, map_object),
                       map_object.diameter_m - truth_object.diameter_m,
                       map_object.height_m - truth_object.height_m};
     position.push_back(match.position_error_m);
+    flat.push_back(match.horizontal_error_m);
     diameter.push_back(std::abs(match.diameter_error_m));
     height.push_back(std::abs(match.height_error_m));
-    class_right += match.true_class == match.map_class;
+    metrics.class_correct += match.true_class == match.map_class;
     metrics.matches.push_back(match);
   }
   metrics.true_objects_found = static_cast<int>(metrics.matches.size());
   metrics.spurious_objects = static_cast<int>(map_objects.size()) - metrics.true_objects_found;
   metrics.object_position_error_median_m = Median(position);
+  metrics.object_horizontal_error_median_m = Median(flat);
+  auto max = [](const std::vector<double>& v) {
+    return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end());
+  };
+  metrics.object_position_error_max_m = max(position);
+  metrics.object_horizontal_error_max_m = max(flat);
   auto mean = [](const std::vector<double>& v) {
     double sum = 0;
     for (double x : v) sum += x;
@@ -179,7 +206,8 @@ MapMetrics EvaluateMap(const OMap& map, const std::vector<Pose2>& odometry, cons
   };
   metrics.diameter_error_mean_m = mean(diameter);
   metrics.height_error_mean_m = mean(height);
-  metrics.class_accuracy = metrics.matches.empty() ? 0.0 : double(class_right) / metrics.matches.size();
+  metrics.class_accuracy =
+      metrics.matches.empty() ? 0.0 : double(metrics.class_correct) / metrics.matches.size();
   return metrics;
 }
 
@@ -189,8 +217,9 @@ std::string MapMetrics::Table() const {
   std::snprintf(line, sizeof(line), "%-10s %10s %14s %14s\n", "trajectory", "ATE m", "RPE trans m",
                 "RPE rot deg");
   out << line;
-  for (const auto& [name, m] : {std::pair<const char*, const TrajectoryMetrics&>{"estimate", estimate},
-                                {"odometry", odometry}}) {
+  for (const auto& [name, m] :
+       {std::pair<const char*, const TrajectoryMetrics&>{"estimate", estimate},
+        {"odometry", odometry}}) {
     std::snprintf(line, sizeof(line), "%-10s %10.3f %14.4f %14.3f\n", name, m.ate_rmse_m,
                   m.rpe_translation_rmse_m, RadToDeg(m.rpe_rotation_rmse_rad));
     out << line;
@@ -202,7 +231,8 @@ std::string MapMetrics::Table() const {
                 object_position_error_median_m, diameter_error_mean_m, height_error_mean_m);
   out << line;
   for (const ObjectMatch& m : matches) {
-    std::snprintf(line, sizeof(line), "  %-16s -> map %-4d %-16s position %.3f m  d %+.3f  h %+.3f\n",
+    std::snprintf(line, sizeof(line),
+                  "  %-16s -> map %-4d %-16s position %.3f m  d %+.3f  h %+.3f\n",
                   m.true_class.c_str(), m.map_id, m.map_class.c_str(), m.position_error_m,
                   m.diameter_error_m, m.height_error_m);
     out << line;

@@ -1,8 +1,8 @@
 // O-SLAM with the landmark ids hidden on the real Victoria Park data
-// (../shared/data/victoria_park/with_ids, issue 10 items 2-3): the recovered
-// association agrees with the file's ids on pairs of sightings, and the
-// trajectory is near the shipped-association solve. Skipped when the shared
-// data is absent. Label: slow (about a minute on 2 cores).
+// (../shared/data/victoria_park/with_ids): the recovered association agrees
+// with the file's ids on pairs of sightings, and the trajectory is near the
+// shipped-association solve. Skipped when the shared data is absent. Label:
+// slow (about a minute on 2 cores).
 #include <cstdio>
 #include <fstream>
 #include <set>
@@ -10,14 +10,15 @@
 
 #include <gtest/gtest.h>
 
+#include "association/association_metrics.h"
+#include "pipeline/landmark_association.h"
 #include "slam/landmark_data.h"
-#include "association/landmark_target.h"
 #include "tests/test_util.h"
 
 namespace oslam {
 namespace {
 
-TEST(LandmarkTargetRealTest, VictoriaParkWithIdsHidden) {
+TEST(LandmarkAssociationRealTest, VictoriaParkWithIdsHidden) {
   const std::string shared = testing::SharedDataDir();
   const std::string path = shared + "/victoria_park/with_ids/victoria_park.txt";
   if (shared.empty() || !std::ifstream(path))
@@ -51,9 +52,9 @@ TEST(LandmarkTargetRealTest, VictoriaParkWithIdsHidden) {
 
 // The raw scans (detections_no_ids: clutter, Ackermann odometry from speed and
 // steering), their first 2,000 poses with the raw-drive settings of
-// docs/benchmarks.md (Session 4): the trajectory against GPS, and no
+// docs/benchmarks.md: the trajectory against GPS, and no
 // landmark seen twice in one scan.
-TEST(LandmarkTargetRealTest, VictoriaParkRawPrefixAgainstGps) {
+TEST(LandmarkAssociationRealTest, VictoriaParkRawPrefixAgainstGps) {
   const std::string shared = testing::SharedDataDir();
   const std::string dir = shared + "/victoria_park/detections_no_ids/";
   if (shared.empty() || !std::ifstream(dir + "measurements.dat"))

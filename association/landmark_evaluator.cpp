@@ -1,0 +1,468 @@
+#include "association/landmark_evaluator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include <Eigen/Cholesky>
+
+#include "core/angles.h"
+#include "core/error.h"
+#include "slam/factors.h"
+#include "slam/landmark_factors.h"
+#include "solver/factor_graph.h"
+
+namespace oslam {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+const MappedLandmark* FindLandmark(const LandmarkSlamResult& result, int id) {
+  const auto it = std::lower_bound(result.landmarks.begin(), result.landmarks.end(), id,
+                                   [](const MappedLandmark& l, int v) { return l.id < v; });
+  return it != result.landmarks.end() && it->id == id ? &*it : nullptr;
+}
+
+LandmarkSlamOptions FullOptions(const LandmarkTargetOptions& options) {
+  LandmarkSlamOptions full = options.slam;
+  full.compute_landmark_covariances = false;  // Solve() adds them for the output only
+  full.compute_pose_covariances = false;
+  return full;
+}
+
+LandmarkSlamOptions StepOptions(const LandmarkTargetOptions& options) {
+  LandmarkSlamOptions step = FullOptions(options);
+  step.solver.max_iterations = options.proposal_iterations;
+  return step;
+}
+
+}  // namespace
+
+bool LandmarkTargetOptions::Validate(std::string* why) const {
+  if (!(slam.landmark_prior_std_m > 0)) {
+    if (why)
+      *why =
+          "the landmark location prior std must be > 0 (a flat prior makes the evidence "
+          "improper across landmark counts)";
+    return false;
+  }
+  if (proposal_iterations < 1 || local_iterations < 1) {
+    if (why) *why = "the solver iterations per proposal must be >= 1";
+    return false;
+  }
+  if (max_cache_entries < 1) {
+    if (why) *why = "the state cache needs room for at least one entry";
+    return false;
+  }
+  return slam.Validate(why);
+}
+
+size_t LandmarkEvaluator::BlockHash::operator()(const std::vector<int>& block) const {
+  size_t h = block.size();
+  for (int t : block) h ^= std::hash<int>()(t) + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+  return h;
+}
+
+LandmarkEvaluator::LandmarkEvaluator(const LandmarkTargetData& data,
+                                     const LandmarkTargetOptions& options)
+    : data_(data),
+      options_(options),
+      full_(FullOptions(options)),
+      step_(StepOptions(options)),
+      trial_(FullOptions(options)) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("landmark O-SLAM target options: " + why);
+  if (!data.data) throw Error("landmark O-SLAM target: no data set");
+  SolverOptions local = options.slam.solver;
+  local.max_iterations = options.local_iterations;
+  local.reuse_symbolic_analysis = false;
+  local_solver_.set_options(local);
+}
+
+std::vector<int> LandmarkEvaluator::Association(const AssociationState& state) const {
+  std::vector<int> association(data_.data->sightings.size(), -1);
+  for (const auto& block : state.blocks)
+    for (int t : block)
+      for (int k : data_.tracks.at(t)) association[k] = block.front();
+  return association;
+}
+
+std::vector<int> LandmarkEvaluator::SightingsOf(const std::vector<int>& block) const {
+  std::vector<int> sightings;
+  for (int t : block)
+    sightings.insert(sightings.end(), data_.tracks[t].begin(), data_.tracks[t].end());
+  return sightings;
+}
+
+LandmarkSlamResult LandmarkEvaluator::WarmStart(const StateEvaluation& from) const {
+  LandmarkSlamResult warm;
+  if (from.solution) warm.trajectory = from.solution->trajectory;
+  for (size_t j = 0; j < from.state.blocks.size() && j < from.locations.size(); ++j) {
+    MappedLandmark l;
+    l.id = from.state.blocks[j].front();
+    l.position_m = from.locations[j].head<2>();
+    warm.landmarks.push_back(l);
+  }
+  std::sort(warm.landmarks.begin(), warm.landmarks.end(),
+            [](const MappedLandmark& a, const MappedLandmark& b) { return a.id < b.id; });
+  return warm;
+}
+
+double SightingResidual2(const LandmarkDataset& data, const std::vector<Pose2>& trajectory,
+                         const std::vector<int>& sightings, const Eigen::Vector2d& landmark_m) {
+  double sum = 0;
+  for (int k : sightings) {
+    const LandmarkSighting& s = data.sightings[k];
+    const Pose2& pose = trajectory[s.pose];
+    const Eigen::Vector3d sensor =
+        pose.RobotToWorld(Eigen::Vector3d(data.sensor_offset_m.x(), data.sensor_offset_m.y(), 0.0));
+    const Eigen::Vector2d d = landmark_m - sensor.head<2>();
+    const double range_error = (d.norm() - s.range_m) / s.range_std_m;
+    const double bearing_error =
+        WrapAngle(std::atan2(d.y(), d.x()) - pose.theta - s.bearing_rad) / s.bearing_std_rad;
+    sum += range_error * range_error + bearing_error * bearing_error;
+  }
+  return sum;
+}
+
+bool LandmarkEvaluator::SharesAScan(const std::vector<int>& block) const {
+  if (!options_.one_sighting_per_scan || block.size() < 2) return false;
+  std::vector<int> poses;
+  for (int t : block)
+    for (int k : data_.tracks[t]) poses.push_back(data_.data->sightings[k].pose);
+  std::sort(poses.begin(), poses.end());
+  return std::adjacent_find(poses.begin(), poses.end()) != poses.end();
+}
+
+EvaluationPtr LandmarkEvaluator::FullEvaluation(const AssociationState& state,
+                                                const StateEvaluation* from, Solver solver) {
+  const auto start = std::chrono::steady_clock::now();
+  const bool refine = solver == Solver::kRefine;
+  const LandmarkDataset& data = *data_.data;
+  if (solver == Solver::kStep)
+    for (const auto& block : state.blocks)
+      if (SharesAScan(block)) {
+        auto invalid = std::make_shared<StateEvaluation>();
+        invalid->state = state;
+        return invalid;  // valid = false: rejected
+      }
+  LandmarkSlamResult warm;
+  const bool use_warm = from != nullptr;
+  if (use_warm) warm = WarmStart(*from);
+  LandmarkSlam& slam = refine ? full_ : solver == Solver::kStep ? step_ : trial_;
+  const LandmarkSlamResult result =
+      slam.Solve(data, Association(state), use_warm ? &warm : nullptr);
+  ++solves_;
+  auto evaluation = std::make_shared<StateEvaluation>();
+  evaluation->state = state;
+  evaluation->valid = result.summary.IsUsable() && result.evidence.valid &&
+                      std::isfinite(result.evidence.log_evidence);
+  evaluation->log_target = result.evidence.log_evidence;
+  auto solution = std::make_shared<GeometricSlamResult>();
+  solution->trajectory = result.trajectory;
+  solution->summary = result.summary;
+  solution->evidence = result.evidence;
+  evaluation->solution = std::move(solution);
+  if (refine) last_refine_keys_.clear();
+  for (const auto& block : state.blocks) {
+    const MappedLandmark* l = FindLandmark(result, block.front());
+    if (refine)
+      last_refine_keys_.push_back(l ? result.landmark_position_keys[l - result.landmarks.data()]
+                                    : -1);
+    const Eigen::Vector2d p = l ? l->position_m : Eigen::Vector2d::Zero();
+    evaluation->locations.push_back(Eigen::Vector3d(p.x(), p.y(), 0));
+    evaluation->residual2.push_back(
+        SightingResidual2(data, result.trajectory, SightingsOf(block), p));
+  }
+  evaluation->evaluation_time_s = SecondsSince(start);
+  return evaluation;
+}
+
+const LandmarkEvaluator::BlockValue& LandmarkEvaluator::LocalBlock(const std::vector<int>& block,
+                                                                   const StateEvaluation* from) {
+  const auto found = block_cache_.find(block);
+  if (found != block_cache_.end()) return found->second;
+  const LandmarkDataset& data = *data_.data;
+  const std::vector<Pose2>& trajectory = reference_->solution->trajectory;
+  const std::vector<int> sightings = SightingsOf(block);
+  // Start where `from` has the block of the earliest track, else at the
+  // first sighting with a bearing.
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();
+  bool placed = false;
+  if (from) {
+    const int j = from->state.BlockOf(block.front());
+    if (j >= 0 && j < static_cast<int>(from->locations.size())) {
+      start = from->locations[j].head<2>();
+      placed = true;
+    }
+  }
+  double diameter_sum = 0;
+  int diameters = 0;
+  for (int k : sightings) {
+    const LandmarkSighting& s = data.sightings[k];
+    if (!placed && s.range_m > 0) {
+      start = LandmarkFromRangeBearing(trajectory[s.pose], s.range_m, s.bearing_rad,
+                                       data.sensor_offset_m);
+      placed = true;
+    }
+    if (std::isfinite(s.diameter_m)) {
+      diameter_sum += s.diameter_m;
+      ++diameters;
+    }
+  }
+  FactorGraph graph;
+  const int landmark = graph.AddVariable(start);
+  const int diameter =
+      diameters > 0 ? graph.AddVariable(Eigen::Matrix<double, 1, 1>(diameter_sum / diameters)) : -1;
+  const double prior_var = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
+  graph.Emplace<PriorFactor>(landmark, Eigen::VectorXd(options_.slam.landmark_prior_mean_m),
+                             Eigen::MatrixXd(Eigen::Matrix2d::Identity() * prior_var),
+                             "landmark prior");
+  const Eigen::Matrix<double, 1, 1> diameter_var(options_.slam.diameter_std_m *
+                                                 options_.slam.diameter_std_m);
+  std::map<int, int> pose_keys;
+  for (int k : sightings) {
+    const LandmarkSighting& s = data.sightings[k];
+    auto it = pose_keys.find(s.pose);
+    if (it == pose_keys.end()) {
+      const Pose2& p = trajectory[s.pose];
+      it = pose_keys.emplace(s.pose, graph.AddPose(p.x, p.y, p.theta, /*fixed=*/true)).first;
+    }
+    graph.Emplace<RangeBearingFactor>(it->second, landmark, s.range_m, s.bearing_rad, s.range_std_m,
+                                      s.bearing_std_rad, data.sensor_offset_m);
+    if (diameter >= 0 && std::isfinite(s.diameter_m))
+      graph.Emplace<PriorFactor>(diameter, Eigen::Matrix<double, 1, 1>(s.diameter_m), diameter_var,
+                                 "diameter");
+  }
+  const SolveResult solved = local_solver_.Solve(&graph);
+  ++solves_;
+  BlockValue value;
+  value.log_evidence = solved.summary.IsUsable() && solved.evidence.valid
+                           ? solved.evidence.log_evidence
+                           : -std::numeric_limits<double>::infinity();
+  value.position_m = graph.values().Get(landmark);
+  value.residual2 = SightingResidual2(data, trajectory, sightings, value.position_m);
+  return block_cache_.emplace(block, value).first->second;
+}
+
+EvaluationPtr LandmarkEvaluator::LocalEvaluation(const AssociationState& state,
+                                                 const StateEvaluation* from) {
+  const auto start = std::chrono::steady_clock::now();
+  auto evaluation = std::make_shared<StateEvaluation>();
+  evaluation->state = state;
+  evaluation->solution = reference_->solution;
+  for (const auto& block : state.blocks)
+    if (!reference_blocks_.count(block) && SharesAScan(block)) return evaluation;  // invalid
+  if (options_.mode == LandmarkEvaluationMode::kMarginal &&
+      MarginalMergeEvaluation(state, evaluation.get())) {
+    evaluation->evaluation_time_s = SecondsSince(start);
+    return evaluation;
+  }
+  std::vector<char> kept(reference_->state.blocks.size(), 0);
+  double log_target = reference_->log_target;
+  for (const auto& block : state.blocks) {
+    const auto in_reference = reference_blocks_.find(block);
+    if (in_reference != reference_blocks_.end()) {
+      const int j = in_reference->second;
+      kept[j] = 1;
+      evaluation->locations.push_back(reference_->locations[j]);
+      evaluation->residual2.push_back(reference_->residual2[j]);
+      continue;
+    }
+    const BlockValue& value = LocalBlock(block, from);
+    log_target += value.log_evidence;
+    evaluation->locations.push_back(Eigen::Vector3d(value.position_m.x(), value.position_m.y(), 0));
+    evaluation->residual2.push_back(value.residual2);
+  }
+  for (size_t j = 0; j < kept.size(); ++j)
+    if (!kept[j])
+      log_target -= LocalBlock(reference_->state.blocks[j], reference_.get()).log_evidence;
+  evaluation->log_target = log_target;
+  evaluation->valid = std::isfinite(log_target);
+  evaluation->evaluation_time_s = SecondsSince(start);
+  return evaluation;
+}
+
+bool LandmarkEvaluator::MarginalMergeEvaluation(const AssociationState& state,
+                                                StateEvaluation* evaluation) {
+  if (state.blocks.size() + 1 != reference_->state.blocks.size()) return false;
+  // One merge of two reference blocks? Then every other block is unchanged.
+  int added = -1, others = 0;
+  for (size_t j = 0; j < state.blocks.size(); ++j)
+    if (!reference_blocks_.count(state.blocks[j])) {
+      added = static_cast<int>(j);
+      ++others;
+    }
+  const int ja = added >= 0 ? reference_->state.BlockOf(state.blocks[added].front()) : -1;
+  int jb = -1;
+  if (ja >= 0 && others == 1)
+    for (int t : state.blocks[added]) {
+      const int j = reference_->state.BlockOf(t);
+      if (j != ja) {
+        jb = j;
+        break;
+      }
+    }
+  double delta = 0;
+  Eigen::Vector2d mean;
+  if (jb < 0 ||
+      reference_->state.blocks[ja].size() + reference_->state.blocks[jb].size() !=
+          state.blocks[added].size() ||
+      !MergeDelta(ja, jb, &delta, &mean))
+    return false;
+  for (size_t j = 0; j < state.blocks.size(); ++j) {
+    if (static_cast<int>(j) == added) {
+      evaluation->locations.push_back(Eigen::Vector3d(mean.x(), mean.y(), 0));
+      evaluation->residual2.push_back(SightingResidual2(
+          *data_.data, reference_->solution->trajectory, SightingsOf(state.blocks[j]), mean));
+      continue;
+    }
+    const int r = reference_blocks_.at(state.blocks[j]);
+    evaluation->locations.push_back(reference_->locations[r]);
+    evaluation->residual2.push_back(reference_->residual2[r]);
+  }
+  evaluation->log_target = reference_->log_target + delta;
+  evaluation->valid = true;
+  return true;
+}
+
+void LandmarkEvaluator::Store(const EvaluationPtr& evaluation) {
+  if (cache_.size() >= options_.max_cache_entries) cache_.clear();
+  cache_[evaluation->state] = evaluation;
+}
+
+EvaluationPtr LandmarkEvaluator::Evaluate(const AssociationState& state,
+                                          const StateEvaluation* from) {
+  const auto found = cache_.find(state);
+  if (found != cache_.end()) {
+    ++hits_;
+    return found->second;
+  }
+  if (options_.mode != LandmarkEvaluationMode::kExact && !reference_) return Refine(state, from);
+  EvaluationPtr evaluation = options_.mode == LandmarkEvaluationMode::kExact
+                                 ? FullEvaluation(state, from, Solver::kStep)
+                                 : LocalEvaluation(state, from);
+  Store(evaluation);
+  return evaluation;
+}
+
+EvaluationPtr LandmarkEvaluator::Refine(const AssociationState& state,
+                                        const StateEvaluation* from) {
+  EvaluationPtr evaluation = FullEvaluation(state, from, Solver::kRefine);
+  if (options_.mode != LandmarkEvaluationMode::kExact && evaluation->valid) {
+    SetReference(evaluation);
+    reference_factorised_ = true;
+    reference_position_keys_ = last_refine_keys_;
+  }
+  Store(evaluation);
+  return evaluation;
+}
+
+EvaluationPtr LandmarkEvaluator::Trial(const AssociationState& state, const StateEvaluation* from) {
+  for (const auto& block : state.blocks)
+    if (!reference_blocks_.count(block) && SharesAScan(block)) {
+      auto invalid = std::make_shared<StateEvaluation>();
+      invalid->state = state;
+      return invalid;  // valid = false
+    }
+  return FullEvaluation(state, from, Solver::kTrial);
+}
+
+bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean) {
+  if (!reference_factorised_) return false;
+  const int ka = reference_position_keys_[ja], kb = reference_position_keys_[jb];
+  if (ka < 0 || kb < 0) return false;
+  std::vector<Eigen::MatrixXd> blocks;
+  std::string why;
+  if (!full_.solver().MarginalCovariances({{ka, kb}}, &blocks, &why) || blocks.size() != 1 ||
+      blocks[0].rows() != 4)
+    return false;
+  ++marginal_merges_;
+  // Laplace evidence ratio of "l_a = l_b = l" (one location prior N(m, s^2 I)
+  // instead of two): with the reference's Gaussian N(mu, Sigma) over
+  // (l_a, l_b) and H = [I; I],
+  //   log int N(H l; mu, Sigma) / N(l; m, s^2 I) dl
+  //   = -1/2 log|Sigma| + 2 log s - 1/2 log|P| + 1/2 b'P^-1 b - 1/2 mu'Lambda mu + |m|^2 / (2 s^2)
+  // with Lambda = Sigma^-1, P = H'Lambda H - I / s^2, b = H'Lambda mu - m / s^2.
+  const Eigen::Matrix4d sigma = blocks[0];
+  Eigen::Vector4d mu;
+  mu << reference_->locations[ja].head<2>(), reference_->locations[jb].head<2>();
+  const Eigen::LLT<Eigen::Matrix4d> sigma_llt(sigma);
+  if (sigma_llt.info() != Eigen::Success) return false;
+  const Eigen::Matrix4d lambda = sigma_llt.solve(Eigen::Matrix4d::Identity());
+  Eigen::Matrix<double, 4, 2> h;
+  h << Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity();
+  const double s2 = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
+  const Eigen::Vector2d m = options_.slam.landmark_prior_mean_m;
+  const Eigen::Matrix2d p = h.transpose() * lambda * h - Eigen::Matrix2d::Identity() / s2;
+  const Eigen::Vector2d b = h.transpose() * lambda * mu - m / s2;
+  const Eigen::LLT<Eigen::Matrix2d> p_llt(p);
+  if (p_llt.info() != Eigen::Success) return false;
+  const Eigen::Vector2d l = p_llt.solve(b);
+  double log_det_sigma = 0, log_det_p = 0;
+  for (int i = 0; i < 4; ++i) log_det_sigma += 2 * std::log(sigma_llt.matrixL()(i, i));
+  for (int i = 0; i < 2; ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
+  *delta = -0.5 * log_det_sigma + std::log(s2) - 0.5 * log_det_p + 0.5 * b.dot(l) -
+           0.5 * mu.dot(lambda * mu) + 0.5 * m.squaredNorm() / s2;
+  *delta += DiameterMergeDelta(ja, jb);
+  *mean = l;
+  return std::isfinite(*delta);
+}
+
+double LandmarkEvaluator::DiameterMergeDelta(int ja, int jb) const {
+  // The trunk diameters: a variable per landmark (flat prior) tied only to
+  // its own measurements, so its part of the evidence is separate and exact:
+  // merging blocks with n_a, n_b measurements of means d_a, d_b adds
+  //   -n_a n_b / (2 n sigma^2) (d_a - d_b)^2 + 1/2 log(n_a n_b / (2 pi sigma^2 n)).
+  auto diameters = [&](int j, double* sum) {
+    int count = 0;
+    *sum = 0;
+    for (int t : reference_->state.blocks[j])
+      for (int k : data_.tracks[t]) {
+        const double d = data_.data->sightings[k].diameter_m;
+        if (!std::isfinite(d)) continue;
+        *sum += d;
+        ++count;
+      }
+    return count;
+  };
+  double sum_a = 0, sum_b = 0;
+  const int na = diameters(ja, &sum_a), nb = diameters(jb, &sum_b);
+  if (na == 0 || nb == 0) return 0;
+  const double var = options_.slam.diameter_std_m * options_.slam.diameter_std_m;
+  const double n = na + nb, gap = sum_a / na - sum_b / nb;
+  return -double(na) * nb / (2 * n * var) * gap * gap +
+         0.5 * std::log(double(na) * nb / (2 * kPi * var * n));
+}
+
+void LandmarkEvaluator::SetReference(const EvaluationPtr& evaluation) {
+  // A new linearisation point: values computed at the old one are stale.
+  reference_ = evaluation;
+  reference_factorised_ = false;
+  reference_blocks_.clear();
+  for (size_t j = 0; j < evaluation->state.blocks.size(); ++j)
+    reference_blocks_[evaluation->state.blocks[j]] = static_cast<int>(j);
+  block_cache_.clear();
+  cache_.clear();
+}
+
+void LandmarkEvaluator::Remember(const EvaluationPtr& evaluation) {
+  Store(evaluation);
+}
+
+LandmarkSlamResult LandmarkEvaluator::Solve(const AssociationState& state,
+                                            const StateEvaluation* from) {
+  LandmarkSlamOptions options = options_.slam;
+  options.compute_landmark_covariances = true;
+  options.held_poses = 0;
+  LandmarkSlam slam(options);
+  LandmarkSlamResult warm;
+  if (from) warm = WarmStart(*from);
+  return slam.Solve(*data_.data, Association(state), from ? &warm : nullptr);
+}
+
+}  // namespace oslam

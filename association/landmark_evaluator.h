@@ -1,0 +1,143 @@
+// The sampler's target for O-SLAM with unknown association on planar
+// landmark data: the state is a partition of the tracks
+// (association/landmark_tracks.h) into landmarks (one class, "tree"), and the
+// target is LandmarkSlam's Laplace log-evidence with a landmark location
+// prior (so states with different landmark counts compare).
+//
+// Two evaluations of a proposed state:
+//  * exact: the whole problem (all poses and landmarks) re-solved from the
+//    current state's solution with a few Levenberg-Marquardt iterations, its
+//    evidence the target (spec §9.6);
+//  * local (approximation): the poses are held at the trajectory of the last
+//    full solve (the reference state R, refined every K steps). Given the
+//    poses the landmarks are independent, so the log-evidence splits into a
+//    sum over landmarks; a state S scores
+//        log_target(R) + sum_{b in S \ R} L(b) - sum_{b in R \ S} L(b),
+//    where L(b) is the Laplace log-evidence of landmark b alone (its
+//    sightings, the location prior, poses fixed). Only the landmarks a move
+//    changes are solved (2-D problems of their sightings), so a proposal
+//    costs the same at any trajectory length. It ignores the pose
+//    uncertainty (how much a merge would bend the trajectory), which is why
+//    the driver (pipeline/landmark_association.h) works in growing temporal
+//    windows: the poses a new track is seen from are then only a short drive
+//    from well-estimated ones.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "association/association_state.h"
+#include "association/sampler.h"
+#include "slam/landmark_slam.h"
+
+namespace oslam {
+
+// kMarginal (for hill climbing): a merge of two landmarks of the reference
+// (the last full solve) is scored in closed form from their joint marginal
+// covariance at the reference, i.e. the exact answer of the linearised
+// problem (one linear system, spec §9.6), pose uncertainty and loop
+// correlations included; other proposals as kLocal. The driver re-solves
+// after each accepted move so the next merge is again against a reference.
+enum class LandmarkEvaluationMode { kExact, kLocal, kMarginal };
+
+struct LandmarkTargetOptions {
+  LandmarkTargetOptions() { slam.landmark_prior_std_m = 100.0; }
+  // The full solves (Refine, and exact proposals with fewer iterations).
+  // landmark_prior_std_m must be > 0.
+  LandmarkSlamOptions slam;
+  LandmarkEvaluationMode mode = LandmarkEvaluationMode::kMarginal;
+  int proposal_iterations = 5;  // exact: LM iterations of a proposal's warm re-solve
+  int local_iterations = 10;    // local: LM iterations of one landmark's solve
+  size_t max_cache_entries = 5000;
+  // A scan sees a landmark at most once: a state putting two sightings of
+  // one pose on one landmark is invalid (P = 0), so no such merge is made.
+  bool one_sighting_per_scan = true;
+
+  bool Validate(std::string* why) const;
+};
+
+struct LandmarkTargetData {
+  const LandmarkDataset* data = nullptr;
+  std::vector<std::vector<int>> tracks;  // sighting indices into *data
+};
+
+// The evaluations: locations (x, y, 0) and residual2 per block; solution
+// holds the trajectory they belong to (a full solve's own, for local ones the
+// reference's) and no objects.
+class LandmarkEvaluator : public StateEvaluator {
+ public:
+  // data (and its data set) must outlive the evaluator. Throws oslam::Error
+  // on invalid options.
+  LandmarkEvaluator(const LandmarkTargetData& data, const LandmarkTargetOptions& options);
+
+  EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation* from) override;
+  EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override;
+  void Remember(const EvaluationPtr& evaluation) override;
+  size_t num_solves() const override { return solves_; }
+  size_t num_cache_hits() const override { return hits_; }
+  size_t num_marginal_merges() const { return marginal_merges_; }  // marginal: closed-form merges
+
+  // The landmark id of every sighting under `state` (a block's id is its
+  // earliest track), -1 for sightings in no track.
+  std::vector<int> Association(const AssociationState& state) const;
+  // A full solve of `state` (the refine iterations) from `from` that leaves
+  // the reference (and so the marginal merges) alone: for trying a state far
+  // from the current one, e.g. a joint re-entry merge, before Refine-ing it.
+  EvaluationPtr Trial(const AssociationState& state, const StateEvaluation* from);
+  // The full solution of `state` with landmark covariances, warm-started
+  // from `from` when given (for the output map).
+  LandmarkSlamResult Solve(const AssociationState& state, const StateEvaluation* from);
+
+ private:
+  struct BlockValue {
+    double log_evidence = 0, residual2 = 0;
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  };
+  struct BlockHash {
+    size_t operator()(const std::vector<int>& block) const;
+  };
+  enum class Solver { kStep, kRefine, kTrial };
+  EvaluationPtr FullEvaluation(const AssociationState& state, const StateEvaluation* from,
+                               Solver solver);
+  EvaluationPtr LocalEvaluation(const AssociationState& state, const StateEvaluation* from);
+  // Marginal mode: when `state` is the reference with two of its blocks
+  // merged, fills `evaluation` in closed form and returns true.
+  bool MarginalMergeEvaluation(const AssociationState& state, StateEvaluation* evaluation);
+  const BlockValue& LocalBlock(const std::vector<int>& block, const StateEvaluation* from);
+  LandmarkSlamResult WarmStart(const StateEvaluation& from) const;
+  void Store(const EvaluationPtr& evaluation);
+  std::vector<int> SightingsOf(const std::vector<int>& block) const;
+
+  const LandmarkTargetData& data_;
+  LandmarkTargetOptions options_;
+  LandmarkSlam full_, step_, trial_;
+  SparseSolver local_solver_;
+  std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
+  // Local mode: the reference (last full solve) and L(b) at its trajectory.
+  EvaluationPtr reference_;
+  bool reference_factorised_ = false;         // reference_ is full_'s last solve
+  std::vector<int> reference_position_keys_;  // per reference block
+  std::vector<int> last_refine_keys_;         // per block of full_'s last solve
+  std::unordered_map<std::vector<int>, int, BlockHash> reference_blocks_;  // block -> index
+  std::unordered_map<std::vector<int>, BlockValue, BlockHash> block_cache_;
+  void SetReference(const EvaluationPtr& evaluation);
+  // True when two of the block's sightings are from one pose.
+  bool SharesAScan(const std::vector<int>& block) const;
+  // log_target(merged) - log_target(reference) for merging reference blocks
+  // ja and jb, and the merged landmark's mean; false when not computable.
+  bool MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean);
+  // The trunk diameters' part of MergeDelta (0 unless both blocks have one).
+  double DiameterMergeDelta(int ja, int jb) const;
+  size_t solves_ = 0, hits_ = 0, marginal_merges_ = 0;
+};
+
+// Squared whitened range-bearing residuals of the sightings `sightings` of a
+// landmark at `landmark_m`, seen from `trajectory`.
+double SightingResidual2(const LandmarkDataset& data, const std::vector<Pose2>& trajectory,
+                         const std::vector<int>& sightings, const Eigen::Vector2d& landmark_m);
+
+}  // namespace oslam

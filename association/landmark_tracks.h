@@ -1,0 +1,33 @@
+// Pre-association of planar landmark sightings into tracks: the atoms the
+// landmark sampler's state partitions (it merges tracks, never splits one).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/pose2.h"
+#include "slam/landmark_data.h"
+
+namespace oslam {
+
+// A sighting joins a track when the track's last sighting is from an earlier
+// pose at most max_pose_gap poses back and its world position (sighting
+// placed by the trajectory) is within gate_m of the track's last one. A
+// sighting with two or more tracks inside the gate, or a track claimed by two
+// sightings of one scan, starts afresh (tracks must be certain; the sampler
+// merges what is left apart).
+struct LandmarkTrackOptions {
+  double gate_m = 1.0;
+  int max_pose_gap = 20;
+
+  bool Validate(std::string* why) const;
+};
+
+// Sighting indices per track in pose order, tracks ordered by their first
+// sighting. Sightings at range 0 (no bearing) are in no track. Throws
+// oslam::Error when the trajectory does not cover the data set's poses.
+std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
+                                                  const std::vector<Pose2>& trajectory,
+                                                  const LandmarkTrackOptions& options);
+
+}  // namespace oslam

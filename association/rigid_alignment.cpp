@@ -1,0 +1,189 @@
+#include "association/rigid_alignment.h"
+
+#include <cmath>
+#include <map>
+#include <tuple>
+
+#include "core/angles.h"
+
+namespace oslam {
+
+Rigid2 FitRigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
+  Eigen::Vector2d cf = Eigen::Vector2d::Zero(), ct = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < from.size(); ++i) {
+    cf += from[i];
+    ct += to[i];
+  }
+  cf /= double(from.size());
+  ct /= double(to.size());
+  double dot = 0, cross = 0;
+  for (size_t i = 0; i < from.size(); ++i) {
+    const Eigen::Vector2d a = from[i] - cf, b = to[i] - ct;
+    dot += a.dot(b);
+    cross += a.x() * b.y() - a.y() * b.x();
+  }
+  Rigid2 rigid;
+  rigid.angle = std::atan2(cross, dot);
+  rigid.t = ct - Eigen::Rotation2Dd(rigid.angle) * cf;
+  return rigid;
+}
+
+Rigid2 PartOf(const Rigid2& rigid, const Eigen::Vector2d& pivot, double fraction) {
+  Rigid2 part;
+  part.angle = fraction * rigid.angle;
+  const Eigen::Vector2d shift = rigid(pivot) - pivot;
+  part.t = pivot + fraction * shift - Eigen::Rotation2Dd(part.angle) * pivot;
+  return part;
+}
+
+namespace {
+
+// The candidates of each `from` point and the inliers of a transform. The
+// `to` points sit on a grid of inlier_m cells: a transform's inliers are then
+// found in the 3 x 3 cells around each moved point instead of among all its
+// candidates (thousands with clutter); the same pairs as a scan of the
+// candidates (ties to the higher index, as that scan).
+class InlierCounter {
+ public:
+  InlierCounter(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
+                const RigidRansacOptions& options)
+      : from_(from),
+        to_(to),
+        inlier_m_(options.inlier_m),
+        inlier2_(inlier_m_ * inlier_m_),
+        reach_(options.search_m + inlier_m_),
+        near_(from.size()) {
+    for (size_t i = 0; i < from_.size(); ++i) {
+      for (size_t o = 0; o < to_.size(); ++o)
+        if ((to_[o] - from_[i]).squaredNorm() <= reach_ * reach_)
+          near_[i].push_back(static_cast<int>(o));
+      with_candidates_ += !near_[i].empty();
+    }
+  }
+
+  int with_candidates() const { return with_candidates_; }
+  const std::vector<int>& near(size_t i) const { return near_[i]; }
+
+  // Builds the grid; needed before Inliers().
+  void Index() {
+    for (size_t o = 0; o < to_.size(); ++o) grid_[CellOf(to_[o])].push_back(static_cast<int>(o));
+  }
+
+  // The number of inliers of `rigid`, and with `pairs` the pairs.
+  int Inliers(const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) const {
+    std::map<int, std::pair<double, int>> by_to;  // to point -> (distance², from point)
+    for (size_t i = 0; i < from_.size(); ++i) {
+      if (near_[i].empty()) continue;
+      const Eigen::Vector2d p = rigid(from_[i]);
+      const auto [cx, cy] = CellOf(p);
+      int nearest = -1;
+      double best = inlier2_;
+      for (long x = cx - 1; x <= cx + 1; ++x)
+        for (long y = cy - 1; y <= cy + 1; ++y) {
+          const auto cell = grid_.find({x, y});
+          if (cell == grid_.end()) continue;
+          for (int o : cell->second) {
+            if ((to_[o] - from_[i]).squaredNorm() > reach_ * reach_) continue;  // not in near_[i]
+            const double d2 = (to_[o] - p).squaredNorm();
+            if (d2 < best || (d2 == best && o > nearest)) {
+              best = d2;
+              nearest = o;
+            }
+          }
+        }
+      if (nearest < 0) continue;
+      const auto it = by_to.find(nearest);
+      if (it == by_to.end() || best < it->second.first)
+        by_to[nearest] = {best, static_cast<int>(i)};
+    }
+    if (pairs) {
+      pairs->clear();
+      for (const auto& [o, value] : by_to) pairs->push_back({value.second, o});
+    }
+    return static_cast<int>(by_to.size());
+  }
+
+ private:
+  std::pair<long, long> CellOf(const Eigen::Vector2d& p) const {
+    return std::make_pair(static_cast<long>(std::floor(p.x() / inlier_m_)),
+                          static_cast<long>(std::floor(p.y() / inlier_m_)));
+  }
+
+  const std::vector<Eigen::Vector2d>& from_;
+  const std::vector<Eigen::Vector2d>& to_;
+  const double inlier_m_, inlier2_, reach_;
+  std::vector<std::vector<int>> near_;  // candidates (to points within reach) per from point
+  int with_candidates_ = 0;
+  std::map<std::pair<long, long>, std::vector<int>> grid_;
+};
+
+// The sampled transform with the most inliers (count 0: none).
+std::pair<Rigid2, int> Sample(const std::vector<Eigen::Vector2d>& from,
+                              const std::vector<Eigen::Vector2d>& to, const InlierCounter& counter,
+                              const RigidRansacOptions& options, std::mt19937_64& rng) {
+  const double inlier_m = options.inlier_m;
+  std::uniform_int_distribution<size_t> pick(0, from.size() - 1);
+  Rigid2 best_rigid;
+  int best_count = 0;
+  for (int sample = 0; sample < options.iterations; ++sample) {
+    const size_t a = pick(rng), b = pick(rng);
+    if (a == b || counter.near(a).empty() || counter.near(b).empty()) continue;
+    const Eigen::Vector2d ra = from[a], rb = from[b];
+    const double d = (rb - ra).norm();
+    if (d < 2 * inlier_m) continue;
+    const double heading = std::atan2(rb.y() - ra.y(), rb.x() - ra.x());
+    for (int oa : counter.near(a))
+      for (int ob : counter.near(b)) {
+        if (oa == ob) continue;
+        const Eigen::Vector2d v = to[ob] - to[oa];
+        if (std::abs(v.norm() - d) > inlier_m) continue;
+        const double angle = WrapAngle(std::atan2(v.y(), v.x()) - heading);
+        if (std::abs(angle) > options.max_rotation_rad) continue;
+        if (options.max_shift_m > 0 &&
+            (0.5 * (to[oa] + to[ob] - ra - rb)).norm() > options.max_shift_m)
+          continue;
+        Rigid2 rigid;
+        rigid.angle = angle;
+        rigid.t = 0.5 * (to[oa] + to[ob]) - Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
+        const int count = counter.Inliers(rigid, nullptr);
+        if (count > best_count) {
+          best_count = count;
+          best_rigid = rigid;
+        }
+      }
+  }
+  return {best_rigid, best_count};
+}
+
+}  // namespace
+
+std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
+                                       const std::vector<Eigen::Vector2d>& to,
+                                       const RigidRansacOptions& options, std::mt19937_64& rng) {
+  if (from.size() < 2) return std::nullopt;
+  InlierCounter counter(from, to, options);
+  if (counter.with_candidates() < options.min_inliers) return std::nullopt;
+  counter.Index();
+  RigidMatch match;
+  int count = 0;
+  std::tie(match.rigid, count) = Sample(from, to, counter, options, rng);
+  if (count < options.min_inliers) return std::nullopt;
+  for (int refit = 0; refit < 2; ++refit) {
+    counter.Inliers(match.rigid, &match.pairs);
+    std::vector<Eigen::Vector2d> matched_from, matched_to;
+    for (const auto& [r, o] : match.pairs) {
+      matched_from.push_back(from[r]);
+      matched_to.push_back(to[o]);
+    }
+    const Rigid2 fitted = FitRigid(matched_from, matched_to);
+    if (counter.Inliers(fitted, nullptr) < static_cast<int>(match.pairs.size())) break;
+    match.rigid = fitted;
+  }
+  counter.Inliers(match.rigid, &match.pairs);
+  if (static_cast<int>(match.pairs.size()) < options.min_inliers ||
+      std::abs(match.rigid.angle) > options.max_rotation_rad)
+    return std::nullopt;
+  return match;
+}
+
+}  // namespace oslam
