@@ -14,7 +14,7 @@ const std::vector<Command>& Commands() {
       {"eval-detect", "score a run's detections against its ground truth", RunEvalDetectCommand},
       {"eval", "score an O-Map against a run's ground truth", RunEvalCommand},
       {"map", "O-SLAM on a run's detections -> O-Map (--known-association: geometric SLAM)",
-       RunMapDispatchCommand},
+       RunMapCommand},
       {"export", "write an O-Map as glTF, PLY, figures and reprojection overlays",
        RunExportCommand},
       {"overlay", "draw an O-Map on a run's frames (reprojection overlays)", RunOverlayCommand},
