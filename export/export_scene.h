@@ -1,5 +1,5 @@
 // What every exporter draws: the O-Map, the class display colours, and the
-// trajectories to compare it with. Shared conventions (spec §2): an object's
+// trajectories to compare it with. Shared conventions (docs/method.md §2): an object's
 // opacity is its existence probability pi, objects with pi below a threshold
 // are left out, the class colour is the display colour of classes.yaml.
 #pragma once

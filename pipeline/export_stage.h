@@ -21,7 +21,7 @@ struct ExportStageOptions {
   bool overlays = false;       // draw the map on the run's frames (overlays/NNNNNN.jpg)
   std::string overlay_frames;  // "" = every frame with an estimated pose; e.g. "0,10,20-30"
   std::string overlay_format = "jpg";  // "jpg" or "png" (lossless, slower)
-  int threads = 2;             // overlays drawn and written at once, 0 = one per core
+  int threads = 2;                     // overlays drawn and written at once, 0 = one per core
 
   ExportOptions Models() const;   // glTF and PLY
   FigureOptions Figures() const;  // bird's-eye, perspective, trajectories

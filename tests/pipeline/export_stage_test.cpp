@@ -28,9 +28,9 @@ TEST(ExportStage, WritesTheModelsFiguresAndChosenOverlays) {
   EXPECT_THROW(RunExportStage(map, {}, dir.Path("no_run"), options, {}), Error);
   EXPECT_FALSE(fs::exists(dir.Path("no_run")));
   RunExportStage(map, {run, dir.Path("d.csv")}, dir.Path("export"), options, {});
-  for (const char* file : {"map.glb", "map.ply", "trajectory_estimated.txt", "birdseye.png",
-                           "birdseye.svg", "trajectories.png", "trajectories.csv",
-                           "overlays/000000.jpg", "overlays/000003.jpg"})
+  for (const char* file :
+       {"map.glb", "map.ply", "trajectory_estimated.txt", "birdseye.png", "birdseye.svg",
+        "trajectories.png", "trajectories.csv", "overlays/000000.jpg", "overlays/000003.jpg"})
     EXPECT_TRUE(fs::is_regular_file(dir.Path("export/") + file)) << file;
   EXPECT_FALSE(fs::exists(dir.Path("export/overlays/000001.jpg")));
 

@@ -54,12 +54,26 @@ TEST(RunPipeline, WritesEveryFileAndEqualsTheSingleCommands) {
   EXPECT_EQ(result.times[1].name, "o-slam");
   EXPECT_EQ(result.Total().seconds,
             result.times[0].seconds + result.times[1].seconds + result.times[2].seconds);
-  for (const char* file : {"detections.csv", "omap.json", "map.glb", "map.gltf", "map.ply",
-                           "trajectory.ply", "trajectory_estimated.txt", "trajectory_odometry.txt",
-                           "trajectory_truth.txt", "birdseye.png", "birdseye.svg", "birdseye.csv",
-                           "perspective.png", "trajectories.png", "trajectories.svg",
-                           "trajectories.csv", "overlays/000000.jpg", "overlays/000015.jpg",
-                           "eval.json", "report.md"})
+  for (const char* file : {"detections.csv",
+                           "omap.json",
+                           "map.glb",
+                           "map.gltf",
+                           "map.ply",
+                           "trajectory.ply",
+                           "trajectory_estimated.txt",
+                           "trajectory_odometry.txt",
+                           "trajectory_truth.txt",
+                           "birdseye.png",
+                           "birdseye.svg",
+                           "birdseye.csv",
+                           "perspective.png",
+                           "trajectories.png",
+                           "trajectories.svg",
+                           "trajectories.csv",
+                           "overlays/000000.jpg",
+                           "overlays/000015.jpg",
+                           "eval.json",
+                           "report.md"})
     EXPECT_TRUE(fs::is_regular_file(fs::path(out) / file)) << file;
   EXPECT_EQ(result.eval_path, out + "/eval.json");
   ASSERT_TRUE(result.metrics.has_value());
