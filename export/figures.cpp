@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/error.h"
 #include "export/cylinder_mesh.h"
 #include "export/raster.h"
@@ -235,6 +236,11 @@ std::vector<double> PositionErrors(const std::vector<Pose2>& poses,
 bool FigureOptions::Validate(std::string* why) const {
   if (width_px < 64 || height_px < 64) {
     *why = "figures must be at least 64x64 pixels";
+    return false;
+  }
+  if (width_px > bounds::kFigureSidePx || height_px > bounds::kFigureSidePx) {
+    *why = "figures must be at most " + std::to_string(bounds::kFigureSidePx) + "x" +
+           std::to_string(bounds::kFigureSidePx) + " pixels (docs/formats.md, Bounds)";
     return false;
   }
   if (!(min_existence >= 0.0 && min_existence <= 1.0)) {
