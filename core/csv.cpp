@@ -1,7 +1,6 @@
 #include "core/csv.h"
 
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -9,6 +8,7 @@
 #include "core/atomic_file.h"
 #include "core/bounds.h"
 #include "core/error.h"
+#include "core/text.h"
 
 namespace oslam {
 namespace {
@@ -134,10 +134,7 @@ long CsvTable::Integer(size_t row, int column, long low, long high) const {
 }
 
 std::string CsvNumber(double value) {
-  char buffer[32];
-  // Shortest text that reads back to the same double.
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
+  return Number(value);
 }
 
 }  // namespace oslam

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <utility>
 
+#include "core/text.h"
 #include "solver/evidence.h"
 #include "solver/levenberg_marquardt.h"
 #include "solver/linearization.h"
@@ -17,9 +18,6 @@ namespace oslam {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 }  // namespace
 
@@ -173,7 +171,7 @@ TerminationType SparseSolver::Impl::Minimize(const SolverOptions& options, Facto
       // Non-finite Jacobians at a point with a finite cost: a failed step.
       step.accepted = normal.Assemble(trial);
       if (!step.accepted) normal.Assemble(current);
-      summary->linearize_time_s += Seconds(t_assemble);
+      summary->linearize_time_s += SecondsSince(t_assemble);
     }
     if (!step.accepted) {
       if (lm.StepRejected()) continue;
@@ -208,13 +206,13 @@ SparseSolver::Impl::Step SparseSolver::Impl::TryStep(const SolverOptions& option
   Step step;
   const auto t_factor = Clock::now();
   step.solved = SolveDamped(options, lm.damping(), delta);
-  summary->factorize_time_s += Seconds(t_factor);
+  summary->factorize_time_s += SecondsSince(t_factor);
   if (!step.solved) return step;
   const double predicted = lm.PredictedDecrease(normal.gradient(), normal.diagonal(), *delta);
   Retract(graph.values(), *delta, &trial_values);
   const auto t_cost = Clock::now();
   const bool evaluated = linearizer.Evaluate(graph, trial_values, true, &trial, &step.new_cost);
-  summary->linearize_time_s += Seconds(t_cost);
+  summary->linearize_time_s += SecondsSince(t_cost);
   if (evaluated && predicted > 0.0) {
     step.rho = (cost - step.new_cost) / predicted;
     step.accepted = lm.Accepts(step.rho);
@@ -304,7 +302,7 @@ void SparseSolver::Impl::SolveFinalSystem(const SolverOptions& options, FactorGr
   result->squared_errors.resize(at_final_values->errors.size());
   for (size_t f = 0; f < at_final_values->errors.size(); ++f)
     result->squared_errors[f] = at_final_values->errors[f].squaredNorm();
-  summary.evidence_time_s = Seconds(t_evidence);
+  summary.evidence_time_s = SecondsSince(t_evidence);
   if (!factored)
     *message +=
         "; the final information matrix is not positive definite (no evidence or "
@@ -341,7 +339,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
     summary.message = message;
     summary.reused_linearizations = impl.linearizer.reused();
     summary.computed_linearizations = impl.linearizer.computed();
-    summary.total_time_s = Seconds(start);
+    summary.total_time_s = SecondsSince(start);
     return result;
   };
   std::string why;
@@ -355,7 +353,7 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   const bool first_ok =
       impl.linearizer.Evaluate(*graph, graph->values(), true, &impl.current, &cost) &&
       impl.normal.Assemble(impl.current);
-  summary.linearize_time_s += Seconds(t_first);
+  summary.linearize_time_s += SecondsSince(t_first);
   if (!first_ok)
     return finish(TerminationType::kFailure,
                   "a factor cannot be evaluated at the initial values (e.g. an object has no "
