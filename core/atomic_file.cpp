@@ -176,7 +176,7 @@ void WriteTextFileAtomically(const std::string& path, const std::string& content
   WriteFileAtomically(path, contents);
 }
 
-std::string PrepareOutputFolder(const std::string& root, const std::string& name) {
+void CheckOutputSubfolder(const std::string& root, const std::string& name) {
   const fs::path folder = fs::path(root) / name;
   std::error_code ec;
   if (fs::is_symlink(folder, ec)) {
@@ -188,6 +188,12 @@ std::string PrepareOutputFolder(const std::string& root, const std::string& name
                                                ", out of the output folder; remove it or "
                                                "choose another output folder");
   }
+}
+
+std::string PrepareOutputFolder(const std::string& root, const std::string& name) {
+  CheckOutputSubfolder(root, name);
+  const fs::path folder = fs::path(root) / name;
+  std::error_code ec;
   fs::create_directories(folder, ec);
   if (!fs::is_directory(folder)) throw Error::InFile(folder.string(), "cannot create the folder");
   return folder.string();

@@ -45,10 +45,13 @@ void SyncFileSystem(const std::string& folder);
 // Writes `contents` to `path` as WriteFileAtomically does.
 void WriteTextFileAtomically(const std::string& path, const std::string& contents);
 
+// Throws oslam::Error naming `root`/`name` when it is a symlink leading out
+// of the output folder `root`: the files written there would land elsewhere.
+void CheckOutputSubfolder(const std::string& root, const std::string& name);
+
 // Creates `root`/`name`, a folder for output inside the output folder
-// `root` (both created when missing), and returns its path. Refuses, with
-// oslam::Error naming it, a `name` that is a symlink leading out of `root`:
-// the files written there would land elsewhere.
+// `root` (both created when missing), after CheckOutputSubfolder; returns
+// its path.
 std::string PrepareOutputFolder(const std::string& root, const std::string& name);
 
 // Throws oslam::Error naming `path` unless it is a regular file within the

@@ -14,6 +14,10 @@ namespace bounds {
 // Positions in metres (world and robot frames: poses, object base points,
 // landmarks, GPS fixes, scene objects): |x|, |y|, |z| at most this.
 inline constexpr double kCoordinateM = 1e5;
+// Standard deviations of sizes and positions (priors, noise), m: at least
+// a micron. The solver weighs by their inverse squares; below this the
+// weights overflow and a prior stops being a proper one.
+inline constexpr double kMinStdM = 1e-6;
 // Speeds of the robot (m/s), as odometry inputs give them.
 inline constexpr double kSpeedMps = 1000.0;
 // Object sizes in metres (diameters, heights, box extents, size priors).

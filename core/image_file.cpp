@@ -1,6 +1,7 @@
 #include "core/image_file.h"
 
 #include <algorithm>
+#include <cctype>
 #include <climits>
 #include <csetjmp>
 #include <cstdint>
@@ -107,6 +108,29 @@ bool JpegSize(const std::string& bytes, int* width, int* height) {
     at += 2 + length;
   }
   return false;
+}
+
+// Width and height of a PNM (PBM, PGM, PPM) file: "P5", then the numbers as
+// text, separated by white space and '#' comments.
+bool PnmSize(const std::string& bytes, int* width, int* height) {
+  size_t at = 2;
+  long numbers[2];
+  for (long& number : numbers) {
+    while (at < bytes.size() &&
+           (std::isspace(static_cast<unsigned char>(bytes[at])) || bytes[at] == '#')) {
+      if (bytes[at] == '#')
+        while (at < bytes.size() && bytes[at] != '\n') ++at;
+      else
+        ++at;
+    }
+    if (at >= bytes.size() || !std::isdigit(static_cast<unsigned char>(bytes[at]))) return false;
+    number = 0;
+    for (; at < bytes.size() && std::isdigit(static_cast<unsigned char>(bytes[at])); ++at)
+      number = std::min(number * 10 + (bytes[at] - '0'), 0x7FFFFFFFl);
+  }
+  *width = static_cast<int>(numbers[0]);
+  *height = static_cast<int>(numbers[1]);
+  return true;
 }
 
 // ---------------------------------------------------------------- PNG
@@ -340,6 +364,9 @@ ImageHeader ReadImageHeader(const std::string& bytes, const std::string& path) {
       const int32_t height = le32(22);  // negative: stored top-down
       header.height = height == INT32_MIN ? INT32_MAX : (height < 0 ? -height : height);
     }
+  } else if (bytes.size() >= 2 && p[0] == 'P' && p[1] >= '1' && p[1] <= '6') {
+    header.format = "pnm";
+    if (!PnmSize(bytes, &header.width, &header.height)) throw cut();
   } else if (TiffReader(p, bytes.size()).Valid()) {
     header.format = "tiff";
     const TiffReader tiff(p, bytes.size());
@@ -348,7 +375,7 @@ ImageHeader ReadImageHeader(const std::string& bytes, const std::string& path) {
     header.width = static_cast<int>(std::min(width, 0x7FFFFFFFl));
     header.height = static_cast<int>(std::min(height, 0x7FFFFFFFl));
   } else {
-    throw Error::InFile(path, "not an image (expected PNG, JPEG, BMP or TIFF data)");
+    throw Error::InFile(path, "not an image (expected PNG, JPEG, BMP, TIFF or PNM data)");
   }
   return header;
 }

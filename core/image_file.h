@@ -15,12 +15,12 @@
 namespace oslam {
 
 struct ImageHeader {
-  std::string format;  // png, jpeg, bmp or tiff
+  std::string format;  // png, jpeg, bmp, tiff or pnm
   int width = 0, height = 0;
 };
 
 // The format and size that the first bytes of an image file declare; throws
-// oslam::Error naming `path` when they are none of the four formats or the
+// oslam::Error naming `path` when they are none of these formats or the
 // header is cut short.
 ImageHeader ReadImageHeader(const std::string& bytes, const std::string& path);
 

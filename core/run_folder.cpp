@@ -53,7 +53,8 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
   for (const char* field : {"diameter_mean_m", "diameter_std_m", "height_mean_m", "height_std_m"}) {
     const double value = file.Double(node, field, key);
     if (!(value > 0)) file.Fail(key + field, "must be positive");
-    file.Within(value, key + field, 0, bounds::kObjectSizeM, "m");
+    const bool is_std = std::string(field).find("_std_") != std::string::npos;
+    file.Within(value, key + field, is_std ? bounds::kMinStdM : 0, bounds::kObjectSizeM, "m");
   }
   const cv::FileNode colour = node["colour"];
   if (!colour.empty() && !colour.isNone()) {

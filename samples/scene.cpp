@@ -250,8 +250,10 @@ std::vector<ObjectClass> ParseClasses(const Reader& r, const cv::FileNode& root)
     for (int k = 0; k < 3; ++k) c.display_rgb[k] = static_cast<int>(std::lround(rgb[k]));
     c.diameter_mean_m = r.Positive(node, "diameter_mean_m", prefix);
     c.diameter_std_m = r.Positive(node, "diameter_std_m", prefix);
+    r.file.Within(c.diameter_std_m, prefix + "diameter_std_m", bounds::kMinStdM, kSize, "m");
     c.height_mean_m = r.Positive(node, "height_mean_m", prefix);
     c.height_std_m = r.Positive(node, "height_std_m", prefix);
+    r.file.Within(c.height_std_m, prefix + "height_std_m", bounds::kMinStdM, kSize, "m");
     classes.push_back(c);
   }
   return classes;

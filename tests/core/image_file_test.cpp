@@ -156,7 +156,7 @@ TEST(ImageFile, TruncatedOrCorruptDataIsAnErrorNamingTheFileAndPrintsNothing) {
   }
   WriteAll(png, "not an image at all");
   EXPECT_EQ(ErrorOf([&] { ReadImage(png); }),
-            png + ": not an image (expected PNG, JPEG, BMP or TIFF data)");
+            png + ": not an image (expected PNG, JPEG, BMP, TIFF or PNM data)");
   WriteAll(png, std::string("\x89PNG\r\n\x1a\n", 8));
   EXPECT_EQ(ErrorOf([&] { ReadImage(png); }), png + ": the png header is cut short");
   EXPECT_EQ(ErrorOf([&] { ReadImage(dir.Path("absent.png")); }),
@@ -206,9 +206,9 @@ TEST(ImageFile, HugeDeclaredSizesAreRefusedFromTheHeaderBeforeDecoding) {
 
 TEST(ImageFile, HeadersOfEveryFormatGiveTheSize) {
   testing::TempDir dir;
-  for (const char* extension : {".png", ".jpg", ".bmp", ".tif"}) {
+  for (const char* extension : {".png", ".jpg", ".bmp", ".tif", ".pgm", ".ppm"}) {
     const std::string path = dir.Path(std::string("image") + extension);
-    ASSERT_TRUE(cv::imwrite(path, Pattern(CV_8UC3)));
+    ASSERT_TRUE(cv::imwrite(path, Pattern(std::string(extension) == ".pgm" ? CV_8UC1 : CV_8UC3)));
     const ImageHeader header = ReadImageHeader(ReadAll(path), path);
     EXPECT_EQ(header.width, 53) << extension;
     EXPECT_EQ(header.height, 37) << extension;

@@ -174,7 +174,7 @@ TEST(Frames, ImagesAreSortedByNameAndBadImagesNamed) {
   EXPECT_EQ(frames.Read(1).cols, 6);
   EXPECT_EQ(
       ErrorOf([&] { frames.Read(2); }),
-      dir.Path("frames/000003.jpg") + ": not an image (expected PNG, JPEG, BMP or TIFF data)");
+      dir.Path("frames/000003.jpg") + ": not an image (expected PNG, JPEG, BMP, TIFF or PNM data)");
 }
 
 TEST(Frames, MissingOrEmptyFoldersAreReported) {

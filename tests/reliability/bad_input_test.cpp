@@ -361,5 +361,40 @@ TEST_F(BadInput, ANegativeDiameterIsRefused) {
   EXPECT_TRUE(FilesUnder(out).empty());
 }
 
+TEST_F(BadInput, NoDetectionSurvivingPreAssociationNamesTheDetections) {
+  const std::string run = CopyOfRun(dir_.Path("run"));
+  // Two sightings five frames apart: no track of the 3 frames a track needs.
+  std::string csv = ReadFile(run + "/detections.csv");
+  const size_t first = csv.find('\n') + 1, second = csv.find('\n', first) + 1;
+  WriteFile(run + "/detections.csv", csv.substr(0, second));
+  EditCsv(run + "/detections.csv", 0, 0, "5");
+  const std::string out = dir_.Path("out");
+  const OslamResult r = Oslam("slam " + run + " -o " + out + "/omap.json --quiet");
+  Row("slam, no detection survives pre-association", r, 1,
+      {run + "/detections.csv: no detection survived pre-association (1 detections, 1 of them in "
+             "tracks shorter than 3 frames)"},
+      FilesLeft(out), 20);
+  EXPECT_TRUE(FilesUnder(out).empty());
+}
+
+TEST_F(BadInput, AnOverlaysSymlinkOutOfTheOutputFolderIsRefused) {
+  const std::string out = dir_.Path("out"), outside = dir_.Path("outside");
+  fs::create_directories(out);
+  fs::create_directories(outside);
+  fs::create_symlink(outside, out + "/overlays");
+  const OslamResult r = Oslam("export " + run_ + "/omap.json --run " + run_ + " --overlays -o " +
+                              out + " --figure-size 64 --quiet");
+  Row("export --overlays, overlays/ a symlink out of -o", r, 1,
+      {out + "/overlays: a symlink to " + outside + ", out of the output folder"},
+      FilesLeft(out) + "; outside: " + FilesLeft(outside), 20);
+  EXPECT_TRUE(FilesUnder(outside).empty());
+  EXPECT_EQ(FilesUnder(out).size(), 0u);  // the symlink is no regular file
+  const OslamResult run = Oslam("run " + run_ + " -o " + out + " --quiet");
+  Row("run, overlays/ a symlink out of -o", run, 1,
+      {out + "/overlays: a symlink to " + outside + ", out of the output folder"},
+      FilesLeft(out) + "; outside: " + FilesLeft(outside), 20);
+  EXPECT_TRUE(FilesUnder(outside).empty());
+}
+
 }  // namespace
 }  // namespace oslam
