@@ -10,6 +10,8 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "core/bounding_slice.h"
+#include "core/csv.h"
 #include "core/motion_model.h"
 #include "core/pose2.h"
 
@@ -149,6 +151,13 @@ struct GroundTruth {
 // folder is absent.
 std::optional<GroundTruth> ReadGroundTruth(const std::string& run_dir);
 void WriteGroundTruth(const GroundTruth& truth, const std::string& run_dir);
+
+// ---- bounding slices in CSV files ----
+
+// The slice in columns u_r_px, u_phi_rad, s_r_px, s_phi_rad of `row`, each
+// within its bound (docs/formats.md, Bounds): radii in [0, 2 x the largest
+// image side], widths in [0, 2 pi]. Throws "FILE:LINE: ..." otherwise.
+BoundingSlice SliceAtRow(const CsvTable& table, size_t row);
 
 // ---- the whole folder ----
 

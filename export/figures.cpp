@@ -13,6 +13,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/csv.h"
 #include "core/error.h"
 #include "export/display_scene.h"
@@ -270,8 +272,10 @@ cv::Point2d Figure::PixelOf(double x, double y) const {
 }
 
 bool FigureOptions::Validate(std::string* why) const {
-  if (width_px < 64 || height_px < 64 || width_px > 8192 || height_px > 8192) {
-    *why = "figures must be 64 to 8192 pixels wide and high";
+  if (width_px < 64 || height_px < 64 || width_px > bounds::kFigureSidePx ||
+      height_px > bounds::kFigureSidePx) {
+    *why = "figures must be 64 to " + std::to_string(bounds::kFigureSidePx) +
+           " pixels wide and high (docs/formats.md, Bounds)";
     return false;
   }
   if (!(min_existence >= 0.0 && min_existence <= 1.0)) {

@@ -2,6 +2,7 @@
 
 #include <optional>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "export/export_files.h"
 
@@ -46,8 +47,10 @@ void RunExportStage(const OMap& map, const ExportStageInput& input,
   scene.map = map;
   if (!input.run_dir.empty()) ReadRunContext(input.run_dir, &scene);
   std::optional<OverlayInput> overlays;
-  if (options.overlays)
+  if (options.overlays) {
     overlays = PrepareOverlays(scene, input.run_dir, options.overlay_frames, input.detections_path);
+    CheckOutputSubfolder(out.string(), "overlays");
+  }
   CreateOutputFolder(out);
 
   WriteExportFiles(scene, options.Models(), options.ascii_ply, options.Figures(),

@@ -11,7 +11,7 @@ OSLAM_CMAKE_EXTRA=()  # extra cmake arguments for the first configure
 # Everything oslam builds against (Debian 12 names).
 OSLAM_PACKAGES=(
   g++ make cmake pkg-config
-  libeigen3-dev libopencv-dev libsuitesparse-dev
+  libeigen3-dev libopencv-dev libsuitesparse-dev libpng-dev libjpeg-dev
   libtinygltf-dev libstb-dev nlohmann-json3-dev libvtk9-dev
   libgtest-dev libbenchmark-dev
   # Off-screen rendering of the 3D views (perspective.png, oslam view

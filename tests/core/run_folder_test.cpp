@@ -99,6 +99,11 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
             path + ": classes[0].image_shape.elongation_std: must be positive");
   EXPECT_TRUE(Contains(error_for(good + "    image_shape: {elongation_mean: 1.0}\n"),
                        "classes[0].image_shape.elongation_std"));
+  std::string huge = good;
+  huge.replace(huge.find("2.2"), 3, "2e9");
+  EXPECT_EQ(error_for(huge), path +
+                                 ": classes[0].height_mean_m: 2e+09 is outside [0, 100] m "
+                                 "(docs/formats.md, Bounds)");
 }
 
 TEST(Odometry, PosesAndIncrementsGiveTheSamePoses) {
@@ -147,6 +152,22 @@ TEST(Odometry, BadFilesAreReportedWithTheLine) {
   EXPECT_TRUE(Contains(error_for("frame,a,b\n0,1,2\n"), "needs columns x_m,y_m,theta_rad"));
   EXPECT_EQ(error_for(header + "0,0,0\n"),
             path + ":2: expected 4 fields as in the header, found 3");
+  // Physical bounds: a finite but absurd position, and increments that each
+  // stay in bounds but add up beyond them.
+  const std::string bound = " (docs/formats.md, Bounds)";
+  EXPECT_EQ(error_for(header + "0,0,0,0\n1,0,1e30,0\n"),
+            path + ":3: column 'y_m': 1e+30 is outside [-100000, 100000] m" + bound);
+  EXPECT_EQ(error_for(header + "0,0,0,1e9\n"),
+            path + ":2: column 'theta_rad': 1e+09 is outside [-100, 100] rad" + bound);
+  std::string far = "frame,distance_m,turn_rad\n0,0,0\n";
+  for (int i = 1; i <= 3; ++i) far += std::to_string(i) + ",60000,0\n";
+  EXPECT_EQ(error_for(far),
+            path +
+                ":4: the odometry reaches (120000, 0) m at frame 2, beyond the position bound "
+                "of +-100000 m" +
+                bound);
+  EXPECT_EQ(error_for(header + "0,0,0,0\n1,0,0,99999999999999999999\n"),
+            path + ":3: column 'theta_rad': 1e+20 is outside [-100, 100] rad" + bound);
 }
 
 TEST(Frames, ImagesAreSortedByNameAndBadImagesNamed) {
@@ -161,8 +182,9 @@ TEST(Frames, ImagesAreSortedByNameAndBadImagesNamed) {
   ASSERT_EQ(frames.size(), 3u);
   EXPECT_EQ(frames.Read(0).at<cv::Vec3b>(0, 0), cv::Vec3b(20, 40, 60));
   EXPECT_EQ(frames.Read(1).cols, 6);
-  EXPECT_EQ(ErrorOf([&] { frames.Read(2); }),
-            dir.Path("frames/000003.jpg") + ": cannot read image (corrupt or not an image)");
+  EXPECT_EQ(
+      ErrorOf([&] { frames.Read(2); }),
+      dir.Path("frames/000003.jpg") + ": not an image (expected PNG, JPEG, BMP, TIFF or PNM data)");
 }
 
 TEST(Frames, MissingOrEmptyFoldersAreReported) {
