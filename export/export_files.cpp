@@ -92,18 +92,25 @@ void WriteModels(const ExportScene& scene, const ExportOptions& options, const f
   progress.Done(names);
 }
 
+std::vector<std::string> WriteFigureFiles(const Figure& figure, const fs::path& out,
+                                          const std::string& stem) {
+  std::vector<std::string> written;
+  for (const auto& [extension, bytes] :
+       {std::pair<std::string, std::string>{".png", EncodePng(figure.image)},
+        {".svg", figure.svg},
+        {".csv", figure.csv}}) {
+    WriteFileAtomically((out / (stem + extension)).string(), bytes);
+    written.push_back(stem + extension);
+  }
+  return written;
+}
+
 std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOptions& options,
                                       const fs::path& out, bool quiet) {
   Progress progress("figures", 3, "figures", quiet);
   std::vector<std::string> written;
   auto write = [&](const std::string& stem, const Figure& figure) {
-    for (const auto& [extension, bytes] :
-         {std::pair<std::string, std::string>{".png", EncodePng(figure.image)},
-          {".svg", figure.svg},
-          {".csv", figure.csv}}) {
-      WriteFileAtomically((out / (stem + extension)).string(), bytes);
-      written.push_back(stem + extension);
-    }
+    for (std::string& name : WriteFigureFiles(figure, out, stem)) written.push_back(name);
   };
   write("birdseye", BirdsEyeFigure(scene, options));
   progress.Update(1);
