@@ -162,6 +162,15 @@ std::optional<OverlayFormat> ParseOverlayFormat(const std::string& text) {
   return std::nullopt;
 }
 
+std::vector<unsigned char> EncodeOverlay(const cv::Mat& image, OverlayFormat format) {
+  std::vector<unsigned char> bytes;
+  const bool encoded = format == OverlayFormat::kJpeg
+                           ? cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, 92})
+                           : cv::imencode(".png", image, bytes);
+  if (!encoded) bytes.clear();
+  return bytes;
+}
+
 void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double min_existence,
                    const fs::path& overlays_dir, bool quiet, int threads, OverlayFormat format) {
   CreateOutputFolder(overlays_dir);
@@ -178,11 +187,8 @@ void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double m
     const cv::Mat image = DrawOverlay(input.frames->Read(frame), frame, *input.camera, scene,
                                       input.detections, min_existence);
     const std::string path = (overlays_dir / name).string();
-    std::vector<unsigned char> bytes;
-    const bool encoded = format == OverlayFormat::kJpeg
-                             ? cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, 92})
-                             : cv::imencode(".png", image, bytes);
-    if (!encoded) throw Error::InFile(path, "cannot encode the overlay");
+    const std::vector<unsigned char> bytes = EncodeOverlay(image, format);
+    if (bytes.empty()) throw Error::InFile(path, "cannot encode the overlay");
     WriteFileAtomically(path,
                         std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
                         FileSync::kDeferred);

@@ -69,6 +69,10 @@ enum class OverlayFormat { kJpeg, kPng };
 // "jpg" or "png"; nullopt otherwise.
 std::optional<OverlayFormat> ParseOverlayFormat(const std::string& text);
 
+// The bytes of an overlay image in `format` (JPEG quality 92, or PNG);
+// empty on failure.
+std::vector<unsigned char> EncodeOverlay(const cv::Mat& image, OverlayFormat format);
+
 // One image per chosen frame: `overlays_dir`/NNNNNN.jpg (or .png; folder
 // created), `threads` frames at a time (0 = one per core); the files do not
 // depend on it. On an error the files of the frames before the failing one
