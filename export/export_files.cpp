@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -92,20 +93,34 @@ void WriteModels(const ExportScene& scene, const ExportOptions& options, const f
   progress.Done(names);
 }
 
+std::vector<std::string> WriteFigureFiles(const Figure& figure, const fs::path& out,
+                                          const std::string& stem) {
+  std::vector<std::string> written;
+  for (const auto& [extension, bytes] :
+       {std::pair<std::string, std::string>{".png", EncodePng(figure.image)},
+        {".svg", figure.svg},
+        {".csv", figure.csv}}) {
+    WriteFileAtomically((out / (stem + extension)).string(), bytes);
+    written.push_back(stem + extension);
+  }
+  return written;
+}
+
 std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOptions& options,
                                       const fs::path& out, bool quiet) {
   Progress progress("figures", 3, "figures", quiet);
   std::vector<std::string> written;
-  auto write = [&](const std::string& stem, const Figure& figure) {
-    for (const auto& [extension, bytes] :
-         {std::pair<std::string, std::string>{".png", EncodePng(figure.image)},
-          {".svg", figure.svg},
-          {".csv", figure.csv}}) {
-      WriteFileAtomically((out / (stem + extension)).string(), bytes);
-      written.push_back(stem + extension);
+  // A figure that cannot be drawn is an error about the file it was drawn for.
+  auto write = [&](const std::string& stem, const std::function<Figure()>& draw) {
+    Figure figure;
+    try {
+      figure = draw();
+    } catch (const Error& e) {
+      throw Error::InFile((out / (stem + ".png")).string(), e.what());
     }
+    for (std::string& name : WriteFigureFiles(figure, out, stem)) written.push_back(name);
   };
-  write("birdseye", BirdsEyeFigure(scene, options));
+  write("birdseye", [&] { return BirdsEyeFigure(scene, options); });
   progress.Update(1);
   // Without an EGL driver there is no off-screen OpenGL: the other files are
   // still worth having.
@@ -122,7 +137,7 @@ std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOpti
   } else {
     FigureOptions plot = options;
     plot.height_px = std::max(200, options.height_px / 2);
-    write("trajectories", TrajectoryErrorFigure(scene, plot));
+    write("trajectories", [&] { return TrajectoryErrorFigure(scene, plot); });
   }
   progress.Update(3);
   progress.Done(std::to_string(written.size()) + " files" + note);
@@ -155,6 +170,15 @@ std::optional<OverlayFormat> ParseOverlayFormat(const std::string& text) {
   return std::nullopt;
 }
 
+std::vector<unsigned char> EncodeOverlay(const cv::Mat& image, OverlayFormat format) {
+  std::vector<unsigned char> bytes;
+  const bool encoded = format == OverlayFormat::kJpeg
+                           ? cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, 92})
+                           : cv::imencode(".png", image, bytes);
+  if (!encoded) bytes.clear();
+  return bytes;
+}
+
 void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double min_existence,
                    const fs::path& overlays_dir, bool quiet, int threads, OverlayFormat format) {
   CreateOutputFolder(overlays_dir);
@@ -171,11 +195,8 @@ void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double m
     const cv::Mat image = DrawOverlay(input.frames->Read(frame), frame, *input.camera, scene,
                                       input.detections, min_existence);
     const std::string path = (overlays_dir / name).string();
-    std::vector<unsigned char> bytes;
-    const bool encoded = format == OverlayFormat::kJpeg
-                             ? cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, 92})
-                             : cv::imencode(".png", image, bytes);
-    if (!encoded) throw Error::InFile(path, "cannot encode the overlay");
+    const std::vector<unsigned char> bytes = EncodeOverlay(image, format);
+    if (bytes.empty()) throw Error::InFile(path, "cannot encode the overlay");
     WriteFileAtomically(path,
                         std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
                         FileSync::kDeferred);

@@ -35,6 +35,10 @@ void CreateOutputFolder(const std::filesystem::path& out);
 void WriteModels(const ExportScene& scene, const ExportOptions& options,
                  const std::filesystem::path& out, bool ascii_ply, bool quiet);
 
+// `out`/`stem`.png, .svg and .csv of a figure, atomically; returns their names.
+std::vector<std::string> WriteFigureFiles(const Figure& figure, const std::filesystem::path& out,
+                                          const std::string& stem);
+
 // birdseye.{png,svg,csv}, perspective.png and, when the scene has ground
 // truth, trajectories.{png,svg,csv}. Returns the names of the files written.
 std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOptions& options,
@@ -64,6 +68,10 @@ enum class OverlayFormat { kJpeg, kPng };
 
 // "jpg" or "png"; nullopt otherwise.
 std::optional<OverlayFormat> ParseOverlayFormat(const std::string& text);
+
+// The bytes of an overlay image in `format` (JPEG quality 92, or PNG);
+// empty on failure.
+std::vector<unsigned char> EncodeOverlay(const cv::Mat& image, OverlayFormat format);
 
 // One image per chosen frame: `overlays_dir`/NNNNNN.jpg (or .png; folder
 // created), `threads` frames at a time (0 = one per core); the files do not

@@ -58,12 +58,21 @@ struct Page {
   double scale = 1.0;
 };
 
+// PLplot ends the process on a fatal error (for instance when it cannot write
+// the list of its device drivers to a full temporary folder). This handler
+// turns that into an Error; libplplot carries unwind tables, so the exception
+// crosses its frames.
+int ThrowPlplotError(PLCHAR_VECTOR message) {
+  throw Error(std::string("PLplot cannot draw: ") + message);
+}
+
 // Runs `draw` once per output (PNG through memory, SVG through a memory
 // stream), on a fresh PLplot stream each time, and fills the figure.
 Figure Render(const FigureOptions& options, const std::function<void(const Page&)>& draw) {
   std::string why;
   if (!options.Validate(&why)) throw Error("figure: " + why);
   const std::lock_guard<std::mutex> lock(PlplotMutex());
+  plsexit(&ThrowPlplotError);
   const Page page{options.width_px, options.height_px,
                   std::min(options.width_px, options.height_px) / 800.0};
   Figure figure;
