@@ -38,6 +38,15 @@ void BindDetectOptions(DetectStageOptions* o, Bindings* b) {
       .Key("max_shape_distance",
            "drop detections whose slice elongation is further than this many sigmas from their "
            "class's image shape; inf = off");
+  b->AddNumberOrInfinity(&d.max_view_distance, "max-view-distance", "SIGMAS",
+                         "drop detections whose image shape and size standing on the floor are "
+                         "further than this from their class's (inf = off)")
+      .Key("max_view_distance",
+           "drop detections whose image shape plus the size they would have standing on the "
+           "floor are further than this many sigmas from their class's; inf = off");
+  b->Add(&d.fragment_gap_px, "fragment-gap", "PX",
+         "same-class blobs this close in one frame are checked together as one view")
+      .Key("fragment_gap_px", "same-class blobs this close in one frame are checked as one view");
   b->Add(&o->sift_templates, "sift-templates", "FILE.yaml",
          "keep a detection of a class with templates only if SIFT verifies it")
       .Key("sift_templates", "templates.yaml for SIFT verification; empty = colour only");
