@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <sstream>
 
 #include <tiny_gltf.h>
 
@@ -239,12 +240,13 @@ void WriteGltf(const ExportScene& scene, const ExportOptions& options, const std
   if (!options.Validate(&why)) throw Error::InFile(path, why);
   const tinygltf::Model model = BuildModel(scene, options);
   const bool binary = path.size() >= 4 && path.compare(path.size() - 4, 4, ".glb") == 0;
-  WriteAtomically(path, [&](const std::string& temp) {
-    tinygltf::TinyGLTF writer;
-    if (!writer.WriteGltfSceneToFile(&model, temp, /*embedImages=*/true, /*embedBuffers=*/true,
-                                     /*prettyPrint=*/!binary, binary))
-      throw Error::InFile(path, "cannot write glTF");
-  });
+  // Encoded in memory (buffers embedded, as a file would have them), then
+  // written with every write checked: tinygltf does not check its own.
+  std::ostringstream encoded;
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToStream(&model, encoded, /*prettyPrint=*/!binary, binary) || !encoded)
+    throw Error::InFile(path, "cannot encode glTF");
+  WriteFileAtomically(path, encoded.str());
 }
 
 }  // namespace oslam

@@ -53,11 +53,12 @@ void WritePlyMesh(const ExportScene& scene, const ExportOptions& options, const 
     AppendObject(*object, ClassColour(scene.classes, object->class_name), options.cylinder_segments,
                  &cloud, &mesh.polygons);
   pcl::toPCLPointCloud2(cloud, mesh.cloud);
-  WriteAtomically(path, [&](const std::string& temp) {
+  WriteAtomically(path, [&](const std::string& memory_path) {
     // Millimetre-and-better precision in ASCII: PCL's default of 5 digits
     // would round coordinates beyond 10 m to centimetres.
-    const int status = encoding == PlyEncoding::kBinary ? pcl::io::savePLYFileBinary(temp, mesh)
-                                                        : pcl::io::savePLYFile(temp, mesh, 8);
+    const int status = encoding == PlyEncoding::kBinary
+                           ? pcl::io::savePLYFileBinary(memory_path, mesh)
+                           : pcl::io::savePLYFile(memory_path, mesh, 8);
     if (status != 0) throw Error::InFile(path, "cannot write PLY mesh");
   });
 }
@@ -71,10 +72,10 @@ void WritePlyTrajectories(const ExportScene& scene, const std::string& path, Ply
           Eigen::Vector3f(static_cast<float>(pose.x), static_cast<float>(pose.y), kHeightM),
           trajectory.rgb, 1.0));
   if (cloud.empty()) throw Error::InFile(path, "no trajectory to write");
-  WriteAtomically(path, [&](const std::string& temp) {
+  WriteAtomically(path, [&](const std::string& memory_path) {
     pcl::PLYWriter writer;
     // No "camera" element: it is PCL-specific and other readers warn about it.
-    const int status = writer.write(temp, cloud, encoding == PlyEncoding::kBinary,
+    const int status = writer.write(memory_path, cloud, encoding == PlyEncoding::kBinary,
                                     /*use_camera=*/false);
     if (status != 0) throw Error::InFile(path, "cannot write PLY trajectory");
   });
