@@ -1,5 +1,6 @@
 // oslam: object maps from omnidirectional video and odometry.
 #include <algorithm>
+#include <cstdlib>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -17,8 +18,9 @@ void PrintHelp() {
                "Builds O-Maps (3D maps of objects with class, position, size and existence\n"
                "probability) from omnidirectional robot video and odometry.\n\ncommands:\n";
   for (const auto& command : oslam::Commands())
-    std::cout << "  " << command.name << std::string(14 - std::min<size_t>(13, command.name.size()), ' ')
-              << command.summary << "\n";
+    std::cout << "  " << command.name
+              << std::string(14 - std::min<size_t>(13, command.name.size()), ' ') << command.summary
+              << "\n";
   std::cout << "\nRun 'oslam <command> --help' for a command's options. 'oslam --version' prints\n"
                "the version.\n";
 }
@@ -36,6 +38,10 @@ int main(int argc, char** argv) {
   // Every failure oslam cares about comes back as an error it reports itself,
   // on one line; OpenCV's own log lines would only add to it.
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+  // Nor FFmpeg's (OpenCV's video backend), which prints its own errors, such
+  // as "moov atom not found" before oslam's message on a damaged video. -8 is
+  // AV_LOG_QUIET; a level the user set is kept.
+  ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", /*overwrite=*/0);
   oslam::InstallInterruptCleanup();
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty()) {

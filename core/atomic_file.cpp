@@ -1,6 +1,8 @@
 #include "core/atomic_file.h"
 
 #include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -114,31 +116,42 @@ void SyncFolderOf(const std::string& path) {
   ::close(fd);
 }
 
+// Runs `write` on the path of a new in-memory file and returns the bytes it
+// wrote (see WriteAtomically); `path`, the target, names the errors.
+std::string WrittenInMemory(const std::string& path,
+                            const std::function<void(const std::string&)>& write) {
+  const int fd = ::memfd_create("oslam-output", MFD_CLOEXEC);
+  if (fd < 0) throw Error::InFile(path, "cannot create an in-memory file: " + Reason(errno));
+  const struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  write("/proc/self/fd/" + std::to_string(fd));
+  struct stat status {};
+  if (::fstat(fd, &status) != 0) throw Error::InFile(path, "write failed: " + Reason(errno));
+  const auto size = static_cast<rlim_t>(status.st_size);
+  rlimit limit{};
+  if (::getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY &&
+      size >= limit.rlim_cur)
+    throw Error::InFile(path, "write failed: the file reaches the file size limit (ulimit -f)");
+  if (size == 0) throw Error::InFile(path, "nothing was written");
+  std::string bytes(static_cast<size_t>(size), '\0');
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n =
+        ::pread(fd, bytes.data() + done, bytes.size() - done, static_cast<off_t>(done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw Error::InFile(path, "cannot read back what was written: " + Reason(errno));
+    done += static_cast<size_t>(n);
+  }
+  return bytes;
+}
+
 }  // namespace
 
 void WriteAtomically(const std::string& path,
-                     const std::function<void(const std::string& temp_path)>& write) {
-  CreateParentFolder(path);
-  std::string temp_path;
-  ::close(CreateTempFile(path, &temp_path));
-  const int slot = ClaimSlot(temp_path);
-  std::error_code ec;
-  try {
-    write(temp_path);
-    if (fs::file_size(temp_path, ec) == 0 || ec) throw Error::InFile(path, "nothing was written");
-    const int fd = ::open(temp_path.c_str(), O_RDONLY);
-    const bool synced = fd >= 0 && ::fsync(fd) == 0;
-    if (fd >= 0) ::close(fd);
-    if (!synced) throw Error::InFile(path, "write failed: " + Reason(errno));
-    if (::rename(temp_path.c_str(), path.c_str()) != 0)
-      throw Error::InFile(path, "cannot move the written file into place: " + Reason(errno));
-  } catch (...) {
-    ::unlink(temp_path.c_str());
-    ReleaseSlot(slot);
-    throw;
-  }
-  ReleaseSlot(slot);
-  SyncFolderOf(path);
+                     const std::function<void(const std::string& memory_path)>& write) {
+  WriteFileAtomically(path, WrittenInMemory(path, write));
 }
 
 void InstallInterruptCleanup() {

@@ -8,12 +8,16 @@
 
 namespace oslam {
 
-// Calls write(temp_path), then renames temp_path to path. On any exception the
-// temp file is removed and the exception propagates. The temp file keeps the
-// target's extension so extension-sniffing writers (cv::imwrite,
-// cv::FileStorage) pick the right format.
+// For a library that can only write to a path (PCL's PLY writer): calls
+// write(memory_path), a path to an in-memory file (memfd), then writes what
+// it wrote to `path` with WriteFileAtomically. Libraries do not always check
+// their own writes; a memory file does not fill up, and the one write to
+// disk is checked. Throws oslam::Error naming `path` when `write` throws,
+// writes nothing, or its file reaches the file size limit (ulimit -f, which
+// caps memory files too and would cut a file short unnoticed). The memory
+// path has no extension: `write` must not choose the format by it.
 void WriteAtomically(const std::string& path,
-                     const std::function<void(const std::string& temp_path)>& write);
+                     const std::function<void(const std::string& memory_path)>& write);
 
 // Makes SIGINT and SIGTERM remove the temp files of writes still under way
 // before the process ends, so an interrupted run leaves neither half-written

@@ -103,8 +103,8 @@ TEST(AtomicFile, AFailedWriteThroughACallbackReachesNoFinalName) {
   testing::TempDir dir;
   const std::string path = dir.Path("image.bin");
   const std::string big(64 * 1024, 'y');
-  // A writer that checks its stream: the failure propagates, and the short
-  // temp file is removed instead of reaching the final name.
+  // A writer that checks its stream: the failure propagates, and nothing
+  // reaches the final name.
   const int code = WriteWithFileSizeLimit(4096, [&] {
     WriteAtomically(path, [&](const std::string& temp) {
       std::ofstream out(temp, std::ios::binary);
@@ -115,6 +115,29 @@ TEST(AtomicFile, AFailedWriteThroughACallbackReachesNoFinalName) {
   EXPECT_EQ(code, 1);
   EXPECT_FALSE(fs::exists(path));
   EXPECT_EQ(FilesIn(dir.Path()), 0);
+}
+
+// A library writer that ignores its stream's state (as tinygltf's and PCL's
+// file writers do): WriteAtomically must still not put a cut-short file
+// under the final name.
+void UncheckedWrite(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out << bytes;
+}
+
+TEST(AtomicFile, AWriterThatIgnoresItsFailuresCannotCutTheFileShort) {
+  testing::TempDir dir;
+  const std::string path = dir.Path("map.ply");
+  const std::string big(64 * 1024, 'z');
+  WriteAtomically(path, [&](const std::string& memory) { UncheckedWrite(memory, big); });
+  EXPECT_EQ(Read(path), big);
+  WriteTextFileAtomically(path, "old contents");
+  const int code = WriteWithFileSizeLimit(4096, [&] {
+    WriteAtomically(path, [&](const std::string& memory) { UncheckedWrite(memory, big); });
+  });
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(Read(path), "old contents");
+  EXPECT_EQ(FilesIn(dir.Path()), 1);
 }
 
 TEST(AtomicFile, AWriterThatWritesNothingIsAnError) {

@@ -314,6 +314,25 @@ TEST_F(BadInput, ATruncatedPngIsOneLineNamingTheFrame) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST_F(BadInput, ADamagedVideoIsOneLineNamingIt) {
+  const std::string run = CopyOfRun(dir_.Path("run"));
+  fs::remove_all(run + "/frames");
+  // An MP4 header and then nothing a decoder can use: FFmpeg has its own
+  // message for it ("moov atom not found"), which must not reach the terminal.
+  std::string video(
+      "\0\0\0\x18"
+      "ftypmp42\0\0\0\0mp42isom",
+      24);
+  for (int i = 0; i < 4096; ++i) video += static_cast<char>((i * 7919) % 251);
+  WriteFile(run + "/video.mp4", video);
+  const std::string out = dir_.Path("d.csv");
+  const OslamResult r = Oslam("detect " + run + " -o " + out + " --quiet");
+  Row("detect, damaged video.mp4", r, 1, {run + "/video.mp4: "}, fs::exists(out) ? "d.csv" : "none",
+      20);
+  EXPECT_EQ(r.err.find("moov"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(BadInput, AMeiXiOf50IsRefused) {
   const std::string camera = dir_.Path("camera.yaml");
   WriteFile(camera,

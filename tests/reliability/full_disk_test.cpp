@@ -29,10 +29,6 @@ namespace fs = std::filesystem;
 
 // Files whose content depends on the run time: only checked to be present.
 const std::set<std::string> kTimed = {"report.md", "run.json"};
-// glTF (tinygltf) and PLY (PCL) are written by libraries to a path; a write
-// they fail to report can leave these truncated under their final name.
-// Reported as pending rather than failed until those writers encode in memory.
-const std::set<std::string> kLibraryWritten = {"map.glb", "map.gltf", "map.ply", "trajectory.ply"};
 
 struct Command {
   std::string name;
@@ -122,7 +118,7 @@ TEST_P(FullDisk, EveryFileIsWholeOrAsBeforeAndTheErrorNamesIt) {
     const OslamResult r =
         Oslam(arguments, 120, "trap \"\" XFSZ; ulimit -f " + std::to_string(limit_kib) + ";");
     // Map the reference's paths onto this cell's output folder.
-    std::string whole, pending;
+    std::string whole;
     int wrong = 0;
     for (auto [file, bytes] : Snapshot(out)) {
       // Paths written into the files (omap.json's source) name this cell's folder.
@@ -137,8 +133,6 @@ TEST_P(FullDisk, EveryFileIsWholeOrAsBeforeAndTheErrorNamesIt) {
       const bool is_old = old != before.end() && old->second == bytes;
       if (is_complete || is_old) {
         whole += (whole.empty() ? "" : " ") + file + (is_old && !is_complete ? " (old)" : "");
-      } else if (kLibraryWritten.count(fs::path(file).filename().string())) {
-        pending += " " + file;
       } else {
         ++wrong;
         ADD_FAILURE() << command.name << " " << at << ": neither whole nor as before ("
@@ -149,8 +143,7 @@ TEST_P(FullDisk, EveryFileIsWholeOrAsBeforeAndTheErrorNamesIt) {
     if (!message.empty() && message.back() == '\n') message.pop_back();
     std::cout << "| " << command.name << " | " << limit_kib << " KiB | " << r.exit_code << " | "
               << (message.empty() ? "-" : message) << " | " << (whole.empty() ? "none" : whole)
-              << (pending.empty() ? "" : "; PENDING (library writers):" + pending) << " |"
-              << std::endl;
+              << " |" << std::endl;
     EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << command.name << ": " << r.err;
     if (r.exit_code == 1) {
       EXPECT_EQ(testing::Lines(r.err), 1) << r.err;
