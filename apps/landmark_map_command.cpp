@@ -14,10 +14,10 @@
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
+#include "omap/omap_json.h"
 #include "pipeline/landmark_association.h"
 #include "slam/landmark_data.h"
 #include "slam/landmark_slam.h"
-#include "omap/omap_json.h"
 #include "slam/slam_omap.h"
 
 namespace oslam {
@@ -84,6 +84,7 @@ int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& dat
   options.moves.merge_sigma_m = options.moves.merge_distance_m / 2;
   options.target.slam.initialisation_window_poses =
       static_cast<int>(arguments.GetInt("init-window"));
+  options.target.slam.initialisation_gate = arguments.GetDouble("init-gate");
   options.target.slam.diameter_std_m = arguments.GetDouble("diameter-std");
   // A location prior is required to compare landmark counts: 100 m unless given.
   options.target.slam.landmark_prior_std_m =
@@ -182,8 +183,15 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
   arguments.AddOption("trajectory", "", "CSV",
                       "where to write the trajectory (default: trajectory.csv beside the O-Map)");
   arguments.AddOption("class", "", "NAME", "class name of the landmarks in the O-Map", "tree");
+  arguments.AddOption("init-gate", "", "CHI2",
+                      "staged initialisation: solve the poses so far wherever a sighting or "
+                      "loop closure is off its prediction by more than this squared whitened "
+                      "error (0: off)",
+                      "100");
   arguments.AddOption("init-window", "", "POSES",
-                      "staged initialisation window (0: start from dead reckoning)", "500");
+                      "staged initialisation: fixed stages of this many poses, or with the gate "
+                      "the longest stage (0: none; both 0: start from dead reckoning)",
+                      "0");
   arguments.AddOption("landmark-prior-std", "", "M",
                       "std of a zero-mean location prior on every landmark (0: none; makes the "
                       "evidence comparable across associations)",
@@ -303,6 +311,7 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
 
   LandmarkSlamOptions options;
   options.initialisation_window_poses = static_cast<int>(arguments.GetInt("init-window"));
+  options.initialisation_gate = arguments.GetDouble("init-gate");
   options.compute_pose_covariances = arguments.Flag("pose-covariances");
   options.landmark_prior_std_m = arguments.GetDouble("landmark-prior-std");
   options.diameter_std_m = arguments.GetDouble("diameter-std");
@@ -330,8 +339,9 @@ int RunLandmarkMapCommand(const std::vector<std::string>& args) {
         TerminationName(s.termination), s.message.c_str(), s.iterations, s.initial_cost,
         s.final_cost, s.num_residuals > 0 ? 2.0 * s.final_cost / s.num_residuals : 0.0,
         1e3 * s.total_time_s);
-    std::printf("total %.1f ms (staged initialisation %.1f ms)\n", 1e3 * result.total_time_s,
-                1e3 * result.initialisation_time_s);
+    std::printf("total %.1f ms (staged initialisation %.1f ms, %d stages)\n",
+                1e3 * result.total_time_s, 1e3 * result.initialisation_time_s,
+                result.initialisation_stages);
     if (result.evidence.valid) std::printf("log evidence %.3f\n", result.evidence.log_evidence);
     std::printf("trajectory %.1f m (dead reckoning %.1f m)\n", TrajectoryLength(result.trajectory),
                 TrajectoryLength(data.dead_reckoning));
