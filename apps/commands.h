@@ -24,9 +24,7 @@ int RunCalibrateCommand(const std::vector<std::string>& args);
 int RunDetectCommand(const std::vector<std::string>& args);
 int RunEvalDetectCommand(const std::vector<std::string>& args);
 int RunEvalCommand(const std::vector<std::string>& args);
-int RunMapCommand(const std::vector<std::string>& args);
-int RunMapDispatchCommand(const std::vector<std::string>& args);
-int RunLandmarkMapCommand(const std::vector<std::string>& args);
+int RunMapCommand(const std::vector<std::string>& args);  // apps/map_modes.h
 int RunTrainColorsCommand(const std::vector<std::string>& args);
 int RunSlamCommand(const std::vector<std::string>& args);
 int RunSimulateCommand(const std::vector<std::string>& args);

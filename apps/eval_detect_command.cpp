@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "apps/arguments.h"
+#include "apps/bindings.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -16,18 +17,21 @@ int RunEvalDetectCommand(const std::vector<std::string>& args) {
                       "detections,\nagainst the run's ground_truth/ (simulated runs).");
   arguments.AddPositional("RUN_DIR", "the run folder (with ground_truth/)");
   arguments.AddOption("detections", "", "FILE", "detections CSV", "RUN_DIR/detections.csv");
-  arguments.AddOption("max-range", "", "M", "objects farther than this do not count for recall", "3");
-  arguments.AddOption("min-visible", "", "F", "sightings less visible do not count for recall", "0.9");
+  DetectionEvaluationOptions options;
+  Bindings bindings;
+  bindings.Add(&options.max_range_m, "max-range", "M",
+               "objects farther than this do not count for recall");
+  bindings.Add(&options.min_visible_fraction, "min-visible", "F",
+               "sightings less visible do not count for recall");
+  bindings.Declare(&arguments);
   arguments.AddOption("json", "", "FILE", "also write the figures as JSON");
   arguments.AddOption("write-confusion", "", "CLASSES.yaml",
                       "store the measured class confusion P(detected | true) in this classes "
                       "file (the one O-SLAM reads)");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
+  bindings.Apply(arguments);
   const std::string run_dir = arguments.Get("RUN_DIR");
-  DetectionEvaluationOptions options;
-  options.max_range_m = arguments.GetDouble("max-range");
-  options.min_visible_fraction = arguments.GetDouble("min-visible");
 
   const std::optional<GroundTruth> truth = ReadGroundTruth(run_dir);
   if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder");
@@ -50,7 +54,8 @@ int RunEvalDetectCommand(const std::vector<std::string>& args) {
                                       "', the run's is '" + classes[c].name + "'");
     const ConfusionMatrix confusion = ConfusionFromCounts(evaluation.confusion_counts);
     WriteClasses(target, path, confusion);
-    if (!arguments.Flag("quiet")) std::printf("wrote the measured confusion into %s\n", path.c_str());
+    if (!arguments.Flag("quiet"))
+      std::printf("wrote the measured confusion into %s\n", path.c_str());
   }
   return 0;
 }

@@ -1,13 +1,9 @@
 // oslam export: an O-Map as glTF (Blender), PLY (MeshLab), figures and
-// optional reprojection overlays on the run's frames.
-#include <cstdio>
-#include <filesystem>
-#include <optional>
-
+// optional reprojection overlays on the run's frames (pipeline/export_stage.h).
 #include "apps/arguments.h"
 #include "apps/commands.h"
+#include "apps/stage_bindings.h"
 #include "core/error.h"
-#include "export/export_files.h"
 #include "omap/omap_json.h"
 
 namespace oslam {
@@ -21,54 +17,27 @@ int RunExportCommand(const std::vector<std::string>& args) {
       "camera and detections.");
   arguments.AddPositional("OMAP", "the O-Map JSON (oslam map)");
   arguments.AddOption("output", "-o", "DIR", "output folder (created)");
-  arguments.AddOption("run", "", "RUN_DIR", "the run folder the map was made from");
-  arguments.AddOption("min-existence", "", "P", "leave out objects with existence probability < P",
-                      "0.1");
-  arguments.AddOption("figure-size", "", "PX", "width and height of the figures", "800");
-  arguments.AddFlag("no-grid", "no floor grid in the glTF");
-  arguments.AddFlag("ascii-ply", "write ASCII PLY instead of binary");
-  arguments.AddFlag("overlays", "also draw the map on the run's frames (overlays/NNNNNN.png)");
-  arguments.AddOption("frames", "", "LIST", "overlay only these frames, e.g. 0,10,20-30");
-  arguments.AddOption("detections", "", "FILE", "detections drawn on the overlays",
-                      "RUN_DIR/detections.csv if present");
-  arguments.AddOption("threads", "", "N", "overlays drawn and written at once (0 = one per core)",
-                      "2");
+  ExportStageInput input;
+  ExportStageOptions options;
+  Bindings bindings;
+  bindings.Add(&input.run_dir, "run", "RUN_DIR", "the run folder the map was made from");
+  BindExportOptions(&options, &bindings);
+  bindings.Add(&input.detections_path, "detections", "FILE", "detections drawn on the overlays")
+      .ShowDefault("RUN_DIR/detections.csv if present");
+  bindings.Declare(&arguments);
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("output")) throw UsageError("missing -o OUT_DIR");
-  if (arguments.Flag("overlays") && !arguments.Has("run"))
+  bindings.Apply(arguments);
+  if (options.overlays && input.run_dir.empty())
     throw UsageError("--overlays needs --run RUN_DIR (frames and camera)");
-  if ((arguments.Has("frames") || arguments.Has("detections")) && !arguments.Flag("overlays"))
+  if ((arguments.Has("frames") || arguments.Has("detections")) && !options.overlays)
     throw UsageError("--frames and --detections apply to --overlays only");
-
-  ExportOptions options;
-  options.min_existence = arguments.GetDouble("min-existence");
-  options.floor_grid = !arguments.Flag("no-grid");
-  FigureOptions figures;
-  figures.min_existence = options.min_existence;
-  figures.width_px = figures.height_px = static_cast<int>(arguments.GetInt("figure-size"));
   std::string why;
-  if (!options.Validate(&why) || !figures.Validate(&why)) throw UsageError(why);
-  const bool quiet = arguments.Flag("quiet");
-  const long threads = arguments.GetInt("threads");
-  if (threads < 0) throw UsageError("--threads must be >= 0");
+  if (!options.Validate(&why)) throw UsageError(why);
 
-  ExportScene scene;
-  scene.map = ReadOMap(arguments.Get("OMAP"));
-  if (arguments.Has("run")) ReadRunContext(arguments.Get("run"), &scene);
-  std::optional<OverlayInput> overlays;
-  if (arguments.Flag("overlays"))
-    overlays = PrepareOverlays(scene, arguments.Get("run"), arguments.Get("frames"),
-                               arguments.Has("detections") ? arguments.Get("detections") : "");
-  const std::filesystem::path out = arguments.Get("output");
-  CreateOutputFolder(out);
-
-  WriteModels(scene, options, out, arguments.Flag("ascii-ply"), quiet);
-  WriteFigures(scene, figures, out, quiet);
-  if (overlays)
-    WriteOverlays(scene, *overlays, options.min_existence, out / "overlays", quiet,
-                  static_cast<int>(threads));
-  if (!quiet) std::printf("wrote %s\n", out.string().c_str());
+  RunExportStage(ReadOMap(arguments.Get("OMAP")), input, arguments.Get("output"), options,
+                 CommandOutput("export", arguments.Flag("quiet")));
   return 0;
 }
 

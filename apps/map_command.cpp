@@ -1,77 +1,73 @@
-// oslam map: build an O-Map from a run folder. For now only setup 1 (spec
-// §3.3): --known-association takes the simulator's true slices with seeded
-// thesis-level noise and their true object ids.
+// oslam map: an O-Map by one of three modes (apps/map_modes.h). This file
+// has the command and the --known-association mode: setup 1 (spec §3.3),
+// the simulator's true slices with seeded thesis-level noise and their true
+// object ids, solved by geometric SLAM.
 #include <cstdio>
 
-#include "apps/arguments.h"
 #include "apps/commands.h"
+#include "apps/map_modes.h"
 #include "calib/camera_io.h"
 #include "core/error.h"
 #include "core/run_folder.h"
-#include "slam/geometric_slam.h"
-#include "pipeline/known_association.h"
+#include "core/text.h"
 #include "omap/evaluation.h"
 #include "omap/omap_json.h"
 #include "slam/slam_omap.h"
+#include "solver/summary_report.h"
 
 namespace oslam {
 
-int RunMapCommand(const std::vector<std::string>& args) {
-  Arguments arguments("oslam map RUN_DIR --known-association -o OMAP.json [options]",
-                      "Geometric SLAM of the run's objects and trajectory; writes the O-Map "
-                      "(docs/omap-format.md).");
-  arguments.AddPositional("RUN_DIR",
-                          "run folder (camera.yaml, classes.yaml, odometry.csv, "
-                          "ground_truth/)");
-  arguments.AddFlag("known-association",
-                    "detections = ground-truth slices + noise, associated by object id");
-  arguments.AddOption("output", "-o", "OMAP.json", "where to write the O-Map (atomically)");
-  arguments.AddOption("pixel-noise", "", "PX", "detection noise E in pixels (thesis: 30)", "30");
-  arguments.AddOption("seed", "", "N", "seed of the detection noise", "1");
-  arguments.AddOption("min-visible", "", "FRACTION",
-                      "drop sightings whose unoccluded share is below this", "0.5");
-  arguments.AddOption("location-std-xy", "", "M", "class location prior std, x and y", "10");
-  arguments.AddOption("location-std-z", "", "M", "class location prior std, z", "2");
-  arguments.AddOption("keyframe-start", "", "POSES",
-                      "runs of more poses than this start from a keyframe solve grown stage "
-                      "by stage instead of raw odometry (0: always raw odometry)",
-                      "2000");
-  arguments.AddFlag("pose-covariances", "also compute every pose's covariance (slower)");
-  arguments.AddFlag("quiet", "print nothing but errors");
-  if (!arguments.Parse(args)) return 0;
-  if (!arguments.Flag("known-association"))
-    throw UsageError("only --known-association is implemented so far (spec setup 1)");
+void KnownAssociationMode::Declare(Arguments* arguments) {
+  arguments->AddPositional("RUN_DIR",
+                           "run folder (camera.yaml, classes.yaml, odometry.csv, ground_truth/)");
+  arguments->AddFlag("known-association",
+                     "detections = ground-truth slices + noise, associated by object id");
+  bindings_.Add(&input_.pixel_noise_px, "pixel-noise", "PX",
+                "detection noise E in pixels (thesis: 30)");
+  bindings_.Add(&input_.seed, "seed", "N", "seed of the detection noise");
+  bindings_.Add(&input_.min_visible_fraction, "min-visible", "FRACTION",
+                "drop sightings whose unoccluded share is below this");
+  Eigen::Vector3d* location = &input_.location_std_m;
+  bindings_.AddCustom(
+      "location-std-xy", "M", "class location prior std, x and y",
+      [location] { return Number(location->x()); },
+      [location](const std::string& text) {
+        double value = 0;
+        const std::string problem = ParseNumber(text, false, &value);
+        if (problem.empty()) location->x() = location->y() = value;
+        return problem;
+      });
+  bindings_.Add(&location->z(), "location-std-z", "M", "class location prior std, z");
+  bindings_
+      .Add(&slam_.keyframe_start.min_poses, "keyframe-start", "POSES",
+           "runs of more poses than this start from a keyframe solve grown stage by stage "
+           "instead of raw odometry (0: always raw odometry)")
+      .Check([this] { return slam_.keyframe_start.min_poses >= 0; }, "must be >= 0");
+  bindings_.AddFlag(&slam_.compute_pose_covariances, "pose-covariances",
+                    "also compute every pose's covariance (slower)");
+  bindings_.Declare(arguments);
+}
+
+int KnownAssociationMode::Run(const Arguments& arguments) {
   if (!arguments.Has("output")) throw UsageError("give the output file with -o OMAP.json");
-  if (arguments.GetInt("seed") < 0) throw UsageError("--seed must be >= 0");
-  if (arguments.GetInt("keyframe-start") < 0) throw UsageError("--keyframe-start must be >= 0");
-
-  const std::string run_dir = arguments.Get("RUN_DIR");
-  KnownAssociationOptions input_options;
-  input_options.pixel_noise_px = arguments.GetDouble("pixel-noise");
-  input_options.seed = static_cast<unsigned long>(arguments.GetInt("seed"));
-  input_options.min_visible_fraction = arguments.GetDouble("min-visible");
-  input_options.location_std_m = {arguments.GetDouble("location-std-xy"),
-                                  arguments.GetDouble("location-std-xy"),
-                                  arguments.GetDouble("location-std-z")};
+  bindings_.Apply(arguments);
   std::string why;
-  if (!input_options.Validate(&why)) throw UsageError(why);
+  if (!input_.Validate(&why)) throw UsageError(why);
+  const std::string run_dir = arguments.Get("RUN_DIR");
   const auto camera = LoadCamera(RunFolderPaths::Of(run_dir).camera);
-  const KnownAssociationInput input = LoadKnownAssociation(run_dir, input_options);
+  const KnownAssociationInput input = LoadKnownAssociation(run_dir, input_);
 
-  GeometricSlamOptions options;
   // The factor's E: with no added noise keep the thesis value rather than 0.
-  options.pixel_std_px = input_options.pixel_noise_px > 0 ? input_options.pixel_noise_px : 30.0;
-  options.compute_pose_covariances = arguments.Flag("pose-covariances");
-  options.keyframe_start.min_poses = arguments.GetInt("keyframe-start");
-  GeometricSlam slam(*camera, options);
+  slam_.pixel_std_px =
+      input_.pixel_noise_px > 0 ? input_.pixel_noise_px : GeometricSlamOptions().pixel_std_px;
+  GeometricSlam slam(*camera, slam_);
   const GeometricSlamResult result = slam.Solve(input.problem);
 
-  OMapSource source{run_dir, "known (ground truth)", std::nullopt, input_options.pixel_noise_px,
-                    input_options.seed};
+  const OMapSource source{run_dir, "known (ground truth)", std::nullopt, input_.pixel_noise_px,
+                          input_.seed};
   const OMap map = ToOMap(result, input.class_names, source);
   WriteOMap(arguments.Get("output"), map);
-  const bool quiet = arguments.Flag("quiet");
-  if (!quiet) {
+  if (!arguments.Flag("quiet")) {
     const SolverSummary& s = result.summary;
     std::printf("%zu objects from %zu detections (%d sightings skipped), %zu poses\n",
                 result.objects.size(), input.problem.observations.size(), input.skipped_sightings,
@@ -82,9 +78,7 @@ int RunMapCommand(const std::vector<std::string>& args) {
           "start: %d keyframes, %d stage solves (%d of them loop closures, all keyframes free), "
           "%.1f ms\n",
           start.num_keyframes, start.stage_solves, start.closures, 1e3 * start.time_s);
-    std::printf("solver: %s (%s), %d iterations, cost %.6g -> %.6g, %.1f ms\n",
-                TerminationName(s.termination), s.message.c_str(), s.iterations, s.initial_cost,
-                s.final_cost, 1e3 * s.total_time_s);
+    std::printf("solver: %s, %.1f ms\n", BriefReport(s).c_str(), 1e3 * s.total_time_s);
     if (result.evidence.valid)
       std::printf("log evidence %.3f (residual %.3f, log det %.3f)\n", result.evidence.log_evidence,
                   result.evidence.squared_residual, result.evidence.log_det_information);
@@ -102,6 +96,46 @@ int RunMapCommand(const std::vector<std::string>& args) {
     std::printf("wrote %s\n", arguments.Get("output").c_str());
   }
   return result.summary.IsUsable() ? 0 : 1;
+}
+
+int RunMapCommand(const std::vector<std::string>& args) {
+  Arguments arguments(
+      "oslam map RUN_DIR -o OMAP.json [options]\n"
+      "       oslam map RUN_DIR --known-association -o OMAP.json [options]\n"
+      "       oslam map --landmarks FILE [--format auto|gtsam|g2o|toro|isam|victoria-raw] -o "
+      "OMAP.json [options]",
+      "Builds an O-Map. Without a mode option: O-SLAM on the run's detections (as 'oslam "
+      "slam');\nwith --known-association: geometric SLAM on the ground-truth association; with "
+      "--landmarks FILE:\nlandmark SLAM on a range-bearing data set. Each mode takes the "
+      "options of its group below.");
+  arguments.AddOption("output", "-o", "OMAP.json", "where to write the O-Map (atomically)");
+  arguments.AddFlag("quiet", "print nothing but errors");
+  SlamMode slam;
+  arguments.BeginMode("", "O-SLAM (no mode option; as 'oslam slam')",
+                      "oslam map RUN_DIR -o OMAP.json [options]",
+                      "O-SLAM: data association and classes by hill climbing and MC3 over the "
+                      "detections' tracks; writes the O-Map with existence probabilities.");
+  slam.Declare(&arguments);
+  KnownAssociationMode known;
+  arguments.BeginMode("known-association",
+                      "geometric SLAM, association given (--known-association)",
+                      "oslam map RUN_DIR --known-association -o OMAP.json [options]",
+                      "Geometric SLAM of the run's objects and trajectory; writes the O-Map "
+                      "(docs/omap-format.md).");
+  known.Declare(&arguments);
+  LandmarkMode landmarks;
+  arguments.BeginMode(
+      "landmarks", "landmark SLAM on a range-bearing data set (--landmarks FILE)",
+      "oslam map --landmarks FILE [--format auto|gtsam|g2o|toro|isam|victoria-raw] -o OMAP.json "
+      "[options]",
+      "Landmark SLAM on a range-bearing data set (docs/formats.md, Landmark data sets) with "
+      "the association its landmark ids (or --association) give; writes the O-Map (one 'tree' "
+      "object per landmark) and the trajectory CSV.");
+  landmarks.Declare(&arguments);
+  if (!arguments.Parse(args)) return 0;
+  if (arguments.mode() == "known-association") return known.Run(arguments);
+  if (arguments.mode() == "landmarks") return landmarks.Run(arguments);
+  return slam.Run(arguments);
 }
 
 }  // namespace oslam

@@ -3,10 +3,12 @@
 #include <cstdio>
 
 #include "apps/arguments.h"
+#include "apps/bindings.h"
 #include "apps/commands.h"
 #include "core/error.h"
 #include "export/export_files.h"
 #include "omap/omap_json.h"
+#include "pipeline/export_stage.h"
 
 namespace oslam {
 
@@ -18,29 +20,33 @@ int RunOverlayCommand(const std::vector<std::string>& args) {
   arguments.AddPositional("RUN_DIR", "the run folder the map was made from (frames, camera)");
   arguments.AddPositional("OMAP", "the O-Map JSON (oslam map)");
   arguments.AddOption("output", "-o", "DIR", "output folder (created)");
-  arguments.AddOption("frames", "", "LIST", "only these frames, e.g. 0,10,20-30 (default: all)");
-  arguments.AddOption("min-existence", "", "P", "leave out objects with existence probability < P",
-                      "0.1");
-  arguments.AddOption("threads", "", "N", "overlays drawn and written at once (0 = one per core)",
-                      "2");
+  // The export stage's overlay options, with its defaults.
+  ExportStageOptions options;
+  Bindings bindings;
+  bindings.Add(&options.overlay_frames, "frames", "LIST",
+               "only these frames, e.g. 0,10,20-30 (default: all)");
+  bindings.Add(&options.min_existence, "min-existence", "P",
+               "leave out objects with existence probability < P");
+  bindings
+      .Add(&options.threads, "threads", "N",
+           "overlays drawn and written at once (0 = one per core)")
+      .Check([&options] { return options.threads >= 0; }, "must be >= 0");
+  bindings.Declare(&arguments);
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("output")) throw UsageError("missing -o OUT_DIR");
-  ExportOptions options;
-  options.min_existence = arguments.GetDouble("min-existence");
+  bindings.Apply(arguments);
   std::string why;
   if (!options.Validate(&why)) throw UsageError(why);
   const bool quiet = arguments.Flag("quiet");
-  const long threads = arguments.GetInt("threads");
-  if (threads < 0) throw UsageError("--threads must be >= 0");
 
   ExportScene scene;
   scene.map = ReadOMap(arguments.Get("OMAP"));
   ReadRunContext(arguments.Get("RUN_DIR"), &scene);
   const OverlayInput input =
-      PrepareOverlays(scene, arguments.Get("RUN_DIR"), arguments.Get("frames"));
+      PrepareOverlays(scene, arguments.Get("RUN_DIR"), options.overlay_frames);
   const std::string out = arguments.Get("output");
-  WriteOverlays(scene, input, options.min_existence, out, quiet, static_cast<int>(threads));
+  WriteOverlays(scene, input, options.min_existence, out, quiet, options.threads);
   if (!quiet) std::printf("wrote %zu overlays to %s\n", input.chosen.size(), out.c_str());
   return 0;
 }

@@ -4,10 +4,12 @@
 #include <cstdio>
 
 #include "apps/arguments.h"
+#include "apps/bindings.h"
 #include "apps/commands.h"
 #include "core/error.h"
 #include "export/export_files.h"
 #include "omap/omap_json.h"
+#include "pipeline/export_stage.h"
 
 namespace oslam {
 
@@ -19,15 +21,18 @@ int RunRenderCommand(const std::vector<std::string>& args) {
   arguments.AddPositional("OMAP", "the O-Map JSON (oslam map)");
   arguments.AddOption("output", "-o", "DIR", "output folder (created)");
   arguments.AddOption("run", "", "RUN_DIR", "the run folder the map was made from");
-  arguments.AddOption("min-existence", "", "P", "leave out objects with existence probability < P",
-                      "0.1");
-  arguments.AddOption("figure-size", "", "PX", "width and height of the figures", "800");
+  // The export stage's figure options, with its defaults.
+  ExportStageOptions options;
+  Bindings bindings;
+  bindings.Add(&options.min_existence, "min-existence", "P",
+               "leave out objects with existence probability < P");
+  bindings.Add(&options.figure_size_px, "figure-size", "PX", "width and height of the figures");
+  bindings.Declare(&arguments);
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("output")) throw UsageError("missing -o OUT_DIR");
-  FigureOptions figures;
-  figures.min_existence = arguments.GetDouble("min-existence");
-  figures.width_px = figures.height_px = static_cast<int>(arguments.GetInt("figure-size"));
+  bindings.Apply(arguments);
+  const FigureOptions figures = options.Figures();
   std::string why;
   if (!figures.Validate(&why)) throw UsageError(why);
   const bool quiet = arguments.Flag("quiet");

@@ -11,13 +11,10 @@
 #include <unordered_map>
 
 #include "core/error.h"
+#include "core/text.h"
 
 namespace oslam {
 namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 bool ValidProbabilities(const MoveProbabilities& p) {
   return p.merge >= 0 && p.split >= 0 && p.switch_class >= 0 &&
@@ -382,7 +379,7 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
     if (approximate && approximate->valid &&
         approximate->log_target - current->log_target < -rule.greedy_screen_nats) {
       ++stat.screened_out;
-      stat.time_s += Seconds(start);
+      stat.time_s += SecondsSince(start);
       return current;
     }
   }
@@ -400,7 +397,7 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
         });
     if (log_u_screen >= log_screen_forward) {
       ++stat.screened_out;
-      stat.time_s += Seconds(start);
+      stat.time_s += SecondsSince(start);
       return current;
     }
   }
@@ -408,7 +405,7 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
   EvaluationPtr proposed = evaluator.Evaluate(proposal.state, current.get());
   stat.cache_hits += static_cast<long>(evaluator.num_cache_hits() - hits_before);
   if (!proposed || !proposed->valid) {
-    stat.time_s += Seconds(start);
+    stat.time_s += SecondsSince(start);
     return current;
   }
   const double delta = proposed->log_target - current->log_target;
@@ -432,7 +429,7 @@ EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
     }
     accept = std::isfinite(log_reverse) && log_u < std::min(0.0, log_alpha);
   }
-  stat.time_s += Seconds(start);
+  stat.time_s += SecondsSince(start);
   if (!accept) return current;
   ++stat.accepted;
   return proposed;
@@ -528,7 +525,7 @@ EvaluationPtr Sampler::HillClimb(const AssociationState& start_state, StateEvalu
   }
   summary->hill_climb_steps = step;
   summary->hill_climbed_log_target = current->log_target;
-  summary->hill_climb_time_s = Seconds(clock);
+  summary->hill_climb_time_s = SecondsSince(clock);
   return current;
 }
 
@@ -579,7 +576,7 @@ void Sampler::SampleChains(const std::vector<std::unique_ptr<StateEvaluator>>& e
   }
   stepper.Stop();
   summary.sampling = chains[0].stats;
-  summary.sampling_time_s = Seconds(clock);
+  summary.sampling_time_s = SecondsSince(clock);
   summary.num_solves += recorder.num_solves();
 }
 

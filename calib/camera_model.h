@@ -15,8 +15,9 @@
 //      camera.yaml can store them; implement Validate, ProjectToPixel (with the
 //      analytic 2x3 Jacobian) and BackProjectPixel.
 //   2. Register it in CreateCameraModel() in camera_io.cpp.
-//   3. Add it to the typed tests in tests/calib/camera_model_test.cpp (round
-//      trip, Jacobians, save/load).
+//   3. Add it to the camera list of tests/calib/camera_cases.h, which the
+//      model tests (Jacobians, projection round trips) and the camera.yaml
+//      tests (save/load) run over.
 #pragma once
 
 #include <memory>

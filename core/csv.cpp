@@ -1,12 +1,12 @@
 #include "core/csv.h"
 
-#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/text.h"
 
 namespace oslam {
 namespace {
@@ -29,7 +29,9 @@ std::vector<std::string> SplitFields(const std::string& line) {
 
 }  // namespace
 
-CsvTable CsvTable::Read(const std::string& path) { return Parse(ReadTextFile(path), path); }
+CsvTable CsvTable::Read(const std::string& path) {
+  return Parse(ReadTextFile(path), path);
+}
 
 CsvTable CsvTable::Parse(const std::string& text, const std::string& path_for_errors) {
   CsvTable table;
@@ -99,10 +101,7 @@ long CsvTable::Integer(size_t row, int column) const {
 }
 
 std::string CsvNumber(double value) {
-  char buffer[32];
-  // Shortest text that reads back to the same double.
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
+  return Number(value);
 }
 
 }  // namespace oslam

@@ -23,12 +23,14 @@ enum class ColourBoxShape {
   kYuv,
   // Chroma scaled by brightness: under a dimmer or brighter light an object's
   // R, G, B scale together, so its chroma (U − 128, V − 128) scales with Y.
-  // With s = Y / μ_Y: Y within [(μ_Y − kσ_Y) / r, (μ_Y + kσ_Y)·r] (r =
+  // With s = Y / μ_Y: Y within [(μ_Y − kσ_Y) / r, μ_Y + kσ_Y] (r =
   // brightness_range) and at least min_y, and
-  // |(U − 128) − s·(μ_U − 128)| ≤ k·σ_U·max(1, s), the same for V: the thesis
-  // box at the class's mean brightness, slid along the line of constant
-  // brightness-normalised chroma; its half-width never shrinks below k·σ, as
-  // pixel noise does not shrink in the dark.
+  // |(U − 128) − s·(μ_U − 128)| ≤ s·k·σ_U, the same for V: the thesis box at
+  // the class's mean brightness, slid along the line of constant
+  // brightness-normalised chroma. Brighter than the examples is not widened
+  // (a dark-red model would fire on an orange object), and the half-width
+  // shrinks with s (kept at k·σ in the dark, every near-grey dark pixel would
+  // pass as a saturated class); docs/detection.md gives the measurements.
   kBrightnessScaled,
 };
 

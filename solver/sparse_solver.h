@@ -11,6 +11,19 @@
 //
 // The evidence and the covariances always come from the *undamped*
 // Gauss-Newton system at the final linearisation point (spec §8.2).
+//
+// This header is the solver's interface; its parts, all in solver/:
+//   levenberg_marquardt.h     the LM policy: damping, gain ratio, line search,
+//                             convergence tests
+//   linearization.h           factor errors and Jacobians, with reuse
+//   normal_equations.h        the CHOLMOD back end, built on
+//     block_pattern.h           the problem's layout and block pattern,
+//     fill_reducing_ordering.h  AMD / CAMD / METIS on the block graph,
+//     symbolic_analysis.h       the permuted matrix and its analysis
+//   sparse_qr.h               the SuiteSparseQR back end
+//   evidence.h                the evidence and covariances
+//   serial_openmp.h           CHOLMOD on the calling thread; it changes
+//                             OpenMP and OpenBLAS for the whole process
 #pragma once
 
 #include <memory>
@@ -106,13 +119,14 @@ struct SolverSummary {
   int reused_linearizations = 0;
   int computed_linearizations = 0;
   int step_extrapolations = 0;  // line-search stretches (max_step_extrapolation)
-  double initial_cost = 0;   // 1/2 sum ||e||^2 at the start
+  double initial_cost = 0;      // 1/2 sum ||e||^2 at the start
   double final_cost = 0;
   int num_factors = 0;
   int num_residuals = 0;   // m
   int num_parameters = 0;  // n (free variables only)
   bool reused_symbolic_analysis = false;
-  OrderingType ordering = OrderingType::kAutomatic;  // the one used (never kAutomatic after a solve)
+  OrderingType ordering =
+      OrderingType::kAutomatic;  // the one used (never kAutomatic after a solve)
   double total_time_s = 0, linearize_time_s = 0, analyze_time_s = 0, factorize_time_s = 0,
          evidence_time_s = 0;
 
@@ -160,8 +174,8 @@ class SparseSolver {
 
   // Joint covariance blocks (one per group of keys, in the groups' order) of
   // the Gaussian at the last Solve's final point, i.e. the matching blocks of
-  // (J^T J)^{-1}. Fixed keys get zero rows/columns. False (with `why`) when
-  // there is no valid final factorisation or a key is unknown.
+  // (J^T J)^{-1}. False (with `why`) when there is no valid final
+  // factorisation, or a key is unknown or fixed.
   bool MarginalCovariances(const std::vector<std::vector<int>>& key_groups,
                            std::vector<Eigen::MatrixXd>* blocks, std::string* why = nullptr);
 

@@ -1,7 +1,7 @@
 // The configuration of `oslam run`: the printed defaults read back to the
 // same configuration, they are the mapping code's defaults, every O-SLAM
-// parameter has a key, an override reaches the options struct the sampler
-// gets, and bad values are one-line errors naming the file or the key.
+// parameter has a key, an override reaches the options the sampler gets,
+// and bad values are one-line errors naming the file or the key.
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -13,19 +13,24 @@
 
 #include "apps/arguments.h"
 #include "apps/run_config.h"
-#include "apps/slam_options.h"
+#include "apps/stage_bindings.h"
 #include "core/error.h"
 #include "test_util.h"
 
 namespace oslam {
 namespace {
 
-// What `oslam slam` would run with, given the configuration's slam section.
-SlamSettings SettingsOf(const RunConfig& config) {
-  Arguments arguments("", "");
-  AddSlamOptions(&arguments);
-  EXPECT_TRUE(arguments.Parse(config.OptionsFor("slam")));
-  return SlamSettingsFrom(arguments);
+const SlamStageOptions& SettingsOf(const RunConfig& config) {
+  return config.options().slam;
+}
+
+// Every key's value as text, in file order.
+std::vector<std::string> Values(const RunConfig& config) {
+  std::vector<std::string> values;
+  for (const Bindings* section : config.sections())
+    for (const Binding& binding : section->entries())
+      if (!binding.key().empty()) values.push_back(binding.Value());
+  return values;
 }
 
 std::string Message(const std::function<void()>& action) {
@@ -45,9 +50,7 @@ TEST(RunConfig, PrintedDefaultsLoadBackToTheSameConfiguration) {
   loaded.LoadYaml(dir.Path("defaults.yaml"));
   EXPECT_NO_THROW(loaded.Check());
   EXPECT_EQ(loaded.ToYaml(), defaults.ToYaml());
-  ASSERT_EQ(loaded.entries().size(), defaults.entries().size());
-  for (size_t i = 0; i < defaults.entries().size(); ++i)
-    EXPECT_EQ(loaded.entries()[i].value, defaults.entries()[i].value) << defaults.entries()[i].key;
+  EXPECT_EQ(Values(loaded), Values(defaults));
 
   // A changed value survives the round trip too, at full precision.
   RunConfig changed;
@@ -61,8 +64,34 @@ TEST(RunConfig, PrintedDefaultsLoadBackToTheSameConfiguration) {
   EXPECT_TRUE(std::isinf(SettingsOf(reloaded).sampler.moves.class_mismatch_penalty));
 }
 
+// The file written into every output folder: the keys in this order, each
+// with its default and meaning (the start of each section is enough to
+// catch a reordering or a changed default's text).
+TEST(RunConfig, PrintedDefaultsKeepTheirOrderAndText) {
+  const std::string yaml = RunConfig().ToYaml();
+  for (const char* lines :
+       {"detect:\n  min_area_px: 40  # smallest colour blob kept, pixels\n  opening_radius_px: 1",
+        "  max_shape_distance: \"inf\"  # drop detections",
+        "  sift_templates: \"\"  # templates.yaml for SIFT verification; empty = colour only\n"
+        "  threads: 2  # frames decoded and searched at once, 0 = one per core (same output)\n"
+        "  skip_bad_frames: 0",
+        "slam:\n  method: \"oslam\"  # oslam (MCMC over association and classes) or nn "
+        "(baseline)\n  seed: 1  # seed of every random choice of the sampler\n  samples: 667",
+        "  hill_climb_moves: \"0.9,0.1,0\"", "  track_gate_angle_rad: 0.349066  #",
+        "  track_link_rule: \"nearest\"", "  track_max_gap_frames: 2  #",
+        "  mismatch_penalty: 3  #", "  spurious_model: 1  #",
+        "  nn_gate_m: 0.5  # method nn: nearest-neighbour association gate, m\nexport:\n"
+        "  min_existence: 0.1  # leave out objects with a lower existence probability\n"
+        "  overlays: 1  # 1: draw the map on every frame\n  overlay_frames: \"\"",
+        "  floor_grid: 1  # 1: a floor grid in the glTF\n  ascii_ply: 0",
+        "eval:\n  threshold: 0.5  # objects at or below this existence probability are not in "
+        "the map\n  gate_m: 0.5  # largest base-point distance of a match, m\n"})
+    EXPECT_NE(yaml.find(lines), std::string::npos) << lines << "\nin\n" << yaml;
+}
+
 TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
-  const SlamSettings s = SettingsOf(RunConfig());
+  const RunConfig config;
+  const SlamStageOptions& s = SettingsOf(config);
   const SamplerOptions sampler;
   EXPECT_EQ(s.sampler.num_iterations, 667);
   EXPECT_EQ(s.sampler.burn_in, 70);
@@ -121,81 +150,82 @@ TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
 // Every parameter `oslam slam` takes has a configuration key, so nothing is
 // settable on the single command but not in `oslam run`.
 TEST(RunConfig, EveryOslamSlamParameterHasAKey) {
-  Arguments slam("", "");
-  AddSlamOptions(&slam);
-  std::set<std::string> options;
-  std::istringstream help(slam.Help());
-  for (std::string word; help >> word;)
-    if (word.rfind("--", 0) == 0 && word != "--help") options.insert(word);
-  // Not parameters: the baseline is slam.method, the threading changes no result.
-  options.erase("--baseline");
-  options.erase("--sequential");
-  const RunConfig config;
-  for (const std::string& option : options) {
-    bool found = false;
-    for (const ConfigEntry& e : config.entries())
-      found |= e.section == "slam" && e.option == option;
-    EXPECT_TRUE(found) << option << " has no slam.* key";
+  SlamStageOptions options;
+  Bindings slam;
+  BindSlamOptions(&options, &slam);
+  size_t flags = 0;
+  for (const Binding& binding : slam.entries()) {
+    if (binding.flag().empty()) continue;
+    ++flags;
+    // Not parameters: the baseline is slam.method, the threading changes no result.
+    if (binding.flag() == "baseline" || binding.flag() == "sequential") continue;
+    EXPECT_FALSE(binding.key().empty()) << "--" << binding.flag() << " has no slam.* key";
   }
-  EXPECT_GE(options.size(), 40u);
+  EXPECT_GE(flags, 40u);
 }
 
 TEST(RunConfig, AnOverrideReachesTheOptionsTheSamplerGets) {
   struct Case {
     std::string assignment;
-    std::function<bool(const SlamSettings&)> applied;
+    std::function<bool(const SlamStageOptions&)> applied;
   };
   const std::vector<Case> cases = {
       {"slam.pixel_noise_px=15",
-       [](const SlamSettings& s) { return s.target.slam.pixel_std_px == 15; }},
+       [](const SlamStageOptions& s) { return s.target.slam.pixel_std_px == 15; }},
       {"slam.motion_add_fwd_m=0.02",
-       [](const SlamSettings& s) { return s.target.slam.motion.additive_std[0] == 0.02; }},
+       [](const SlamStageOptions& s) { return s.target.slam.motion.additive_std[0] == 0.02; }},
       {"slam.motion_mult_heading=0.3",
-       [](const SlamSettings& s) { return s.target.slam.motion.multiplicative[2] == 0.3; }},
+       [](const SlamStageOptions& s) { return s.target.slam.motion.multiplicative[2] == 0.3; }},
       {"slam.motion_noise_is_variance=1",
-       [](const SlamSettings& s) { return s.target.slam.motion.entries_are_variances; }},
+       [](const SlamStageOptions& s) { return s.target.slam.motion.entries_are_variances; }},
       {"slam.spurious_t0_m2=0.25",
-       [](const SlamSettings& s) { return s.fusion.spurious_t0_m2 == 0.25; }},
+       [](const SlamStageOptions& s) { return s.fusion.spurious_t0_m2 == 0.25; }},
       {"slam.spurious_tau_m2=0.01",
-       [](const SlamSettings& s) { return s.fusion.spurious_tau_m2 == 0.01; }},
-      {"slam.spurious_model=0", [](const SlamSettings& s) { return !s.fusion.spurious_model; }},
-      {"slam.identity_merge=0", [](const SlamSettings& s) { return !s.fusion.merge_identities; }},
+       [](const SlamStageOptions& s) { return s.fusion.spurious_tau_m2 == 0.01; }},
+      {"slam.spurious_model=0", [](const SlamStageOptions& s) { return !s.fusion.spurious_model; }},
+      {"slam.identity_merge=0",
+       [](const SlamStageOptions& s) { return !s.fusion.merge_identities; }},
       {"slam.track_gate_radius_px=12",
-       [](const SlamSettings& s) { return s.tracks.max_radius_change_px == 12; }},
+       [](const SlamStageOptions& s) { return s.tracks.max_radius_change_px == 12; }},
       {"slam.track_gate_angle_rad=0.1",
-       [](const SlamSettings& s) { return s.tracks.max_angle_change_rad == 0.1; }},
+       [](const SlamStageOptions& s) { return s.tracks.max_angle_change_rad == 0.1; }},
       {"slam.track_gate_size_change=0.3",
-       [](const SlamSettings& s) { return s.tracks.max_relative_size_change == 0.3; }},
+       [](const SlamStageOptions& s) { return s.tracks.max_relative_size_change == 0.3; }},
       {"slam.track_link_rule=refuse-ambiguous",
-       [](const SlamSettings& s) { return s.tracks.link_rule == TrackLinkRule::kRefuseAmbiguous; }},
+       [](const SlamStageOptions& s) {
+         return s.tracks.link_rule == TrackLinkRule::kRefuseAmbiguous;
+       }},
       {"slam.merge_sigma_m=0.8",
-       [](const SlamSettings& s) { return s.sampler.moves.merge_sigma_m == 0.8; }},
+       [](const SlamStageOptions& s) { return s.sampler.moves.merge_sigma_m == 0.8; }},
       {"slam.split_sampler=thesis",
-       [](const SlamSettings& s) {
+       [](const SlamStageOptions& s) {
          return s.sampler.moves.split_sampler == SplitSampler::kThesis;
        }},
       {"slam.sampling_moves=0.5,0.3,0.2",
-       [](const SlamSettings& s) { return s.sampler.sampling_moves.split == 0.3; }},
-      {"slam.refine_every=7", [](const SlamSettings& s) { return s.sampler.refine_every == 7; }},
+       [](const SlamStageOptions& s) { return s.sampler.sampling_moves.split == 0.3; }},
+      {"slam.refine_every=7",
+       [](const SlamStageOptions& s) { return s.sampler.refine_every == 7; }},
       {"slam.hill_climb_patience=0",
-       [](const SlamSettings& s) { return s.sampler.hill_climb_patience == 0; }},
+       [](const SlamStageOptions& s) { return s.sampler.hill_climb_patience == 0; }},
       {"slam.hill_climb_max=700",
-       [](const SlamSettings& s) { return s.sampler.hill_climb_max_steps == 700; }},
+       [](const SlamStageOptions& s) { return s.sampler.hill_climb_max_steps == 700; }},
       {"slam.class_proposal_uniform=0",
-       [](const SlamSettings& s) { return s.sampler.moves.class_proposal_uniform == 0.0; }},
+       [](const SlamStageOptions& s) { return s.sampler.moves.class_proposal_uniform == 0.0; }},
       {"slam.solver_iterations=9",
-       [](const SlamSettings& s) { return s.target.slam.solver.max_iterations == 9; }},
+       [](const SlamStageOptions& s) { return s.target.slam.solver.max_iterations == 9; }},
       {"slam.confusion_floor=0.01",
-       [](const SlamSettings& s) { return s.confusion_floor == 0.01; }},
-      {"slam.nn_gate_m=0.8", [](const SlamSettings& s) { return s.baseline.gate_m == 0.8; }},
+       [](const SlamStageOptions& s) { return s.confusion_floor == 0.01; }},
+      {"slam.nn_gate_m=0.8", [](const SlamStageOptions& s) { return s.baseline.gate_m == 0.8; }},
       {"slam.known_classes=1",
-       [](const SlamSettings& s) {
-         return s.sampler.sampling_moves.merge == 0.5 &&
-                s.sampler.sampling_moves.switch_class == 0 &&
-                std::isinf(s.sampler.moves.class_mismatch_penalty);
+       [](const SlamStageOptions& s) {
+         const SamplerOptions sampler = s.EffectiveSampler();
+         return s.known_classes && sampler.sampling_moves.merge == 0.5 &&
+                sampler.sampling_moves.switch_class == 0 &&
+                std::isinf(sampler.moves.class_mismatch_penalty);
        }},
   };
-  const SlamSettings defaults = SettingsOf(RunConfig());
+  const RunConfig default_config;
+  const SlamStageOptions& defaults = SettingsOf(default_config);
   for (const Case& c : cases) {
     EXPECT_FALSE(c.applied(defaults)) << c.assignment << " is already the default";
     RunConfig config;
@@ -205,23 +235,17 @@ TEST(RunConfig, AnOverrideReachesTheOptionsTheSamplerGets) {
   }
 }
 
-TEST(RunConfig, LookAlikeAndShapeGateKeysReachTheDetectCommand) {
-  auto has = [](const std::vector<std::string>& options, const std::string& option) {
-    return std::find(options.begin(), options.end(), option) != options.end();
-  };
-  RunConfig defaults;
-  EXPECT_FALSE(has(defaults.OptionsFor("detect"), "--keep-look-alikes"));
-  EXPECT_EQ(defaults.Get("detect", "max_shape_distance"), "inf");
+TEST(RunConfig, LookAlikeAndShapeGateKeysReachTheDetectStage) {
+  const RunConfig defaults;
+  EXPECT_TRUE(defaults.options().detect.detector.separate_look_alikes);
+  EXPECT_EQ(defaults.Find("detect", "keep_look_alikes")->Value(), "0");
+  EXPECT_EQ(defaults.Find("detect", "max_shape_distance")->Value(), "inf");
   RunConfig config;
   config.Override("detect.keep_look_alikes=1");
   config.Override("detect.max_shape_distance=5");
   config.Check();
-  const std::vector<std::string> options = config.OptionsFor("detect");
-  EXPECT_TRUE(has(options, "--keep-look-alikes"));
-  const auto gate = std::find(options.begin(), options.end(), "--max-shape-distance");
-  ASSERT_NE(gate, options.end());
-  ASSERT_NE(gate + 1, options.end());
-  EXPECT_EQ(*(gate + 1), "5");
+  EXPECT_FALSE(config.options().detect.detector.separate_look_alikes);
+  EXPECT_EQ(config.options().detect.detector.max_shape_distance, 5.0);
   RunConfig bad;
   bad.Override("detect.max_shape_distance=-2");
   EXPECT_THROW(bad.Check(), UsageError);
@@ -243,9 +267,10 @@ TEST(RunConfig, BadValuesAreOneLineErrorsNamingTheKeyOrFile) {
   const std::string burn_in = Message([&] { invalid.Check(); });
   EXPECT_NE(burn_in.find("burn-in"), std::string::npos) << burn_in;
   RunConfig rule;
-  rule.Override("slam.track_link_rule=closest");
-  const std::string link = Message([&] { rule.Check(); });
-  EXPECT_NE(link.find("slam.track_link_rule"), std::string::npos) << link;
+  const std::string link = Message([&] { rule.Override("slam.track_link_rule=closest"); });
+  EXPECT_NE(link.find("slam.track_link_rule must be 'nearest' or 'refuse-ambiguous'"),
+            std::string::npos)
+      << link;
 
   testing::TempDir dir;
   std::ofstream(dir.Path("bad.yaml")) << "slam:\n  motion_add_fwd_m: fast\n";

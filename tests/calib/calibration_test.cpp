@@ -1,5 +1,5 @@
 // Calibration on synthetic boards (known Mei camera and poses, 0.1 px noise,
-// seeded) and mirror-rim detection on synthetic annulus images.
+// seeded).
 #include "calib/calibration.h"
 
 #include <cmath>
@@ -7,12 +7,10 @@
 
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
-#include <opencv2/imgproc.hpp>
 
 #include "calib/camera_io.h"
 #include "calib/hyperbolic_camera.h"
 #include "calib/mei_camera.h"
-#include "calib/rim_detection.h"
 #include "core/error.h"
 #include "test_util.h"
 
@@ -198,77 +196,6 @@ TEST(Calibration, TooFewViewsIsAnError) {
   std::string why;
   EXPECT_FALSE(bad.Validate(&why));
   EXPECT_NE(why.find("model"), std::string::npos);
-}
-
-// ---- rim detection ----
-
-cv::Mat AnnulusImage(const Eigen::Vector2d& centre, double blind, double rim, std::uint64_t seed) {
-  cv::Mat image(600, 800, CV_8U, cv::Scalar(15));
-  cv::circle(image, cv::Point(std::lround(centre.x() * 16), std::lround(centre.y() * 16)),
-             std::lround(rim * 16), cv::Scalar(190), cv::FILLED, cv::LINE_AA, 4);
-  cv::circle(image, cv::Point(std::lround(centre.x() * 16), std::lround(centre.y() * 16)),
-             std::lround(blind * 16), cv::Scalar(40), cv::FILLED, cv::LINE_AA, 4);
-  // Scene texture inside the mirror: random blobs (different per frame).
-  std::mt19937_64 engine(seed);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  for (int i = 0; i < 40; ++i) {
-    const double angle = 2 * M_PI * uniform(engine);
-    const double radius = blind + 10 + (rim - blind - 30) * uniform(engine);
-    cv::circle(image,
-               cv::Point(static_cast<int>(centre.x() + radius * std::cos(angle)),
-                         static_cast<int>(centre.y() + radius * std::sin(angle))),
-               static_cast<int>(3 + 12 * uniform(engine)), cv::Scalar(60 + 120 * uniform(engine)),
-               cv::FILLED);
-  }
-  cv::Mat noise(image.size(), CV_16S);
-  cv::randn(noise, 0, 12);
-  cv::Mat noisy;
-  image.convertTo(noisy, CV_16S);
-  noisy += noise;
-  noisy.convertTo(image, CV_8U);
-  return image;
-}
-
-TEST(RimDetection, FindsCentreAndRadiiOfASyntheticAnnulus) {
-  cv::theRNG().state = 12345;
-  const Eigen::Vector2d centre(407.3, 291.8);
-  std::vector<cv::Mat> frames;
-  for (int i = 0; i < 5; ++i) frames.push_back(AnnulusImage(centre, 48.0, 262.5, 100 + i));
-  const RimDetectionResult result = DetectMirrorRim(frames);
-  ASSERT_TRUE(result.found) << result.message;
-  EXPECT_LT((result.center_px - centre).norm(), 1.0) << result.center_px.transpose();
-  EXPECT_NEAR(result.rim.radius, 262.5, 1.0);
-  ASSERT_TRUE(result.blind_found);
-  EXPECT_NEAR(result.blind.radius, 48.0, 1.0);
-  EXPECT_LT((result.blind.center - centre).norm(), 1.0);
-  EXPECT_GT(result.annulus.blind_radius_px, 48.0);
-  EXPECT_LT(result.annulus.rim_radius_px, 262.5);
-}
-
-TEST(RimDetection, RimCutByTheImageBorderStillFits) {
-  cv::theRNG().state = 777;
-  const Eigen::Vector2d centre(398.6, 300.4);
-  const std::vector<cv::Mat> frames = {AnnulusImage(centre, 40.0, 340.0, 5)};  // cut top/bottom
-  const RimDetectionResult result = DetectMirrorRim(frames);
-  ASSERT_TRUE(result.found) << result.message;
-  EXPECT_LT((result.center_px - centre).norm(), 1.0) << result.center_px.transpose();
-  EXPECT_NEAR(result.rim.radius, 340.0, 1.0);
-}
-
-TEST(RimDetection, UniformImageHasNoRim) {
-  const std::vector<cv::Mat> frames = {cv::Mat(300, 400, CV_8U, cv::Scalar(128))};
-  const RimDetectionResult result = DetectMirrorRim(frames);
-  EXPECT_FALSE(result.found);
-  EXPECT_FALSE(result.message.empty());
-}
-
-TEST(CircleFit, ExactPointsGiveTheCircle) {
-  std::vector<Eigen::Vector2d> points;
-  for (int k = 0; k < 7; ++k)
-    points.push_back(Eigen::Vector2d(3.0, -2.0) + 5.0 * Eigen::Vector2d(std::cos(k), std::sin(k)));
-  const Circle circle = FitCircle(points);
-  EXPECT_LT((circle.center - Eigen::Vector2d(3.0, -2.0)).norm(), 1e-9);
-  EXPECT_NEAR(circle.radius, 5.0, 1e-9);
 }
 
 }  // namespace

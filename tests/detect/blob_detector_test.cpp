@@ -1,54 +1,27 @@
 // Colour-blob detection on synthetic omnidirectional frames with known slices.
 #include "detect/blob_detector.h"
 
-#include <fstream>
 #include <random>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "calib/hyperbolic_camera.h"
 #include "core/angles.h"
 #include "core/error.h"
 #include "detect/colour_classifier.h"
-#include "detect/colour_training.h"
+#include "detect/painted_slices.h"
 #include "test_util.h"
 
 namespace oslam {
 namespace {
 
-// BGR colours far apart in YUV.
-const cv::Vec3b kGreen(60, 170, 40), kPink(180, 105, 255), kBlue(200, 80, 20);
-
-ObjectClass ClassWithColour(const std::string& name, const cv::Vec3b& bgr, double noise_std) {
-  ObjectClass c;
-  c.name = name;
-  c.diameter_mean_m = c.height_mean_m = 0.3;
-  c.diameter_std_m = c.height_std_m = 0.1;
-  cv::Mat pixel(1, 1, CV_8UC3, cv::Scalar(bgr[0], bgr[1], bgr[2])), yuv;
-  cv::cvtColor(pixel, yuv, cv::COLOR_BGR2YUV);
-  ColourBox box;
-  for (int ch = 0; ch < 3; ++ch) {
-    box.yuv_mean[ch] = yuv.at<cv::Vec3b>(0, 0)[ch];
-    box.yuv_std[ch] = noise_std;
-  }
-  c.colour = box;
-  return c;
-}
-
-// Fills the annular sector of `slice` with `colour` (pixel centres inside).
-void PaintSlice(cv::Mat* image, const CameraModel& camera, const BoundingSlice& slice,
-                const cv::Vec3b& colour) {
-  for (int y = 0; y < image->rows; ++y)
-    for (int x = 0; x < image->cols; ++x) {
-      const PolarPoint p = camera.PixelToPolar({x, y});
-      const double dphi = std::abs(WrapAngle(p.angle_rad - slice.u_phi_rad));
-      if (p.radius_px >= slice.u_r_px && p.radius_px <= slice.u_r_px + slice.s_r_px &&
-          dphi <= 0.5 * slice.s_phi_rad)
-        image->at<cv::Vec3b>(y, x) = colour;
-    }
-}
+using testing::ClassWithColour;
+using testing::kBlue;
+using testing::kGreen;
+using testing::kPink;
+using testing::PaintSlice;
+using testing::Scaled;
 
 struct Scene {
   HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
@@ -119,53 +92,6 @@ TEST(BlobDetector, WrongFrameSizeIsAnError) {
   EXPECT_THROW(BlobDetector(scene.camera, scene.classes, bad), Error);
 }
 
-cv::Vec3b ToYuv(const cv::Vec3b& bgr) {
-  cv::Mat yuv;
-  cv::cvtColor(cv::Mat(1, 1, CV_8UC3, cv::Scalar(bgr[0], bgr[1], bgr[2])), yuv, cv::COLOR_BGR2YUV);
-  return yuv.at<cv::Vec3b>(0, 0);
-}
-
-cv::Vec3b Scaled(const cv::Vec3b& bgr, double factor) {
-  return cv::Vec3b(cv::saturate_cast<uint8_t>(bgr[0] * factor),
-                   cv::saturate_cast<uint8_t>(bgr[1] * factor),
-                   cv::saturate_cast<uint8_t>(bgr[2] * factor));
-}
-
-TEST(ColourClassifier, BrightnessScaledBoxKeepsAnObjectUnderDimLightThatTheThesisBoxLoses) {
-  const std::vector<ObjectClass> classes = {ClassWithColour("green box", kGreen, 3),
-                                            ClassWithColour("pink ball", kPink, 3)};
-  ColourClassifierOptions thesis;
-  thesis.shape = ColourBoxShape::kYuv;
-  ColourClassifierOptions scaled;
-  scaled.shape = ColourBoxShape::kBrightnessScaled;
-  scaled.brightness_range = 2.5;
-  const ColourClassifier yuv_box(classes, thesis), scaled_box(classes, scaled);
-  for (int c = 0; c < 2; ++c) {
-    const cv::Vec3b bgr = c == 0 ? kGreen : kPink;
-    // Both accept the class's own colour.
-    EXPECT_TRUE(yuv_box.InBox(c, ToYuv(bgr)));
-    EXPECT_TRUE(scaled_box.InBox(c, ToYuv(bgr)));
-    // Half the light: R, G, B halve. Only the scaled box still accepts it.
-    EXPECT_FALSE(yuv_box.InBox(c, ToYuv(Scaled(bgr, 0.5))));
-    EXPECT_TRUE(scaled_box.InBox(c, ToYuv(Scaled(bgr, 0.5))));
-    // A quarter of it is beyond brightness_range: rejected.
-    EXPECT_FALSE(scaled_box.InBox(c, ToYuv(Scaled(bgr, 0.2))));
-    // Brighter than the examples is not widened.
-    EXPECT_FALSE(scaled_box.InBox(c, ToYuv(Scaled(bgr, 1.6))));
-  }
-  // Dimmed grey and the other class's dimmed colour stay out.
-  EXPECT_FALSE(scaled_box.InBox(0, ToYuv(cv::Vec3b(60, 60, 60))));
-  EXPECT_FALSE(scaled_box.InBox(1, ToYuv(cv::Vec3b(60, 60, 60))));
-  EXPECT_FALSE(scaled_box.InBox(0, ToYuv(Scaled(kPink, 0.5))));
-  EXPECT_FALSE(scaled_box.InBox(1, ToYuv(Scaled(kGreen, 0.5))));
-  // The score measures the chroma against the class's, rescaled: a dimmed
-  // exact colour scores near 1 with the scaled shape.
-  const cv::Vec3b dim = ToYuv(Scaled(kGreen, 0.5));
-  const std::array<double, 3> dim_yuv = {double(dim[0]), double(dim[1]), double(dim[2])};
-  EXPECT_LT(scaled_box.SquaredDistance(*classes[0].colour, dim_yuv), 1.0);
-  EXPECT_GT(yuv_box.SquaredDistance(*classes[0].colour, dim_yuv), 9.0);
-}
-
 TEST(BlobDetector, FindsADimlyLitSliceOnlyWithTheBrightnessScaledBox) {
   Scene scene;
   scene.truth = {{0, {120.0, 0.5, 40.0, 0.35}}};
@@ -180,53 +106,6 @@ TEST(BlobDetector, FindsADimlyLitSliceOnlyWithTheBrightnessScaledBox) {
   EXPECT_EQ(found[0].class_index, 0);
   EXPECT_NEAR(found[0].slice.u_r_px, 120.0, 1.0);
   EXPECT_NEAR(found[0].slice.s_r_px, 40.0, 1.0);
-}
-
-TEST(ColourClassifier, BoxShapeParsingAndOptionChecks) {
-  ColourBoxShape shape = ColourBoxShape::kBrightnessScaled;
-  EXPECT_TRUE(ParseColourBoxShape("yuv", &shape));
-  EXPECT_EQ(shape, ColourBoxShape::kYuv);
-  EXPECT_TRUE(ParseColourBoxShape("scaled", &shape));
-  EXPECT_EQ(shape, ColourBoxShape::kBrightnessScaled);
-  EXPECT_FALSE(ParseColourBoxShape("hsv", &shape));
-  ColourClassifierOptions bad;
-  bad.brightness_range = 0.5;
-  EXPECT_THROW(ColourClassifier({ClassWithColour("green box", kGreen, 3)}, bad), Error);
-}
-
-TEST(ColourModel, LearntBoxRecoversMeanAndSpread) {
-  cv::Mat image(200, 200, CV_8UC3);
-  cv::RNG rng(5);
-  rng.fill(image, cv::RNG::NORMAL, cv::Scalar(100, 150, 80), cv::Scalar(5, 5, 5));
-  const cv::Mat mask(200, 200, CV_8UC1, cv::Scalar(255));
-  const ColourBox box = LearnColourBox({image}, {mask}, 3.0);
-  cv::Mat yuv;
-  cv::cvtColor(cv::Mat(1, 1, CV_8UC3, cv::Scalar(100, 150, 80)), yuv, cv::COLOR_BGR2YUV);
-  for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(box.yuv_mean[ch], yuv.at<cv::Vec3b>(0, 0)[ch], 1.0);
-  EXPECT_GT(box.yuv_std[0], 2.0);  // Y mixes the three channels' noise
-  EXPECT_LT(box.yuv_std[0], 6.0);
-  EXPECT_EQ(box.k_sigma, 3.0);
-}
-
-TEST(ColourConfusion, RowsAreDistributionsWithTheTrueClassMostLikely) {
-  std::vector<ObjectClass> classes = {ClassWithColour("orange door", cv::Vec3b(0, 128, 255), 10),
-                                      ClassWithColour("orange ball", cv::Vec3b(10, 140, 250), 10),
-                                      ClassWithColour("blue ball", kBlue, 4)};
-  const auto confusion = ColourConfusion(classes, 1e-3);
-  for (size_t c = 0; c < classes.size(); ++c) {
-    double total = 0;
-    for (size_t a = 0; a < classes.size(); ++a) {
-      total += confusion[c][a];
-      EXPECT_GE(confusion[c][a], 1e-3 * 0.99);
-      if (a != c) {
-        EXPECT_GT(confusion[c][c], confusion[c][a]);
-      }
-    }
-    EXPECT_NEAR(total, 1.0, 1e-12);
-  }
-  // Look-alike oranges confuse each other far more than orange and blue do.
-  EXPECT_GT(confusion[0][1], 0.05);
-  EXPECT_LT(confusion[0][2], 0.002);
 }
 
 TEST(Detections, CsvRoundTripAndUnknownClass) {
@@ -332,54 +211,6 @@ TEST(BlobDetector, ShapeGateDropsOnlyDetectionsFarFromTheirClassShape) {
   EXPECT_EQ(ClassesOn(detections, scene.blue), Names{});
   gated.max_shape_distance = -1.0;
   EXPECT_THROW(BlobDetector(scene.camera, scene.classes, gated), Error);
-}
-
-TEST(ImageShapes, LearntFromOutlineExamplesAsTheDetectorMeasuresBlobs) {
-  const LookAlikeScene scene;
-  testing::TempDir dir;
-  std::ofstream yaml(dir.Path("examples.yaml"));
-  yaml << "examples:\n";
-  // Three views of a bucket-shaped slice (elongation 1.4) at other places in the image.
-  const std::vector<BoundingSlice> views = {{100.0, 0.3, 24.0, 24.0 / (1.4 * 112.0)},
-                                            {140.0, 2.0, 30.0, 30.0 / (1.4 * 155.0)},
-                                            {80.0, -2.5, 20.0, 20.0 / (1.4 * 90.0)}};
-  for (size_t i = 0; i < views.size(); ++i) {
-    cv::Mat image(scene.camera.image_height(), scene.camera.image_width(), CV_8UC3,
-                  cv::Scalar(128, 128, 128));
-    PaintSlice(&image, scene.camera, views[i], scene.orange);
-    cv::Mat mask;
-    cv::inRange(image, scene.orange, scene.orange, mask);
-    const std::string name = "view" + std::to_string(i);
-    cv::imwrite(dir.Path(name + ".png"), image);
-    cv::imwrite(dir.Path(name + "_mask.png"), mask);
-    yaml << "  - {image: " << name << ".png, class: orange bucket, mask: " << name
-         << "_mask.png, outline: 1}\n";
-  }
-  // A plain colour example teaches no shape.
-  yaml << "  - {image: view0.png, class: orange ball, roi: [0, 0, 8, 8]}\n";
-  yaml.close();
-  const std::vector<ColourExample> examples =
-      ReadColourExamples(dir.Path("examples.yaml"), scene.classes);
-  std::vector<ObjectClass> classes = scene.classes;
-  for (ObjectClass& c : classes) c.image_shape.reset();
-  const std::vector<ObjectClass> learnt =
-      LearnImageShapesFromExamples(classes, examples, scene.camera);
-  ASSERT_TRUE(learnt[1].image_shape.has_value());
-  EXPECT_NEAR(learnt[1].image_shape->elongation_mean, 1.4, 0.08);
-  EXPECT_GE(learnt[1].image_shape->elongation_std, 0.05);  // the floor for few views
-  EXPECT_FALSE(learnt[0].image_shape.has_value());
-  // Fewer than three outlines: no model.
-  const std::vector<ColourExample> two(examples.begin(), examples.begin() + 2);
-  EXPECT_FALSE(LearnImageShapesFromExamples(classes, two, scene.camera)[1].image_shape);
-
-  std::ofstream(dir.Path("bad.yaml"))
-      << "examples:\n  - {image: view0.png, class: orange ball, roi: [0, 0, 8, 8], outline: 1}\n";
-  try {
-    ReadColourExamples(dir.Path("bad.yaml"), scene.classes);
-    ADD_FAILURE() << "an ROI passed as an outline";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("examples[0].outline"), std::string::npos) << e.what();
-  }
 }
 
 TEST(BlobDetector, ShapeDistanceGrowsWithTheElongationErrorAndShrinksWithBlobSize) {

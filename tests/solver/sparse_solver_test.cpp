@@ -3,7 +3,6 @@
 #include "solver/sparse_solver.h"
 
 #include <cmath>
-#include <cstdint>
 #include <cstdlib>
 #include <string>
 
@@ -448,33 +447,6 @@ TEST(SolverTest, IndependentOfHistoryGivesAFreshSolversNumbersExactly) {
   reusing.Solve(&full_again);
   FactorGraph sparser_again = SmallSlamGraph(camera, 5, 25, 3, 4);
   EXPECT_TRUE(reusing.Solve(&sparser_again).summary.reused_symbolic_analysis);
-}
-
-// Factors made by Emplace live in the graph's arena (64 kB blocks): a
-// graph spanning many blocks, moved to another variable, keeps every factor
-// intact and solvable, next to a heap factor handed over by Add.
-TEST(FactorGraphTest, ArenaFactorsSurviveManyBlocksAndAMove) {
-  constexpr int kPoses = 3000;  // ~3,000 odometry factors: several blocks
-  FactorGraph built;
-  for (int i = 0; i < kPoses; ++i) built.AddPose(0.1 * i, 0.0, 0.0, i == 0);
-  const OdometryIncrement step{0.1, 0.0};
-  for (int i = 1; i < kPoses; ++i) {
-    const Factor* factor = built.Emplace<OdometryFactor>(i - 1, i, step, MotionNoiseOptions());
-    ASSERT_EQ(reinterpret_cast<std::uintptr_t>(factor) % alignof(OdometryFactor), 0u);
-  }
-  built.Add(MakeLocationPrior(built.AddVariable(Eigen::Vector3d(1, 2, 0)), Eigen::Vector3d::Zero(),
-                              Eigen::Vector3d::Ones()));
-  FactorGraph graph = std::move(built);
-  ASSERT_EQ(graph.factors().size(), static_cast<size_t>(kPoses));
-  for (int i = 1; i < kPoses; ++i) {
-    EXPECT_EQ(graph.factors()[i - 1]->keys()[0], i - 1);
-    EXPECT_EQ(graph.factors()[i - 1]->keys()[1], i);
-  }
-  graph.mutable_values().MutableData(kPoses - 1)[1] += 0.5;  // off the odometry
-  const SolveResult result = SparseSolver().Solve(&graph);
-  ASSERT_EQ(result.summary.termination, TerminationType::kConverged) << result.summary.message;
-  EXPECT_LT(result.summary.final_cost, 1e-6);  // to the solver's tolerances
-  EXPECT_NEAR(graph.values().Data(kPoses - 1)[0], 0.1 * (kPoses - 1), 1e-4);
 }
 
 // A graph with the last set-up's structure skips the set-up; one with the

@@ -1,0 +1,90 @@
+#include "apps/stage_bindings.h"
+
+#include <cstdio>
+
+namespace oslam {
+
+void BindDetectOptions(DetectStageOptions* o, Bindings* b) {
+  BlobDetectorOptions& d = o->detector;
+  b->Add(&o->debug_images_dir, "debug-images", "DIR",
+         "also write each frame with its slices drawn");
+  b->Add(&d.min_area_px, "min-area", "PX", "smallest blob kept, in pixels")
+      .Key("min_area_px", "smallest colour blob kept, pixels");
+  b->Add(&d.opening_radius_px, "opening", "PX", "radius of the morphological opening, 0 = off")
+      .Key("opening_radius_px", "morphological opening, 0 = off");
+  b->AddChoice(&d.colour.shape,
+               {{"yuv", ColourBoxShape::kYuv}, {"scaled", ColourBoxShape::kBrightnessScaled}},
+               "colour-box", "yuv|scaled",
+               "class colour region: 'yuv' = the thesis' mean ± k·σ box; 'scaled' = its chroma "
+               "scaled with brightness (robust to dim light)")
+      .Key("colour_box",
+           "yuv = the thesis' mean +- k sigma YUV box; scaled = chroma scaled with brightness");
+  b->Add(&d.colour.brightness_range, "brightness-range", "R",
+         "with --colour-box scaled: accept brightness from 1/R to R times the examples' range")
+      .Key("brightness_range",
+           "colour_box scaled: accept brightness from 1/R to R times the examples' range");
+  b->AddInvertedFlag(&d.separate_look_alikes, "keep-look-alikes",
+                     "keep every class a blob's colour matches (the thesis); by default, where "
+                     "two classes' blobs are the same pixels, only the one whose colour and "
+                     "learnt image shape fit better is kept")
+      .Key("keep_look_alikes",
+           "1: keep every class a blob's colour matches (thesis); 0: of look-alike classes on "
+           "the same pixels keep the one whose colour and image shape fit better");
+  b->AddNumberOrInfinity(&d.max_shape_distance, "max-shape-distance", "SIGMAS",
+                         "drop detections whose slice elongation is further than this from "
+                         "their class's image shape (inf = off)")
+      .Key("max_shape_distance",
+           "drop detections whose slice elongation is further than this many sigmas from their "
+           "class's image shape; inf = off");
+  b->Add(&o->sift_templates, "sift-templates", "FILE.yaml",
+         "keep a detection of a class with templates only if SIFT verifies it")
+      .Key("sift_templates", "templates.yaml for SIFT verification; empty = colour only");
+  b->Add(&o->threads, "threads", "N", "frames decoded and searched at once (0 = one per core)")
+      .Key("threads", "frames decoded and searched at once, 0 = one per core (same output)")
+      .Check([o] { return o->threads >= 0; }, "must be >= 0");
+  b->AddFlag(&o->skip_bad_frames, "skip-bad-frames", "warn about unreadable frames and go on")
+      .Key("skip_bad_frames", "1: warn about unreadable frames and go on instead of stopping");
+}
+
+void BindExportOptions(ExportStageOptions* o, Bindings* b) {
+  b->Add(&o->min_existence, "min-existence", "P",
+         "leave out objects with existence probability < P")
+      .Key("min_existence", "leave out objects with a lower existence probability");
+  b->AddFlag(&o->overlays, "overlays",
+             "also draw the map on the run's frames (overlays/NNNNNN.png)")
+      .Key("overlays", "1: draw the map on every frame");
+  b->Add(&o->overlay_frames, "frames", "LIST", "overlay only these frames, e.g. 0,10,20-30")
+      .Key("overlay_frames", "only these frames, e.g. 0,10,20-30");
+  b->Add(&o->threads, "threads", "N", "overlays drawn and written at once (0 = one per core)")
+      .Key("threads", "overlays drawn and written at once, 0 = one per core (same output)")
+      .Check([o] { return o->threads >= 0; }, "must be >= 0");
+  b->Add(&o->figure_size_px, "figure-size", "PX", "width and height of the figures")
+      .Key("figure_size_px", "width and height of the figures");
+  b->AddNegatedFlag(&o->floor_grid, "no-grid", "no floor grid in the glTF")
+      .Key("floor_grid", "1: a floor grid in the glTF");
+  b->AddFlag(&o->ascii_ply, "ascii-ply", "write ASCII PLY instead of binary")
+      .Key("ascii_ply", "1: ASCII PLY instead of binary");
+}
+
+void BindEvalOptions(EvalStageOptions* o, Bindings* b) {
+  b->Add(&o->metrics.existence_threshold, "threshold", "P",
+         "objects with existence probability <= P are left out")
+      .Key("threshold", "objects at or below this existence probability are not in the map");
+  b->Add(&o->metrics.match_gate_m, "gate", "M", "largest horizontal base-point distance of a match")
+      .Key("gate_m", "largest base-point distance of a match, m");
+}
+
+StageOutput CommandOutput(const std::string& command, bool quiet) {
+  StageOutput output;
+  output.quiet = quiet;
+  output.print = [](const std::string& line) {
+    std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+  };
+  output.warn = [command](const std::string& message) {
+    std::fprintf(stderr, "oslam %s: warning: %s\n", command.c_str(), message.c_str());
+  };
+  return output;
+}
+
+}  // namespace oslam

@@ -1,0 +1,109 @@
+#include "solver/evidence.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <cholmod.h>
+
+namespace oslam {
+namespace {
+
+constexpr double kLog2Pi = 1.8378770664093454836;
+
+// Unit columns are solved for in batches of at most this many.
+constexpr int kCovarianceBatch = 64;
+
+}  // namespace
+
+void SetEvidenceConstants(const FactorGraph& graph, int m, int n, Evidence* evidence) {
+  evidence->num_rows = m;
+  evidence->num_parameters = n;
+  for (const auto& factor : graph.factors()) evidence->log_det_noise += factor->LogDetCovariance();
+  evidence->normaliser = 0.5 * (n - m) * kLog2Pi;
+}
+
+void CompleteEvidence(Evidence* evidence) {
+  if (evidence->valid)
+    evidence->log_evidence = -0.5 * evidence->squared_residual - 0.5 * evidence->log_det_noise -
+                             0.5 * evidence->log_det_information + evidence->normaliser;
+}
+
+double MinimumSquaredResidual(double cost, const Eigen::VectorXd& gradient,
+                              const Eigen::VectorXd& inverse_hessian_gradient) {
+  return std::max(0.0, 2.0 * cost - gradient.dot(inverse_hessian_gradient));
+}
+
+double LogDetOfFactor(const cholmod_factor* factor) {
+  double log_det = 0.0;
+  const double* x = static_cast<const double*>(factor->x);
+  if (factor->is_super) {
+    const auto* super = static_cast<const int*>(factor->super);
+    const auto* pi = static_cast<const int*>(factor->pi);
+    const auto* px = static_cast<const int*>(factor->px);
+    for (size_t s = 0; s < factor->nsuper; ++s) {
+      const int columns = super[s + 1] - super[s];
+      const int rows = pi[s + 1] - pi[s];
+      for (int j = 0; j < columns; ++j)
+        log_det += 2.0 * std::log(std::abs(x[px[s] + j + j * rows]));
+    }
+  } else {
+    const auto* p = static_cast<const int*>(factor->p);
+    const double scale = factor->is_ll ? 2.0 : 1.0;  // LDL' keeps D on the diagonal
+    for (size_t j = 0; j < factor->n; ++j) log_det += scale * std::log(std::abs(x[p[j]]));
+  }
+  return log_det;
+}
+
+bool CovarianceBlocks(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
+                      cholmod_common* cc, const std::vector<std::vector<int>>& columns,
+                      std::vector<Eigen::MatrixXd>* blocks, std::string* why) {
+  const int n = static_cast<int>(factor->n);
+  blocks->assign(columns.size(), Eigen::MatrixXd());
+  // Solve H X = E for batches of unit columns; pick the groups' rows.
+  size_t g = 0;
+  while (g < columns.size()) {
+    size_t end = g;
+    int width = 0;
+    while (end < columns.size() &&
+           (width == 0 || width + static_cast<int>(columns[end].size()) <= kCovarianceBatch))
+      width += static_cast<int>(columns[end++].size());
+    cholmod_dense* unit = cholmod_zeros(n, width, CHOLMOD_REAL, cc);
+    auto* ux = static_cast<double*>(unit->x);
+    int c = 0;
+    for (size_t h = g; h < end; ++h)
+      for (int column : columns[h])
+        ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = 1.0;
+    // With H = L L' (the permuted matrix is factored in its natural order),
+    // H^-1 = L^-T L^-1, so a block is Y' Y with Y = L^-1 E: a forward solve
+    // only, half the work of solving with H. An LDL' factor solves with H.
+    const bool forward_only = factor->is_ll;
+    cholmod_dense* x = cholmod_solve(forward_only ? CHOLMOD_L : CHOLMOD_A, factor, unit, cc);
+    cholmod_free_dense(&unit, cc);
+    if (!x) {
+      if (why) *why = "CHOLMOD solve failed";
+      return false;
+    }
+    const auto* xx = static_cast<const double*>(x->x);
+    c = 0;
+    for (size_t h = g; h < end; ++h) {
+      const int size = static_cast<int>(columns[h].size());
+      Eigen::MatrixXd& block = (*blocks)[h];
+      if (forward_only) {
+        const Eigen::Map<const Eigen::MatrixXd> y(xx + static_cast<size_t>(c) * n, n, size);
+        block = y.transpose() * y;
+      } else {
+        block.resize(size, size);
+        for (int q = 0; q < size; ++q)
+          for (int r = 0; r < size; ++r)
+            block(r, q) = xx[static_cast<size_t>(c + q) * n + inverse_permutation[columns[h][r]]];
+        block = 0.5 * (block + block.transpose()).eval();
+      }
+      c += size;
+    }
+    cholmod_free_dense(&x, cc);
+    g = end;
+  }
+  return true;
+}
+
+}  // namespace oslam

@@ -1,0 +1,53 @@
+// What the Gaussian at a solve's final point gives (spec §8.2): the Laplace
+// log-evidence and marginal covariances. Both come from the *undamped*
+// Gauss-Newton system J^T J delta = -J^T e at the final linearisation point.
+//
+// With r the residual of that system's least-squares solution, m rows and
+// n unknowns, and P_f each factor's noise covariance,
+//
+//   log P(Z) ~ -1/2 ||r||^2 - 1/2 sum_f log |P_f| - 1/2 log det(J^T J)
+//              + 1/2 (n - m) log(2 pi),
+//
+// the integral of the linearised likelihood over the unknowns (exact for a
+// linear-Gaussian problem), and the covariance of the unknowns is
+// (J^T J)^{-1}.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "solver/factor_graph.h"
+#include "solver/sparse_solver.h"
+
+struct cholmod_common_struct;
+struct cholmod_factor_struct;
+
+namespace oslam {
+
+// The parts that do not depend on the solution: m, n, sum_f log |P_f| and
+// the normaliser 1/2 (n - m) log(2 pi).
+void SetEvidenceConstants(const FactorGraph& graph, int m, int n, Evidence* evidence);
+// log_evidence from the parts, when evidence->valid.
+void CompleteEvidence(Evidence* evidence);
+
+// min_d ||e + J d||^2 = ||e||^2 - g' H^{-1} g (at d = -H^{-1} g), from the
+// cost 1/2 ||e||^2, the gradient g = J^T e and x = H^{-1} g; at least 0
+// (rounding).
+double MinimumSquaredResidual(double cost, const Eigen::VectorXd& gradient,
+                              const Eigen::VectorXd& inverse_hessian_gradient);
+
+// log det of the matrix a CHOLMOD factor holds (LL' or LDL', simplicial or
+// supernodal).
+double LogDetOfFactor(const cholmod_factor_struct* factor);
+
+// Covariance blocks of the factored matrix H: for every list of scalar
+// columns (in delta's order), the matching block of H^{-1}. `inverse_
+// permutation` maps a column of delta to its row in the factor. False with
+// `why` when CHOLMOD fails.
+bool CovarianceBlocks(cholmod_factor_struct* factor, const std::vector<int>& inverse_permutation,
+                      cholmod_common_struct* cc, const std::vector<std::vector<int>>& columns,
+                      std::vector<Eigen::MatrixXd>* blocks, std::string* why);
+
+}  // namespace oslam
