@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "omap/omap_json.h"
 #include "slam/landmark_formats.h"
+#include "slam/landmark_noise.h"
 #include "slam/slam_omap.h"
 #include "solver/summary_report.h"
 
@@ -127,6 +128,9 @@ void LandmarkMode::Declare(Arguments* arguments) {
         "std of one trunk-diameter measurement (where the data set has them)");
   b.AddFlag(&o.slam.compute_pose_covariances, "pose-covariances",
             "also compute every pose's covariance (slower)");
+  b.AddFlag(&o.calibrate_noise, "calibrate-noise",
+            "known association: estimate the variance components of the sightings' and the "
+            "odometry's noise at the association and solve under them (docs/method.md §16.3)");
   b.AddFlag(&o.unknown_association, "unknown-association",
             "ignore the file's landmark ids: tracks, O-SLAM hill climbing in growing windows, "
             "optional MC3; compared with the ids when the file has them");
@@ -166,6 +170,13 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&u.joint_max_shift_m, "joint-max-shift", "M",
         "unknown association: joint merges only for alignments shifting the recent landmarks "
         "at most this far (0: no limit)");
+  b.AddChoice<bool>(&u.calibrate_on_tracks, {{"on", true}, {"off", false}}, "calibrate-tracks",
+                    "on|off",
+                    "unknown association: estimate the noise's variance components with every "
+                    "track its own landmark before the search, and search under that noise");
+  b.Add(&u.calibration_rounds, "calibration-rounds", "N",
+        "unknown association: after the search, re-estimate the noise at the association found "
+        "and refine it by split and merge sweeps, N times (0: none)");
   b.Add(&u.free_poses, "free-poses", "POSES",
         "unknown association: poses free in a window's solves, earlier ones held (0: all free)");
   b.Add(&o.poses, "poses", "N",
@@ -207,8 +218,21 @@ int LandmarkMode::Run(const Arguments& arguments) {
   }
   std::string why;
   if (!o.slam.Validate(&why)) throw UsageError(why);
-  LandmarkSlam slam(o.slam);
-  const LandmarkSlamResult result = slam.Solve(data, association);
+  LandmarkSlamResult result;
+  if (o.calibrate_noise) {
+    NoiseCalibrationResult c = CalibrateNoise(data, association, o.slam, NoiseCalibrationOptions());
+    const NoiseScales& n = c.scales;
+    if (!arguments.Flag("quiet"))
+      std::printf(
+          "noise calibration: the stated variances times %.3g (range), %.3g (bearing), %.3g "
+          "(point), %.3g (odometry translation), %.3g (heading); %d outliers left out, %.2f s\n",
+          n.range, n.bearing, n.point, n.odometry_translation, n.odometry_heading, c.outliers,
+          c.time_s);
+    result = std::move(c.solution);
+  } else {
+    LandmarkSlam slam(o.slam);
+    result = slam.Solve(data, association);
+  }
   const std::string output = arguments.Get("output");
   const std::string trajectory_path =
       WriteMapAndTrajectory(output, o.trajectory, data, result, o.class_name, association_source);
@@ -281,6 +305,13 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
       result.proposals, result.accepted, result.solves, result.cold_retries,
       result.hill_climb_time_s, result.joint_tries, result.joint_merges, result.joint_time_s,
       result.sampling_time_s, result.total_time_s);
+  const NoiseScales& n = result.noise_scales;
+  if (options.calibrate_on_tracks || options.calibration_rounds > 0)
+    std::printf(
+        "noise: the stated variances times %.3g (range), %.3g (bearing), %.3g (point), %.3g "
+        "(odometry translation), %.3g (heading); calibration %.2f s\n",
+        n.range, n.bearing, n.point, n.odometry_translation, n.odometry_heading,
+        result.calibration_time_s);
   if (data.has_landmark_ids) {
     const std::vector<int> shipped = GivenAssociation(data);
     const PairwiseAgreement a = ComparePairwise(result.association, shipped);
@@ -291,13 +322,15 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
         "%.4f recall %.4f (%lld / %lld / %lld); landmarks %zu vs %zu\n",
         a.agreement, a.precision, a.recall, a.same_both, a.same_estimate, a.same_truth,
         solution.landmarks.size(), ids.size());
+    // The shipped association solved under the noise the search ended with.
     LandmarkSlamOptions known_options = options.target.slam;
     known_options.compute_landmark_covariances = false;
     LandmarkSlam known(known_options);
-    const LandmarkSlamResult reference = known.Solve(data, shipped);
+    const LandmarkSlamResult reference =
+        known.Solve(WithNoiseScales(data, result.noise_scales), shipped);
     std::printf(
-        "trajectory vs the shipped-association solve: RMSE %.3f m (its log evidence "
-        "%.1f, ours %.1f)\n",
+        "trajectory vs the shipped-association solve (same noise): RMSE %.3f m (its log "
+        "evidence %.1f, ours %.1f)\n",
         TrajectoryRmse(solution.trajectory, reference.trajectory), reference.evidence.log_evidence,
         result.log_target);
   }

@@ -54,14 +54,15 @@ class LandmarkMode {
   // The data set, the files written, and the solve's options.
   struct Options {
     std::string format = "auto";  // auto | gtsam | g2o | toro | isam | victoria-raw
-    std::string inputs;            // victoria-raw: "" = inputs.dat beside the measurements
-    std::string association;       // one landmark id per sighting; "" = the file's ids
+    std::string inputs;           // victoria-raw: "" = inputs.dat beside the measurements
+    std::string association;      // one landmark id per sighting; "" = the file's ids
     std::string association_out, trajectory, gps;
     std::string class_name = "tree";
     long poses = 0;  // the first N poses only (0: all)
     double odometry_noise_scale = 1;
     bool unknown_association = false;
-    LandmarkSlamOptions slam;  // known association; some shared with `unknown`
+    bool calibrate_noise = false;  // known association: variance components first
+    LandmarkSlamOptions slam;      // known association; some shared with `unknown`
     UnknownAssociationOptions unknown;
   };
   int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& data);

@@ -82,7 +82,7 @@ TEST(LandmarkMapCommand, UnknownAssociationComparesWithTheIds) {
   EXPECT_NE(run.out.find("window 1/1: 4 poses"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("pairwise agreement"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("landmarks"), std::string::npos) << run.out;
-  EXPECT_NE(run.out.find("trajectory vs the shipped-association solve: RMSE"), std::string::npos)
+  EXPECT_NE(run.out.find("trajectory vs the shipped-association solve (same noise): RMSE"), std::string::npos)
       << run.out;
   const OMap map = ReadOMap(dir.Path("omap.json"));
   EXPECT_GE(map.objects.size(), 2u);  // the two trees are 5 m apart: never one
