@@ -1,5 +1,5 @@
 // oslam map: an O-Map by one of three modes (apps/map_modes.h). This file
-// has the command and the --known-association mode: setup 1 (spec §3.3),
+// has the command and the --known-association mode: setup 1 (docs/method.md §3.3),
 // the simulator's true slices with seeded thesis-level noise and their true
 // object ids, solved by geometric SLAM.
 #include <cstdio>

@@ -55,12 +55,12 @@ void BindSampling(SlamStageOptions* o, Bindings* b) {
       .ShowDefault("");
   b->Add(&s.seed, "seed", "N", "seed of the sampler")
       .Key("seed", "seed of every random choice of the sampler");
-  b->Add(&s.num_iterations, "samples", "N", "MC3 iterations including burn-in (spec §13 #21)")
-      .Key("samples", "MC3 iterations incl. burn-in (spec §9.8, §13 #21)");
+  b->Add(&s.num_iterations, "samples", "N", "MC3 iterations including burn-in (docs/method.md §13 #21)")
+      .Key("samples", "MC3 iterations incl. burn-in (docs/method.md §9.8, §13 #21)");
   b->Add(&s.burn_in, "burn-in", "N", "iterations discarded")
-      .Key("burn_in", "iterations discarded (spec §9.8)");
+      .Key("burn_in", "iterations discarded (docs/method.md §9.8)");
   b->Add(&s.hill_climb_steps, "hill-climb", "N", "hill-climbing steps (the minimum)")
-      .Key("hill_climb", "hill-climbing steps, the minimum (spec §9.7)");
+      .Key("hill_climb", "hill-climbing steps, the minimum (docs/method.md §9.7)");
   b->Add(&s.hill_climb_patience, "hill-climb-patience", "N",
          "then climb on while a move was accepted in the last N steps (0 = fixed count)")
       .Key("hill_climb_patience");
@@ -68,18 +68,18 @@ void BindSampling(SlamStageOptions* o, Bindings* b) {
       .Key("hill_climb_max");
   b->Add(&s.refine_every, "refine-every", "N",
          "K_NL: full re-optimisation of the current state every N hill-climbing steps")
-      .Key("refine_every", "K_NL: full re-optimisation every N hill-climbing steps (spec §9.7)");
+      .Key("refine_every", "K_NL: full re-optimisation every N hill-climbing steps (docs/method.md §9.7)");
   AddMoves(&s.hill_climb_moves, "hill-climb-moves",
            "merge,split,switch probabilities in hill climbing", b)
-      .Key("hill_climb_moves", "merge,split,switch probabilities in hill climbing (spec §9.8)");
+      .Key("hill_climb_moves", "merge,split,switch probabilities in hill climbing (docs/method.md §9.8)");
   AddMoves(&s.sampling_moves, "sampling-moves",
            "merge,split,switch probabilities in MC3 (--known-classes: switch 0, rest rescaled)", b)
       .Key("sampling_moves",
            "merge,split,switch probabilities in MC3; known_classes: switch 0, rest rescaled");
   b->Add(&s.num_chains, "chains", "N", "MC3 chains (1 = Metropolis-Hastings)")
-      .Key("chains", "MC3 chains, 1 = Metropolis-Hastings (spec §9.4)");
+      .Key("chains", "MC3 chains, 1 = Metropolis-Hastings (docs/method.md §9.4)");
   b->Add(&s.delta_temperature, "delta-t", "DT", "temperature step between chains")
-      .Key("delta_t", "temperature step between chains (spec §9.4)");
+      .Key("delta_t", "temperature step between chains (docs/method.md §9.4)");
   b->AddFlag(&o->known_classes, "known-classes",
              "assume perfect classes: no switch moves, P_merge = P_split = 0.5")
       .Key("known_classes",
@@ -90,7 +90,7 @@ void BindSampling(SlamStageOptions* o, Bindings* b) {
 void BindTracks(SlamStageOptions* o, Bindings* b) {
   TrackOptions& t = o->tracks;
   b->Add(&t.min_length, "min-track-length", "N", "drop shorter tracks (Sec. 6.3: 3)")
-      .Key("min_track_length", "drop tracks with fewer detections (spec §6.3, §9.8)");
+      .Key("min_track_length", "drop tracks with fewer detections (docs/method.md §6.3, §9.8)");
   b->Add(&t.max_radius_change_px, "gate-radius", "PX", "track linking: largest |du_r| (eq. 6.1)")
       .Key("track_gate_radius_px", "track pre-association: largest |du_r|, px (eq. 6.1)");
   b->Add(&t.max_angle_change_rad, "gate-angle", "RAD",
@@ -106,9 +106,9 @@ void BindTracks(SlamStageOptions* o, Bindings* b) {
                {{"nearest", TrackLinkRule::kNearest},
                 {"refuse-ambiguous", TrackLinkRule::kRefuseAmbiguous}},
                "link-rule", "nearest|refuse-ambiguous",
-               "track linking when several candidates pass the gate (spec §13 #20)")
+               "track linking when several candidates pass the gate (docs/method.md §13 #20)")
       .Key("track_link_rule",
-           "nearest (one-to-one, closest first) or refuse-ambiguous (spec §13 #20)");
+           "nearest (one-to-one, closest first) or refuse-ambiguous (docs/method.md §13 #20)");
   b->Add(&t.max_gap_frames, "max-gap", "N",
          "join tracks across up to N missed frames (occlusions; 0 = thesis)")
       .Key("track_max_gap_frames");
@@ -119,33 +119,33 @@ void BindProposals(SlamStageOptions* o, Bindings* b) {
   MoveOptions& m = o->sampler.moves;
   b->Add(&o->target.proposal_iterations, "proposal-iterations", "N",
          "solver iterations per proposed state")
-      .Key("proposal_iterations", "solver iterations per proposed state (spec §9.6, §13 #46)");
+      .Key("proposal_iterations", "solver iterations per proposed state (docs/method.md §9.6, §13 #46)");
   b->AddFlag(&o->target.class_prior_per_object, "class-prior-per-object",
              "P(C, J) = prod_j 1/|classes| instead of uniform (#37)")
       .Key("class_prior_per_object",
-           "1: P(C, J) = prod_j 1/|classes|; 0: uniform joint (spec §13 #13/#37)");
+           "1: P(C, J) = prod_j 1/|classes|; 0: uniform joint (docs/method.md §13 #13/#37)");
   b->AddNumberOrInfinity(&m.class_mismatch_penalty, "mismatch-penalty", "X",
                          "class-mismatch factor on e_j (inf = never)")
       .Key("mismatch_penalty",
-           "class-mismatch factor in the merge proposal, inf = never (spec §13 #15)");
+           "class-mismatch factor in the merge proposal, inf = never (docs/method.md §13 #15)");
   b->Add(&m.merge_distance_m, "merge-distance", "M", "merge proposal threshold d_thr")
-      .Key("merge_distance_m", "merge proposal distance threshold d_thr, m (spec §9.8)");
-  b->Add(&m.merge_sigma_m, "merge-sigma", "M", "merge proposal sigma_E (spec §13 #14)")
-      .Key("merge_sigma_m", "merge proposal sigma_E, m (spec §13 #14)");
+      .Key("merge_distance_m", "merge proposal distance threshold d_thr, m (docs/method.md §9.8)");
+  b->Add(&m.merge_sigma_m, "merge-sigma", "M", "merge proposal sigma_E (docs/method.md §13 #14)")
+      .Key("merge_sigma_m", "merge proposal sigma_E, m (docs/method.md §13 #14)");
   b->Add(&m.class_proposal_uniform, "class-proposal-uniform", "U",
          "uniform share of the class drawn by merge/split/switch (0 = thesis)")
       .Key("class_proposal_uniform");
   b->Add(&m.merge_count_smoothing, "merge-count-smoothing", "EPS",
          "epsilon_d added to every d_j (#16)")
-      .Key("merge_count_smoothing", "epsilon_d added to every d_j (spec §13 #16)");
+      .Key("merge_count_smoothing", "epsilon_d added to every d_j (docs/method.md §13 #16)");
   b->AddFlag(&m.merge_count_includes_self, "merge-count-includes-self",
              "d_j counts o_j itself (#41)")
-      .Key("merge_count_includes_self", "1: d_j counts o_j itself (spec §13 #41)");
+      .Key("merge_count_includes_self", "1: d_j counts o_j itself (docs/method.md §13 #41)");
   b->AddChoice(&m.split_sampler,
                {{"uniform", SplitSampler::kUniform}, {"thesis", SplitSampler::kThesis}},
                "split-sampler", "uniform|thesis", "split partition proposal (#18/#43)")
       .Key("split_sampler",
-           "uniform (non-empty subset) or thesis (Algorithm 6) (spec §13 #18/#43)");
+           "uniform (non-empty subset) or thesis (Algorithm 6) (docs/method.md §13 #18/#43)");
 }
 
 // The model: class confusion and priors, detection and odometry noise, the solver.
@@ -154,18 +154,18 @@ void BindModel(SlamStageOptions* o, Bindings* b) {
   MotionNoiseOptions& q = g.motion;
   b->Add(&o->confusion_floor, "confusion-floor", "P", "smallest P(a | c); rows renormalised")
       .Key("confusion_floor",
-           "smallest class confusion probability P(a | c); rows renormalised (spec §13 #12)")
+           "smallest class confusion probability P(a | c); rows renormalised (docs/method.md §13 #12)")
       .Check([o] { return o->confusion_floor > 0 && o->confusion_floor < 1; }, "must be in (0, 1)");
   b->Add(&o->location_std_xy_m, "location-std-xy", "M", "class location prior std, x and y")
-      .Key("location_std_xy_m", "class location prior std in x and y, m (spec §13 #7)")
+      .Key("location_std_xy_m", "class location prior std in x and y, m (docs/method.md §13 #7)")
       .Check([o] { return o->location_std_xy_m > 0; }, "must be > 0 m");
   b->Add(&o->location_std_z_m, "location-std-z", "M", "class location prior std, z")
-      .Key("location_std_z_m", "class location prior std in z, m (spec §13 #7)")
+      .Key("location_std_z_m", "class location prior std in z, m (docs/method.md §13 #7)")
       .Check([o] { return o->location_std_z_m > 0; }, "must be > 0 m");
-  b->Add(&g.pixel_std_px, "pixel-noise", "PX", "detection noise E (spec §4.2; thesis 30)")
-      .Key("pixel_noise_px", "detection noise E, px: R = diag(E^2, (E/u_r)^2) (spec §4.2, §13 #5)");
-  b->Add(&q.additive_std[0], "motion-add-fwd", "M", "Q_add forward std (spec §13 #1)")
-      .Key("motion_add_fwd_m", "odometry noise Q_add, forward std, m (spec §4.1, §13 #1)");
+  b->Add(&g.pixel_std_px, "pixel-noise", "PX", "detection noise E (docs/method.md §4.2; thesis 30)")
+      .Key("pixel_noise_px", "detection noise E, px: R = diag(E^2, (E/u_r)^2) (docs/method.md §4.2, §13 #5)");
+  b->Add(&q.additive_std[0], "motion-add-fwd", "M", "Q_add forward std (docs/method.md §13 #1)")
+      .Key("motion_add_fwd_m", "odometry noise Q_add, forward std, m (docs/method.md §4.1, §13 #1)");
   b->Add(&q.additive_std[1], "motion-add-lat", "M", "Q_add lateral std")
       .Key("motion_add_lat_m", "odometry noise Q_add, lateral std, m");
   b->Add(&q.additive_std[2], "motion-add-heading", "RAD", "Q_add heading std (1 deg)")
@@ -179,23 +179,23 @@ void BindModel(SlamStageOptions* o, Bindings* b) {
   b->AddFlag(&q.entries_are_variances, "motion-variances",
              "read Q_add and Q_mult as variances, not std devs (#2)")
       .Key("motion_noise_is_variance",
-           "1: read Q_add and Q_mult as variances instead of std devs (spec §13 #2)");
+           "1: read Q_add and Q_mult as variances instead of std devs (docs/method.md §13 #2)");
   b->AddFlag(&q.heading_scales_with_distance, "motion-heading-by-distance",
              "Q_mult heading row scales with |v_r| (#2)")
       .Key("motion_heading_by_distance",
-           "1: the heading row of Q_mult scales with |v_r| instead of |v_phi| (spec §13 #2)");
+           "1: the heading row of Q_mult scales with |v_r| instead of |v_phi| (docs/method.md §13 #2)");
   b->AddFlag(&q.world_frame, "motion-world-frame",
              "Q_i in the world frame, not rotated from the robot's (#2)")
       .Key("motion_world_frame",
-           "1: Q_i in the world frame, not rotated from the robot frame (spec §13 #2)");
+           "1: Q_i in the world frame, not rotated from the robot frame (docs/method.md §13 #2)");
   b->Add(&g.solver.max_iterations, "solver-iterations", "N",
          "full optimisation: most Levenberg-Marquardt iterations")
       .Key("solver_iterations",
-           "full optimisation: most Levenberg-Marquardt iterations (spec §5.4, §13 #8)");
+           "full optimisation: most Levenberg-Marquardt iterations (docs/method.md §5.4, §13 #8)");
   b->Add(&g.solver.step_tolerance, "solver-step-tolerance", "X",
-         "full optimisation: converged when max |step| < X (m, rad; spec §5.4)")
+         "full optimisation: converged when max |step| < X (m, rad; docs/method.md §5.4)")
       .Key("solver_step_tolerance",
-           "full optimisation: converged when max |step| < this, m and rad (spec §5.4)");
+           "full optimisation: converged when max |step| < this, m and rad (docs/method.md §5.4)");
 }
 
 // Existence (spurious model), the MC3 schedule on threads, identity merging
@@ -204,13 +204,13 @@ void BindFusionAndSchedule(SlamStageOptions* o, Bindings* b) {
   FusionOptions& f = o->fusion;
   SamplerOptions& s = o->sampler;
   b->AddNegatedFlag(&f.spurious_model, "no-spurious-model",
-                    "P(xi) = 1 for every object (spec §7.2 off)")
+                    "P(xi) = 1 for every object (docs/method.md §7.2 off)")
       .Key("spurious_model",
-           "1: existence weighted by P(xi), the spurious-object sigmoid (spec §7.2)");
-  b->Add(&f.spurious_t0_m2, "spurious-t0", "M2", "spurious sigmoid t0 (spec §7.2: (0.4 m)^2)")
-      .Key("spurious_t0_m2", "spurious sigmoid t0, m^2: (0.4 m)^2 (spec §7.2, §9.8)");
-  b->Add(&f.spurious_tau_m2, "spurious-tau", "M2", "spurious sigmoid tau (spec §7.2: (0.2 m)^2)")
-      .Key("spurious_tau_m2", "spurious sigmoid tau, m^2: (0.2 m)^2 (spec §7.2, §9.8)");
+           "1: existence weighted by P(xi), the spurious-object sigmoid (docs/method.md §7.2)");
+  b->Add(&f.spurious_t0_m2, "spurious-t0", "M2", "spurious sigmoid t0 (docs/method.md §7.2: (0.4 m)^2)")
+      .Key("spurious_t0_m2", "spurious sigmoid t0, m^2: (0.4 m)^2 (docs/method.md §7.2, §9.8)");
+  b->Add(&f.spurious_tau_m2, "spurious-tau", "M2", "spurious sigmoid tau (docs/method.md §7.2: (0.2 m)^2)")
+      .Key("spurious_tau_m2", "spurious sigmoid tau, m^2: (0.2 m)^2 (docs/method.md §7.2, §9.8)");
   b->AddFlag(&o->class_likelihood_per_detection, "class-likelihood-per-detection",
              "count log P(a | c) once per detection (eq. 4.32 as printed), not once per track")
       .Key("class_likelihood_per_detection",
@@ -235,11 +235,11 @@ void BindFusionAndSchedule(SlamStageOptions* o, Bindings* b) {
                     "solve every MC3 proposal (thesis) instead of screening it first with the "
                     "changed objects solved alone")
       .Key("delayed_acceptance",
-           "1: MC3 proposals screened before they are solved, same posterior (docs/oslam.md)");
+           "1: MC3 proposals screened before they are solved, same posterior (docs/method.md §9.3)");
   b->AddNegatedFlag(&f.merge_identities, "no-identity-merge",
                     "keep one map object per sample identity (thesis Algorithm 3 as printed)")
       .Key("identity_merge",
-           "1: combine sample identities of one object (beyond the thesis, docs/oslam.md 6a)");
+           "1: combine sample identities of one object (beyond the thesis, docs/method.md §7.3)");
   b->Add(&f.identity_merge_distance_m, "identity-distance", "M",
          "identities closer than this that rarely co-occur become one object")
       .Key("identity_distance_m", "identity merging: largest distance of combined identities, m");

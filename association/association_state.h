@@ -1,8 +1,8 @@
-// The sampler's state (C, J) over atomic tracks (spec §9.5): a partition of
+// The sampler's state (C, J) over atomic tracks (docs/method.md §9.5): a partition of
 // the track ids into objects plus a class per object, kept canonical (ids
 // sorted in each block, blocks sorted by their first id) so that equal states
 // compare and hash equal. Also the class-confusion model of the tracks
-// (spec §7.1) and what a state's evaluation provides to the moves.
+// (docs/method.md §7.1) and what a state's evaluation provides to the moves.
 #pragma once
 
 #include <cstddef>
@@ -41,13 +41,13 @@ AssociationState SeparateTracksState(const std::vector<int>& track_classes);
 // log P(a | c) for the tracks: a track's detections share one detected class.
 class ClassConfusionModel {
  public:
-  // confusion[c][a] = P(a | c); entries are floored at `floor` (spec §7.1,
+  // confusion[c][a] = P(a | c); entries are floored at `floor` (docs/method.md §7.1,
   // so that no class is impossible) and rows renormalised. track_size[t] is
   // the number of detector class decisions track t counts for: its detection
   // count (eq. 4.32 as printed) or 1 (one decision per track).
   ClassConfusionModel(const std::vector<std::vector<double>>& confusion, double floor,
                       std::vector<int> track_class, std::vector<int> track_size);
-  // Identity confusion (known classes, spec §11.4): P(a | c) = 1 if a == c, else `floor`.
+  // Identity confusion (known classes, docs/method.md §11.4): P(a | c) = 1 if a == c, else `floor`.
   static ClassConfusionModel Identity(int num_classes, double floor, std::vector<int> track_class,
                                       std::vector<int> track_size);
 
@@ -66,7 +66,7 @@ class ClassConfusionModel {
 };
 
 // A state's target and the per-object quantities the moves need, all
-// computed on that state's solution (spec §9.2-9.3); index = block index.
+// computed on that state's solution (docs/method.md §9.2-9.3); index = block index.
 struct StateEvaluation {
   AssociationState state;
   bool valid = false;
@@ -123,7 +123,7 @@ class StateEvaluator {
   // Evaluates `state`, linearised at `from` (the current state's evaluation,
   // may be null); a cached value is returned for a revisited state.
   virtual EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation* from) = 0;
-  // Full optimisation of `state`; replaces its cached value (spec §9.3).
+  // Full optimisation of `state`; replaces its cached value (docs/method.md §9.3).
   virtual EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) = 0;
   // Puts an evaluation computed elsewhere into the cache (chain start, swaps).
   virtual void Remember(const EvaluationPtr& evaluation) = 0;

@@ -7,7 +7,7 @@
 // Two evaluations of a proposed state:
 //  * exact: the whole problem (all poses and landmarks) re-solved from the
 //    current state's solution with a few Levenberg-Marquardt iterations, its
-//    evidence the target (spec §9.6);
+//    evidence the target (docs/method.md §9.6);
 //  * local (approximation): the poses are held at the trajectory of the last
 //    full solve (the reference state R, refined every K steps). Given the
 //    poses the landmarks are independent, so the log-evidence splits into a
@@ -39,7 +39,7 @@ namespace oslam {
 // kMarginal (for hill climbing): a merge of two landmarks of the reference
 // (the last full solve) is scored in closed form from their joint marginal
 // covariance at the reference, i.e. the exact answer of the linearised
-// problem (one linear system, spec §9.6), pose uncertainty and loop
+// problem (one linear system, docs/method.md §9.6), pose uncertainty and loop
 // correlations included; other proposals as kLocal. The driver re-solves
 // after each accepted move so the next merge is again against a reference.
 enum class LandmarkEvaluationMode { kExact, kLocal, kMarginal };

@@ -1,5 +1,5 @@
-// The data-driven proposals of spec §9.2 (Algorithms 5-7) with the review's
-// fixes (spec §9.2-9.3, §13 #16-#19, #40-#45): merge (class-aware and
+// The data-driven proposals of docs/method.md §9.2 (Algorithms 5-7) with the review's
+// fixes (docs/method.md §9.2-9.3, §13 #16-#19, #40-#45): merge (class-aware and
 // distance-based, forward probability summed over both orders), split
 // (residual-based; the partition probability is the one of the sampler
 // actually used) and switch class. Each move's probability is a function of
@@ -23,7 +23,7 @@ struct MoveProbabilities {
   double merge = 0.4, split = 0.4, switch_class = 0.2;
 };
 
-// How a split partitions an object's tracks (spec §13 #18/#43).
+// How a split partitions an object's tracks (docs/method.md §13 #18/#43).
 enum class SplitSampler {
   kUniform,  // uniform non-empty subset of the non-earliest tracks: 1/(2^(n-1) - 1)
   kThesis,   // Algorithm 6 step 4, with its true probability |Psi2|/(n-1) 2^-(n-2)

@@ -1,4 +1,4 @@
-// Baseline for comparison with O-SLAM (issue 7): gated nearest-neighbour data
+// Baseline for comparison with O-SLAM (docs/method.md §7.3): gated nearest-neighbour data
 // association of the tracks followed by one geometric solve. Each track, in
 // time order, joins the nearest object of its detected class whose current
 // location (mean of its tracks' locations in the all-separate solution) is

@@ -94,7 +94,7 @@ bool Combinable(const Accumulator& a, const Accumulator& b, const FusionOptions&
   return CoOccurrences(a, b) <= options.identity_max_cooccurrence * rarer;
 }
 
-// Greedy agglomeration (item 6a): candidate pairs of identities, closest
+// Greedy agglomeration (identity merging, docs/method.md §7.3): candidate pairs of identities, closest
 // first; two groups are joined when their pooled means are still close and
 // they rarely co-occur, so two distinct objects that are both present in
 // most samples are never joined through a rare identity that spans both.

@@ -1,13 +1,13 @@
-// The O-Map from samples {(C_n, J_n)} (spec §7.3 Algorithm 3, with the
+// The O-Map from samples {(C_n, J_n)} (docs/method.md §7.3 Algorithm 3, with the
 // review's fixes §13 #9, #10, #33-#36): identities are sets of tracks; per
 // identity the existence probability pi = (1/N_s) sum_n 1(ID in n) P(xi),
 // the conditional mean geometry over the samples holding it, a covariance
 // (mean of the per-sample covariances plus the spread of the means), and the
 // class histogram whose most frequent class is the object's class. P(xi) is
-// the spurious-object model of spec §7.2 (mirrored sigmoid on the location
+// the spurious-object model of docs/method.md §7.2 (mirrored sigmoid on the location
 // uncertainty with the class prior removed).
 //
-// Beyond the thesis (issue 7, item 6a; spec §12): one physical object can
+// Beyond the thesis (docs/method.md §7.3, identity merging; §12): one physical object can
 // appear under different identities in different samples (one extra track
 // attached to it, or its tracks grouped differently). Identities whose mean
 // base points are within a class-aware distance and that rarely appear in
@@ -34,7 +34,7 @@ struct FusionOptions {
   bool spurious_model = true;     // false: P(xi) = 1 (setup 2, Fig. 6.9)
   double min_existence = 0.0;     // identities below this pi are left out of the map
 
-  // Identity merging (item 6a); false = the thesis' Algorithm 3 as printed.
+  // Identity merging (docs/method.md §7.3); false = the thesis' Algorithm 3 as printed.
   bool merge_identities = true;
   double identity_merge_distance_m = 0.5;  // d_thr of the merge move (Sec. 6.2)
   // Squared distance times this factor when the identities' classes differ
@@ -50,7 +50,7 @@ struct FusionOptions {
 // S(t) = 1 / (1 + exp((t - t0) / tau)).
 double MirroredSigmoid(double t, double t0, double tau);
 
-// ||C̄_l||_2 (m^2) of spec §7.2: the location block of the prior-free
+// ||C̄_l||_2 (m^2) of docs/method.md §7.2: the location block of the prior-free
 // covariance; infinity when the prior-free information is not positive definite.
 double PriorFreeLocationVariance(const Eigen::Matrix<double, 5, 5>& covariance,
                                  const ClassPrior& prior);

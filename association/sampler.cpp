@@ -490,7 +490,7 @@ EvaluationPtr Sampler::HillClimb(const AssociationState& start_state, StateEvalu
                                  Rng* rng, SamplerSummary* summary,
                                  const ProgressCallback& progress) const {
   // Algorithm 9 steps 3-4: full optimisation, then greedy moves, refining
-  // every K_NL steps (and replacing the cached value, spec §9.3).
+  // every K_NL steps (and replacing the cached value, docs/method.md §9.3).
   const auto clock = std::chrono::steady_clock::now();
   AssociationState start = start_state;
   start.Canonicalize();

@@ -1,4 +1,4 @@
-// O-SLAM inference over (C, J) (spec §9.1, §9.4, §9.7 Algorithm 9): a
+// O-SLAM inference over (C, J) (docs/method.md §9.1, §9.4, §9.7 Algorithm 9): a
 // hill-climbing phase from the all-tracks-separate state, then
 // Metropolis-coupled MCMC (MC³; plain Metropolis-Hastings is the one-chain
 // case). Chains step in parallel threads; each chain owns its random stream

@@ -19,7 +19,7 @@ GeometricSlamOptions StepOptions(const SlamTargetOptions& options) {
   // speculative chain can undo evaluations and redo them (SupportsRollBack).
   step.solver.independent_of_history = true;
   // Proposals from one state share its solution as their linearisation
-  // point: all but the first reuse most factors' Jacobians (spec §9.6).
+  // point: all but the first reuse most factors' Jacobians (docs/method.md §9.6).
   step.solver.reuse_linearizations = true;
   // Every proposal changes the block pattern, so each is analysed afresh;
   // comparing AMD with objects-last orderings each time cost 10 % of a
@@ -99,7 +99,7 @@ double SlamEvaluator::ClassTerm(const std::vector<int>& block, int class_index) 
   return term;
 }
 
-// The linearisation point of a proposed state (spec §9.6): the current
+// The linearisation point of a proposed state (docs/method.md §9.6): the current
 // solution; a merged object keeps its earliest part's point (its id), a split
 // half and a switched object keep the originating object's point.
 GeometricSlamResult SlamEvaluator::WarmStart(const AssociationState& state,
@@ -186,7 +186,7 @@ EvaluationPtr SlamEvaluator::Approximate(const AssociationState& to, const State
       approximate->residual2.push_back(from.residual2[found->second]);
       continue;
     }
-    // Started where a solve's warm start would put it (spec §9.6).
+    // Started where a solve's warm start would put it (docs/method.md §9.6).
     const int old_block = from.state.BlockOf(to.blocks[j].front());
     const MappedObject* start =
         old_block < 0 ? nullptr : FindObject(*from.solution, from.state.blocks[old_block].front());

@@ -1,9 +1,9 @@
-// The O-SLAM target for the sampler (spec §8): log P(Z | C, J) by the
+// The O-SLAM target for the sampler (docs/method.md §8): log P(Z | C, J) by the
 // geometric solver's Laplace evidence, plus the class-confusion penalty
 // sum log P(a | c) (eq. 4.32) and log P(C, J) (uniform joint by default,
-// spec §13 #37). A state's objects are its blocks of tracks; object id = the
+// docs/method.md §13 #37). A state's objects are its blocks of tracks; object id = the
 // block's earliest track. Proposed states are solved from the current state's
-// solution with few iterations (spec §9.6), and every evaluated state is
+// solution with few iterations (docs/method.md §9.6), and every evaluated state is
 // cached by its canonical form, so a revisited state keeps one value (§9.3).
 #pragma once
 
@@ -22,7 +22,7 @@ struct SlamTargetOptions {
   GeometricSlamOptions slam;  // E, motion noise, solver (full optimisation)
   // Linear systems solved for a proposed state, linearised at the current
   // state's solution: 1 = the thesis' single Gauss-Newton step with the
-  // evidence of that linear system (spec §9.6, §8.2 notes); k > 1 adds k - 1
+  // evidence of that linear system (docs/method.md §9.6, §8.2 notes); k > 1 adds k - 1
   // Levenberg-Marquardt iterations before it.
   int proposal_iterations = 1;
   // #37: false = P(C, J) uniform (thesis reading); true = prod_j 1/|classes|.

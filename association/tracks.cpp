@@ -104,7 +104,7 @@ TrackSet BuildTracks(const std::vector<ClassedSlice>& detections, const TrackOpt
       ++result.summary.num_links;
     }
   }
-  // Joins across 1..max_gap_frames missed frames (item 6b), shortest gap
+  // Joins across 1..max_gap_frames missed frames (docs/method.md §9.7), shortest gap
   // first: track ends at frame f and track starts at f + 1 + gap, with the
   // gate widths multiplied by the frame difference.
   for (int gap = 1; gap <= options.max_gap_frames; ++gap) {

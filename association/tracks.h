@@ -1,4 +1,4 @@
-// Pre-association of detections into atomic tracks (spec §9.7, eq. 6.1,
+// Pre-association of detections into atomic tracks (docs/method.md §9.7, eq. 6.1,
 // Algorithm 9 steps 1-2): detections of the same detected class in
 // consecutive frames are linked when all four gates hold; chains of links
 // form tracks, and tracks shorter than a minimum length are dropped as
@@ -19,7 +19,7 @@ struct ClassedSlice {
   BoundingSlice slice;
 };
 
-// When several candidates pass the gate (spec §13 #20, [G]).
+// When several candidates pass the gate (docs/method.md §13 #20, [G]).
 enum class TrackLinkRule {
   kNearest,          // one-to-one, closest pairs (normalised gate distance) first
   kRefuseAmbiguous,  // link only pairs where both sides have a single candidate
@@ -31,7 +31,7 @@ struct TrackOptions {
   double max_relative_size_change = 0.2;   // |ds| < 0.2 min(s, s') for s_r and s_phi
   int min_length = 3;                      // N_min (3 in the class-confusion runs, 2 in §6.2)
   TrackLinkRule link_rule = TrackLinkRule::kNearest;
-  // Beyond the thesis (issue 7 item 6b): a track that ends and one that
+  // Beyond the thesis (docs/method.md §9.7): a track that ends and one that
   // starts up to this many missed frames later (an occlusion, a missed
   // detection) are joined when they have the same detected class and pass
   // the eq. 6.1 gate widened by the frame difference; shortest gaps first,

@@ -1,4 +1,4 @@
-# Ceres comparison of the geometric solver (issue 6). Benchmark-only and
+# Ceres comparison of the geometric solver. Benchmark-only and
 # optional: built when Debian's libceres-dev is installed, skipped otherwise.
 find_package(Ceres QUIET)
 if(Ceres_FOUND)

@@ -1,5 +1,5 @@
-// Cost of one O-SLAM proposal on the real Victoria Park data (issue 10 item
-// 2): prefixes of 1k, 2k, 4k and all 6,969 poses, sightings grouped into
+// Cost of one O-SLAM proposal on the real Victoria Park data
+// (docs/method.md §16.2): prefixes of 1k, 2k, 4k and all 6,969 poses, sightings grouped into
 // tracks, the all-separate state solved in full (the reference), then merge
 // proposals of two nearby landmarks (within 5 m) evaluated by each mode:
 // marginal (closed form from the pair's joint marginal covariance), local

@@ -1,4 +1,4 @@
-// Landmark SLAM on the real Victoria Park data (issue 10): the known-
+// Landmark SLAM on the real Victoria Park data (docs/method.md §16): the known-
 // association solve of GTSAM's victoria_park.txt (its landmark ids), whole
 // and on prefixes of 1k, 2k, 4k poses, cold (staged initialisation from dead
 // reckoning + final solve) and warm (re-solve from the previous solution

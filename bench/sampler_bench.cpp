@@ -1,4 +1,4 @@
-// O-SLAM sampler speed (issue 7): MC3 over the tracks of a synthetic LPA-like
+// O-SLAM sampler speed: MC3 over the tracks of a synthetic LPA-like
 // loop (tests/slam/synthetic_scene.h, E = 30 px, noisy odometry) grown k
 // times (300 k poses, 10 k objects), started from the true association so
 // that every size samples around its posterior. Reports time per proposal and

@@ -1,4 +1,4 @@
-// Geometric solver speed (issue 6): a cold solve from raw odometry at LPA
+// Geometric solver speed: a cold solve from raw odometry at LPA
 // scale and at 10,000 poses, a warm re-solve after a small association
 // change, and CHOLMOD's numeric factorisation per iteration as the floor.
 // Problems come from tests/slam/synthetic_scene.h (thesis noise levels).
@@ -149,7 +149,7 @@ void BM_LpaWarmResolveAfterSplit(benchmark::State& state) {
 BENCHMARK(BM_LpaWarmResolveAfterSplit)->Unit(benchmark::kMillisecond);
 
 // The state after splitting off the last detection of object `from` as a
-// new object `to`, and its start as the thesis linearises it (spec §9.6):
+// new object `to`, and its start as the thesis linearises it (docs/method.md §9.6):
 // the solved `base`, with the new object at `from`'s point.
 struct SplitProposal {
   GeometricSlamProblem problem;
@@ -183,7 +183,7 @@ bool RegisterWithFixedCounts(const char* name, void (*function)(benchmark::State
   return true;
 }
 
-// The thesis's proposal evaluation (spec §9.6): after the split the new
+// The thesis's proposal evaluation (docs/method.md §9.6): after the split the new
 // object takes the originating object's linearisation point, and the state
 // is solved with one linearised step (max_iterations = 0: the undamped
 // Gauss-Newton step of the system the evidence comes from).

@@ -165,7 +165,7 @@ class Projector {
     }
   }
   // Mirror frame: z towards the camera (Mei convention); the hyperbolic
-  // frame of spec §4.3 is (x, -y, -z) with a mirrored image.
+  // frame of docs/method.md §4.3 is (x, -y, -z) with a mirrored image.
   bool Project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel) const {
     if (model_ == Model::kMei) return mei_.ProjectMirrorPoint(point, pixel);
     if (!valid_) return false;

@@ -6,7 +6,7 @@
 // unknowns).
 //
 // Models: "mei" (MeiCamera: ξ, fx, fy, [skew], cx, cy, k1, k2, p1, p2) and
-// "hyperbolic" (HyperbolicCamera, spec §4.3: focal_px, cx, cy and the mirror's
+// "hyperbolic" (HyperbolicCamera, docs/method.md §4.3: focal_px, cx, cy and the mirror's
 // b with a fixed; only b/a changes the projection, so a is a scale taken from
 // the data sheet). The mount (focus height, yaw) cannot be seen from board
 // views; it is taken from the options.

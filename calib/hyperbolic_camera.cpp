@@ -15,7 +15,7 @@ HyperbolicCamera::HyperbolicCamera(const HyperbolicMirrorParameters& parameters,
 }
 
 HyperbolicCamera HyperbolicCamera::Preset(const std::string& name) {
-  // Mirror and focal values: thesis Appendix A (spec §4.3 table). Image size
+  // Mirror and focal values: thesis Appendix A (docs/method.md §4.3 table). Image size
   // and annulus are not in the thesis: chosen so the horizon (201 px LPA,
   // 262 px Cogniron) and some sky fit, and the robot's own reflection is
   // masked.

@@ -1,4 +1,4 @@
-// Central catadioptric camera with a hyperbolic mirror (spec §4.3, after
+// Central catadioptric camera with a hyperbolic mirror (docs/method.md §4.3, after
 // Zivkovic & Booij 2005): the mirror's outer focus is at height z_m on the
 // robot's vertical axis, the lens centre at the second focus below it, the
 // camera looking up.
@@ -33,7 +33,7 @@ class HyperbolicCamera final : public CameraModel {
   HyperbolicCamera(const HyperbolicMirrorParameters& parameters, int image_width, int image_height,
                    const MirrorAnnulus& annulus);
 
-  // The two rigs of the thesis (spec §4.3 table): "lpa", "cogniron". Image
+  // The two rigs of the thesis (docs/method.md §4.3 table): "lpa", "cogniron". Image
   // size and annulus are our guesses (see docs/formats.md). Throws
   // oslam::Error for an unknown name.
   static HyperbolicCamera Preset(const std::string& name);

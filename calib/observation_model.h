@@ -1,4 +1,4 @@
-// Observation model of spec §4.2 (thesis A.2): the bounding slice an upright
+// Observation model of docs/method.md §4.2 (thesis A.2): the bounding slice an upright
 // cylinder produces in the omnidirectional image of a robot at pose x_i,
 // through any CameraModel.
 //

@@ -1,5 +1,5 @@
 // A bounding slice: the annular sector an object covers in the omnidirectional
-// image, in polar image coordinates (spec §3.1, §10.1). It is the measurement
+// image, in polar image coordinates (docs/method.md §3.1, §10.1). It is the measurement
 // every detector produces and the observation model predicts.
 #pragma once
 

@@ -1,4 +1,4 @@
-// Odometry motion model of spec §4.1 (thesis Appendix A.1): midpoint
+// Odometry motion model of docs/method.md §4.1 (thesis Appendix A.1): midpoint
 // integration of a (distance, heading change) increment, and the noise
 // Q_i = Q_add + Q_mult * |v_i| read as standard deviations in the robot frame.
 #pragma once
@@ -28,10 +28,10 @@ Pose2 ApplyIncrement(const Pose2& previous, const OdometryIncrement& increment,
 OdometryIncrement IncrementBetween(const Pose2& previous, const Pose2& next);
 
 struct MotionNoiseOptions {
-  // Standard deviations (forward m, lateral m, heading rad): spec §13 item 1.
+  // Standard deviations (forward m, lateral m, heading rad): docs/method.md §13 #1.
   Eigen::Vector3d additive_std{0.005, 0.005, 0.017453292519943295};
   Eigen::Vector3d multiplicative{0.1, 0.01, 0.15};
-  // Spec §13 item 2 alternatives, switchable.
+  // docs/method.md §13 #2 alternatives, switchable.
   bool entries_are_variances = false;  // read Q_add/Q_mult as variances, not std devs
   bool heading_scales_with_distance = false;  // |v^r| instead of |v^phi| in the heading row
   bool world_frame = false;                   // skip the rotation into the world frame

@@ -37,7 +37,7 @@ struct ImageShapeModel {
 struct ObjectClass {
   std::string name;
   std::array<int, 3> display_rgb{128, 128, 128};
-  // Size prior (spec Tables 6.1/6.2): mean and std of diameter and height.
+  // Size prior (thesis Tables 6.1/6.2): mean and std of diameter and height.
   double diameter_mean_m = 0.0;
   double diameter_std_m = 0.0;
   double height_mean_m = 0.0;
@@ -47,7 +47,7 @@ struct ObjectClass {
 };
 
 // P(detected class a | true class c) as matrix[c][a], rows in the order of
-// the classes (spec §7.1); stored under `confusion:` in classes.yaml.
+// the classes (docs/method.md §7.1); stored under `confusion:` in classes.yaml.
 using ConfusionMatrix = std::vector<std::vector<double>>;
 
 std::vector<ObjectClass> ReadClasses(const std::string& path);

@@ -1,7 +1,7 @@
-// Colour-blob detector (CMVision-style, spec §10.2): per-pixel class by YUV
+// Colour-blob detector (CMVision-style, docs/method.md §10.2): per-pixel class by YUV
 // box, optional opening, connected components, minimum area, restricted to the
 // mirror annulus; each blob becomes a bounding slice in polar image
-// coordinates (spec §10.1: u_r = inner radius, u_phi = middle angle).
+// coordinates (docs/method.md §10.1: u_r = inner radius, u_phi = middle angle).
 #pragma once
 
 #include <array>

@@ -1,4 +1,4 @@
-// CMVision-style colour classification (spec §10.2): each class is a box in
+// CMVision-style colour classification (docs/method.md §10.2): each class is a box in
 // YUV space, mean ± k·σ per channel (the thesis), or that box with its chroma
 // scaled by the pixel's brightness (illumination-robust). Two 256 × 256
 // lookup tables, indexed by (Y, U) and (Y, V), hold one bit per class, so a
@@ -90,7 +90,7 @@ ColourBox LearnColourBox(const std::vector<cv::Mat>& bgr_images, const std::vect
                          double k_sigma);
 
 // P(detected a | true c) from the Mahalanobis distance between colour models
-// (spec §7.1): D²(a, c) = Σ_ch (μ_a − μ_c)² / σ_c², P(a | c) ∝ exp(−D²/2),
+// (docs/method.md §7.1): D²(a, c) = Σ_ch (μ_a − μ_c)² / σ_c², P(a | c) ∝ exp(−D²/2),
 // then floored at `floor` and renormalised so no entry is exactly 0.
 // Returned as matrix[c][a] (rows: true class, columns: detected class).
 // Classes without a colour box get the identity row.

@@ -53,7 +53,7 @@ DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
                                        const std::vector<ObjectClass>& classes,
                                        const DetectionEvaluationOptions& options = {});
 
-// P(detected a | true c) measured from confusion counts (spec §7.1, what
+// P(detected a | true c) measured from confusion counts (docs/method.md §7.1, what
 // the thesis estimated on training data): rows normalised, entries floored at
 // `floor` and renormalised; a class with no detection gets the identity row.
 // matrix[c][a], like ColourConfusion.

@@ -1,4 +1,4 @@
-// SIFT verification of colour detections (spec §10.3, after Ekvall, Kragic &
+// SIFT verification of colour detections (docs/method.md §10.3, after Ekvall, Kragic &
 // Jensfelt 2007): a candidate blob of a class that has template images is kept
 // only when enough SIFT matches between the candidate's region and a template
 // pass Lowe's ratio test and a RANSAC affine check. Same-coloured clutter

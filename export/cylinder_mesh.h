@@ -1,4 +1,4 @@
-// Triangle mesh of an upright cylinder (the O-Map object shape, spec §2):
+// Triangle mesh of an upright cylinder (the O-Map object shape, docs/method.md §2):
 // flat-shaded caps and a smooth side, counter-clockwise seen from outside.
 #pragma once
 

@@ -1,5 +1,5 @@
 // What every exporter draws: the O-Map, the class display colours, and the
-// trajectories to compare it with. Shared conventions (spec §2): an object's
+// trajectories to compare it with. Shared conventions (docs/method.md §2): an object's
 // opacity is its existence probability pi, objects with pi below a threshold
 // are left out, the class colour is the display colour of classes.yaml.
 #pragma once
@@ -28,7 +28,7 @@ struct ExportScene {
 
 struct ExportOptions {
   double min_existence = 0.0;  // objects with pi below this are left out
-  bool floor_grid = true;      // glTF: 1 m grid lines on the floor (context only, spec §2)
+  bool floor_grid = true;      // glTF: 1 m grid lines on the floor (context only, docs/method.md §2)
   int cylinder_segments = 32;  // facets around a cylinder
   bool Validate(std::string* why) const;
 };

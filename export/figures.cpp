@@ -117,7 +117,7 @@ void DrawLegend(cv::Mat* image, const std::vector<NamedTrajectory>& trajectories
   }
 }
 
-// Red triangle at an object's centre (spec §2 display conventions).
+// Red triangle at an object's centre (docs/method.md §2 display conventions).
 void DrawCentreMarker(cv::Mat* image, cv::Point centre) {
   const std::vector<cv::Point> triangle = {centre + cv::Point(0, -4), centre + cv::Point(-4, 3),
                                            centre + cv::Point(4, 3)};

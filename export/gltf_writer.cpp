@@ -77,7 +77,7 @@ Eigen::Vector3f ToYUp(const Eigen::Vector3d& p) {
   return ZUpToYUp(p).cast<float>();
 }
 
-// Objects always blend (alpha = pi, spec §2), even at pi = 1, so every object
+// Objects always blend (alpha = pi, docs/method.md §2), even at pi = 1, so every object
 // material behaves the same in a viewer; lines are opaque.
 int AddMaterial(tinygltf::Model* model, const std::string& name, const Rgb& rgb, double alpha,
                 bool blend) {
@@ -88,7 +88,7 @@ int AddMaterial(tinygltf::Model* model, const std::string& name, const Rgb& rgb,
   material.pbrMetallicRoughness.metallicFactor = 0.0;
   material.pbrMetallicRoughness.roughnessFactor = 0.8;
   if (blend) material.alphaMode = "BLEND";
-  // Transparent objects are seen from inside too (opacity = pi, spec §2).
+  // Transparent objects are seen from inside too (opacity = pi, docs/method.md §2).
   material.doubleSided = true;
   model->materials.push_back(material);
   return static_cast<int>(model->materials.size()) - 1;

@@ -1,5 +1,5 @@
 // Small OpenCV drawing helpers shared by the overlays and figures: colour
-// conversion, alpha-blended shapes (opacity = existence probability, spec §2)
+// conversion, alpha-blended shapes (opacity = existence probability, docs/method.md §2)
 // and readable labels. Deterministic, so figures can be golden-tested.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The O-Map (spec §2): objects with class, base point, cylinder size,
+// The O-Map (docs/method.md §2): objects with class, base point, cylinder size,
 // covariance and existence probability, plus the estimated trajectory, where
 // the map came from and the reports of the method that made it. Pure data:
 // mapping produces it (slam/, association/), export and evaluation consume

@@ -73,7 +73,7 @@ KnownAssociationInput LoadKnownAssociation(const std::string& run_dir,
       continue;
     }
     BoundingSlice slice{sighting.u_r_px, sighting.u_phi_rad, sighting.s_r_px, sighting.s_phi_rad};
-    // Same noise model the factor assumes (spec §4.2): R on u, W = 2R on s.
+    // Same noise model the factor assumes (docs/method.md §4.2): R on u, W = 2R on s.
     const double ur = slice.u_r_px;
     slice.u_r_px += e * normal(rng);
     slice.u_phi_rad = WrapAngle(slice.u_phi_rad + e / ur * normal(rng));

@@ -1,4 +1,4 @@
-// The O-SLAM stage (spec §6-§9, Algorithm 9) on a run folder's detections:
+// The O-SLAM stage (docs/method.md §6-§9, Algorithm 9) on a run folder's detections:
 // tracks, hill climbing, MC³ over (C, J), fusion of the samples into an
 // O-Map with existence probabilities and class histograms; or the
 // nearest-neighbour baseline. Writes the O-Map and reports convergence and,
@@ -33,8 +33,8 @@ struct SlamStageOptions {
   SamplerOptions sampler;    // MC3, moves
   FusionOptions fusion;      // spurious model, identity merging
   NearestNeighbourOptions baseline;
-  double confusion_floor = 1e-3;                            // smallest P(a | c) (spec §13 #12)
-  double location_std_xy_m = 10.0, location_std_z_m = 2.0;  // Gamma(c) (spec §13 #7)
+  double confusion_floor = 1e-3;                            // smallest P(a | c) (docs/method.md §13 #12)
+  double location_std_xy_m = 10.0, location_std_z_m = 2.0;  // Gamma(c) (docs/method.md §13 #7)
   // Detected classes are right: no switch moves, no merges across classes (Sec. 6.2).
   bool known_classes = false;
   // log P(a | c) counted once per track (default) or once per detection

@@ -1,5 +1,5 @@
 // Drives the simulated robot: true poses and the odometry it reports, with
-// the odometry error of the spec's motion model (§4.1):
+// the odometry error of the motion model (docs/method.md §4.1):
 //   x_i = f(x_{i-1}, v_i) + e_i,   e_i ~ N(0, Q_i),   Q_i = MotionCovariance(v_i)
 // where v_i is the reported increment. The robot moves stop-and-go, one
 // command (a step or a turn) per frame, like the LPA robot.

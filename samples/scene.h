@@ -105,7 +105,7 @@ struct SensorEffects {
   double gain = 1.0;           // overall brightness
 };
 
-// Stop-and-go driving (spec §11.3): every command is one step_m move or one
+// Stop-and-go driving (docs/method.md §11.3): every command is one step_m move or one
 // turn_step_rad turn, and the robot takes one frame after each.
 struct PathSpec {
   Pose2 start;
@@ -123,7 +123,7 @@ struct PathSpec {
 };
 
 struct OdometryNoise {
-  MotionNoiseOptions model;  // spec §4.1 Q_add, Q_mult (standard deviations)
+  MotionNoiseOptions model;  // docs/method.md §4.1 Q_add, Q_mult (standard deviations)
   double scale = 1.0;        // multiplies every standard deviation; 0 = perfect odometry
 };
 

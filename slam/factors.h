@@ -1,4 +1,4 @@
-// The factors of geometric O-SLAM (spec §5.1): odometry, bounding-slice
+// The factors of geometric O-SLAM (docs/method.md §5.1): odometry, bounding-slice
 // observation, and the class priors on object size and location.
 #pragma once
 
@@ -14,13 +14,13 @@
 
 namespace oslam {
 
-// x_i = f(x_{i-1}, v_i) + e, e ~ N(0, Q_i) (spec §4.1). The error is taken in
+// x_i = f(x_{i-1}, v_i) + e, e ~ N(0, Q_i) (docs/method.md §4.1). The error is taken in
 // the frame of the midpoint heading alpha = theta_{i-1} + v^phi/2,
 //
 //   e = diag(sigma)^{-1} Rot(alpha)^T (f(x_{i-1}, v_i) - x_i)   (heading wrapped),
 //
 // which is the Gaussian with Q_i = Rot(alpha) diag(sigma^2) Rot(alpha)^T of
-// spec §4.1 with its dependence on theta_{i-1} kept exactly (its
+// docs/method.md §4.1 with its dependence on theta_{i-1} kept exactly (its
 // determinant does not depend on alpha). With options.world_frame the
 // rotation is dropped. Keys: (pose i-1, pose i).
 class OdometryFactor final : public Factor {
@@ -44,7 +44,7 @@ class OdometryFactor final : public Factor {
 };
 
 // A detection's bounding slice z = (u_r, u_phi, s_r, s_phi) of the object with
-// base point l and cylinder g = (d, h), seen from pose x (spec §4.2):
+// base point l and cylinder g = (d, h), seen from pose x (docs/method.md §4.2):
 // z = (h^u(x, l), h^s(x, l, g)) + noise, with R = diag(E^2, (E/u_r)^2) on u and
 // W = 2R on s, u_r the *measured* radius. The u_phi residual is wrapped.
 // Keys: (pose, base point, cylinder). The camera must outlive the factor.
@@ -76,7 +76,7 @@ class BoundingSliceFactor final : public Factor {
 
 // A Gaussian prior x ~ N(mean, covariance) on one variable: the class prior on
 // size, g_j ~ N(varsigma(c), Sigma(c)), and on location, l_j ~ N(gamma(c),
-// Gamma(c)) (spec §5.1). If the variable has an angle component, that
+// Gamma(c)) (docs/method.md §5.1). If the variable has an angle component, that
 // residual is wrapped.
 class PriorFactor final : public Factor {
  public:

@@ -69,7 +69,7 @@ bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
   const double bearing = std::atan2(ray.direction_robot.y(), ray.direction_robot.x());
   const Eigen::Vector3d direction(std::cos(bearing), std::sin(bearing), 0.0);
 
-  // 1-D search on the range (spec §5.4): the size prior alone gives a range
+  // 1-D search on the range (docs/method.md §5.4): the size prior alone gives a range
   // from s_phi; u_r (at the prior height of the base) and s_r add to it. The
   // weights are the measurement noise plus the prior's relative spread, in
   // units that need no camera-specific tuning.
@@ -309,7 +309,7 @@ bool GeometricSlam::CheckSlotMeasurements(const GeometricSlamProblem& problem) {
   return true;
 }
 
-// A new object's start (spec §5.4 leaves it open): candidates start at the
+// A new object's start (docs/method.md §5.4 leaves it open): candidates start at the
 // first detection, then at detections spread over the object's track; the
 // first one from which every detection of the object can be predicted wins
 // (else the one with the fewest failures), so the solve never starts where a
@@ -405,7 +405,7 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
   std::vector<int> pose_keys(num_poses);
   for (long i = 0; i < num_poses; ++i)
     pose_keys[i] = graph.AddPose(initial_poses[i].x, initial_poses[i].y, initial_poses[i].theta,
-                                 /*fixed=*/i == 0);  // gauge: x_1 excluded (spec §14)
+                                 /*fixed=*/i == 0);  // gauge: x_1 excluded (docs/method.md §14)
 
   std::map<int, const MappedObject*> previous;
   if (warm_start)

@@ -1,9 +1,9 @@
-// Geometric O-SLAM with known classes and association (spec §5, setup 1):
+// Geometric O-SLAM with known classes and association (docs/method.md §5, setup 1):
 // builds the factor graph from odometry and bounding slices, initialises it
 // (poses from odometry, objects from their first detection), solves it, and
-// returns the MAP map, covariances and the Laplace log-evidence (spec §8.2).
+// returns the MAP map, covariances and the Laplace log-evidence (docs/method.md §8.2).
 //
-// The same object serves the MCMC (spec §9): Solve() with a `warm_start`
+// The same object serves the MCMC (docs/method.md §9): Solve() with a `warm_start`
 // reuses the previous estimate for every pose and every object id still
 // present, and the solver keeps its symbolic analysis when the new block
 // pattern fits in the old one.
@@ -37,14 +37,14 @@ struct SliceObservation {
   int detection_id = -1;
 };
 
-// Class priors (spec §5.1): size g ~ N(size_mean, diag(size_std^2)),
+// Class priors (docs/method.md §5.1): size g ~ N(size_mean, diag(size_std^2)),
 // location l ~ N(location_mean, diag(location_std^2)).
 struct ClassPrior {
   std::string name;
   Eigen::Vector2d size_mean_m{0.3, 0.3};  // (diameter, height)
   Eigen::Vector2d size_std_m{0.1, 0.1};
-  Eigen::Vector3d location_mean_m = Eigen::Vector3d::Zero();  // gamma(c), spec: 0
-  Eigen::Vector3d location_std_m{10.0, 10.0, 2.0};            // Gamma(c), spec §5.1 [G]
+  Eigen::Vector3d location_mean_m = Eigen::Vector3d::Zero();  // gamma(c): 0 (docs/method.md §5.1)
+  Eigen::Vector3d location_std_m{10.0, 10.0, 2.0};            // Gamma(c), docs/method.md §5.1 [G]
 };
 
 struct GeometricSlamProblem {
@@ -54,7 +54,7 @@ struct GeometricSlamProblem {
   std::vector<SliceObservation> observations;
   std::vector<ClassPrior> classes;
   std::map<int, int> object_class;  // object id -> index into classes
-  Pose2 first_pose;                 // x_1, clamped (spec §3.4)
+  Pose2 first_pose;                 // x_1, clamped (docs/method.md §3.4)
 };
 
 // The initial estimate of a long run (GeometricSlam::KeyframeStart): a batch
@@ -105,7 +105,7 @@ struct KeyframeStartSummary {
 
 struct GeometricSlamOptions {
   MotionNoiseOptions motion;
-  double pixel_std_px = 30.0;  // E of spec §4.2 (thesis: 30 px)
+  double pixel_std_px = 30.0;  // E of docs/method.md §4.2 (thesis: 30 px)
   SolverOptions solver;
   // A new object (not in the warm start) starts from its first detection
   // and is then refined, alone and with the poses held, on up to this many
@@ -126,7 +126,7 @@ struct MappedObject {
   Eigen::Matrix<double, 5, 5> covariance = Eigen::Matrix<double, 5, 5>::Zero();
   int num_observations = 0;
   // Sum of the whitened squared errors of its detections at the solution
-  // (r^2(j) of spec eq. 5.2, R = diag(E^2, (E/u_r)^2), W = 2R).
+  // (r^2(j) of eq. 5.2, R = diag(E^2, (E/u_r)^2), W = 2R).
   double squared_residual = 0;
 };
 
@@ -141,7 +141,7 @@ struct GeometricSlamResult {
   KeyframeStartSummary keyframe_start;
 };
 
-// Objects' initial geometry from a first detection (spec §5.4): bearing from
+// Objects' initial geometry from a first detection (docs/method.md §5.4): bearing from
 // u_phi (through the camera), range from the class's diameter prior and the
 // angular width, height above the floor chosen so that the base point lies
 // on the ray of u_r, size = prior mean. False when the slice has no ray.
@@ -158,7 +158,7 @@ bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pos
                                 const ClassPrior& prior, double pixel_std_px,
                                 CylinderGeometry* object);
 
-// The Laplace log-evidence (spec §8.2) of one object's detections and class
+// The Laplace log-evidence (docs/method.md §8.2) of one object's detections and class
 // priors with the poses held at `poses`: the object's 5 parameters are solved
 // by Levenberg-Marquardt from `object` (which receives the result), then
 //   -1/2 ||r||^2 - 1/2 log|noise| - 1/2 log det(J'J) + 1/2 (5 - m) log 2 pi.
@@ -220,7 +220,7 @@ class GeometricSlam {
   long slot_check_ = 0;
 };
 
-// Odometry composed from `first` (the initial trajectory, spec §5.4).
+// Odometry composed from `first` (the initial trajectory, docs/method.md §5.4).
 std::vector<Pose2> ComposeOdometry(const Pose2& first,
                                    const std::vector<OdometryIncrement>& increments);
 

@@ -1,4 +1,4 @@
-// GeometricSlam::KeyframeStart: the initial estimate of a long run (spec
+// GeometricSlam::KeyframeStart: the initial estimate of a long run (docs/method.md
 // §5.4 leaves the initialisation open). A batch solve from raw odometry
 // cannot undo laps of drift: the first re-observation of an object puts it
 // tens of metres from where its first detections placed it, and

@@ -20,7 +20,7 @@ struct KeyframeLink {
 // The odometry of frames (first, last] (increments[i] takes frame i-1 to i)
 // composed in frame `first`'s robot frame, with the covariance of the
 // composition propagated to first order: P <- F P F' + Q_i per step, F the
-// motion model's Jacobian and Q_i its noise (spec §4.1).
+// motion model's Jacobian and Q_i its noise (docs/method.md §4.1).
 KeyframeLink ComposeOdometrySteps(const std::vector<OdometryIncrement>& increments, long first,
                                   long last, const MotionNoiseOptions& motion);
 

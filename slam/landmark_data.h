@@ -1,4 +1,4 @@
-// Planar landmark SLAM data sets (issue 10): poses linked by relative-pose
+// Planar landmark SLAM data sets (docs/method.md §16): poses linked by relative-pose
 // odometry, and range-bearing sightings of point landmarks (trees), with or
 // without landmark ids. Two readers:
 //
@@ -127,7 +127,7 @@ struct GpsFix {
 // gps.dat: time x y (local metric frame). Throws oslam::Error "FILE:LINE: ...".
 std::vector<GpsFix> ReadGps(const std::string& path);
 
-// A trajectory against GPS (issue 10 item 4), after the least-squares rigid
+// A trajectory against GPS, after the least-squares rigid
 // 2D alignment of the trajectory onto the fixes (GPS has its own frame):
 // each fix is compared with the position interpolated linearly at its time
 // between the two poses around it; fixes before the first or after the last

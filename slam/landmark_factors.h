@@ -1,4 +1,4 @@
-// Factors of planar landmark SLAM (issue 10): a range-bearing sighting of a
+// Factors of planar landmark SLAM (docs/method.md §16): a range-bearing sighting of a
 // 2D point landmark (e.g. a tree trunk seen by a laser), and the relative-pose
 // odometry of data sets that give a full Pose2 increment with a covariance
 // (GTSAM's ODOMETRY lines, Ackermann dead reckoning). Both follow factor.h:

@@ -1,8 +1,8 @@
-// Planar landmark SLAM with a given association (issue 10): poses linked by
+// Planar landmark SLAM with a given association (docs/method.md §16.1): poses linked by
 // relative-pose odometry, point landmarks (trees) seen by range and bearing,
 // trunk diameters as the objects' size when measured. Built on the same
 // factor graph and SparseSolver as geometric O-SLAM, so the result carries
-// the Laplace log-evidence (spec §8.2) and marginal covariances.
+// the Laplace log-evidence (docs/method.md §8.2) and marginal covariances.
 //
 // The association comes from anywhere: a vector with one landmark id per
 // sighting (-1: the sighting is left out, e.g. clutter). The file's ids give
@@ -36,7 +36,7 @@ struct LandmarkSlamOptions {
   // landmark's diameter variable).
   double diameter_std_m = 0.05;
   // Location prior of every landmark, N(landmark_prior_mean_m,
-  // landmark_prior_std_m^2 I) (the class location prior of spec §5.1). 0:
+  // landmark_prior_std_m^2 I) (the class location prior of docs/method.md §5.1). 0:
   // none (flat), which is fine for a fixed association but makes the
   // evidence improper across associations with different landmark counts:
   // without it a split of one sighting off a landmark can raise the

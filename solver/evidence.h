@@ -1,4 +1,4 @@
-// What the Gaussian at a solve's final point gives (spec §8.2): the Laplace
+// What the Gaussian at a solve's final point gives (docs/method.md §8.2): the Laplace
 // log-evidence and marginal covariances. Both come from the *undamped*
 // Gauss-Newton system J^T J delta = -J^T e at the final linearisation point.
 //

@@ -1,4 +1,4 @@
-// A factor of the geometric SLAM problem (spec §5.1), GTSAM-style: it knows
+// A factor of the geometric SLAM problem (docs/method.md §5.1), GTSAM-style: it knows
 // its variables (keys), its measurement and its noise, and computes only the
 // whitened error
 //
@@ -8,7 +8,7 @@
 // the solver's business (solver/sparse_solver.h), so a new measurement type
 // (e.g. range-bearing to a landmark) is one new subclass and nothing else.
 //
-// The solver minimises sum_f ||e_f||^2 / 2; the Laplace evidence (spec §8.2)
+// The solver minimises sum_f ||e_f||^2 / 2; the Laplace evidence (docs/method.md §8.2)
 // also needs log|P| of every factor, hence LogDetCovariance().
 #pragma once
 
@@ -80,7 +80,7 @@ class Factor {
   // For messages and the O-Map summary.
   virtual std::string Name() const = 0;
 
-  // Linearisation reuse (SolverOptions::reuse_linearizations, spec §9.6).
+  // Linearisation reuse (SolverOptions::reuse_linearizations, docs/method.md §9.6).
   // Factors given the same slot in the solves of one SparseSolver must be
   // the same function of their keys' values (same kind, measurement, noise
   // and model): the solver then reuses the slot's last error and Jacobian

@@ -1,5 +1,5 @@
 // A factor graph: the variables' current values, which of them are held
-// fixed (the gauge: pose 1 is excluded from the unknowns, spec §14), and the
+// fixed (the gauge: pose 1 is excluded from the unknowns, docs/method.md §14), and the
 // factors. The solver reads the structure and updates the values in place.
 #pragma once
 

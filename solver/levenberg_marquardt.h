@@ -1,4 +1,4 @@
-// The Levenberg-Marquardt policy of SparseSolver (spec §5.2-§5.4, Algorithm
+// The Levenberg-Marquardt policy of SparseSolver (docs/method.md §5.2-§5.4, Algorithm
 // 1), apart from the minimiser loop and the linear algebra: the damping
 // matrix, the damping's updates, step acceptance by gain ratio, the line
 // search beyond a step that gained more than predicted, and the convergence

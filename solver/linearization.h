@@ -1,5 +1,5 @@
 // Evaluation of every factor of a graph at a point: the whitened errors and
-// Jacobians the solver's iterations consume, with spec §9.6's Jacobian reuse
+// Jacobians the solver's iterations consume, with docs/method.md §9.6's Jacobian reuse
 // (SolverOptions::reuse_linearizations): a factor given a linearisation
 // slot keeps its last error and Jacobian, and they are copied instead of
 // recomputed where the factor's variables are bitwise unchanged. An O-SLAM

@@ -4,7 +4,7 @@
 //   [ J              ]         [ -e ]
 //   [ sqrt(lambda D) ] delta = [  0 ]
 //
-// factored by SPQR, as the thesis does (spec §5.3). Slower than the normal
+// factored by SPQR, as the thesis does (docs/method.md §5.3). Slower than the normal
 // equations (solver/normal_equations.h); kept for cross-checking them. The
 // undamped system (lambda = 0) also gives the evidence's pieces: the
 // residual ||J delta + e||^2 and log |det R| (= 1/2 log det(J^T J)).

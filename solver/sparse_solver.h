@@ -1,5 +1,5 @@
-// Sparse Levenberg-Marquardt for a FactorGraph (spec §5.2-§5.4, Algorithm 1),
-// with the Laplace log-evidence of spec §8.2 and marginal covariances.
+// Sparse Levenberg-Marquardt for a FactorGraph (docs/method.md §5.2-§5.4, Algorithm 1),
+// with the Laplace log-evidence of docs/method.md §8.2 and marginal covariances.
 //
 // Linear algebra: the whitened normal equations (J^T J + lambda D) delta =
 // -J^T e are assembled straight into a CHOLMOD upper-triangular matrix whose
@@ -10,7 +10,7 @@
 // SuiteSparseQR, as the thesis does (slower; kept for cross-checking).
 //
 // The evidence and the covariances always come from the *undamped*
-// Gauss-Newton system at the final linearisation point (spec §8.2).
+// Gauss-Newton system at the final linearisation point (docs/method.md §8.2).
 //
 // This header is the solver's interface; its parts, all in solver/:
 //   levenberg_marquardt.h     the LM policy: damping, gain ratio, line search,
@@ -48,7 +48,7 @@ struct SolverOptions {
   LinearSolverType linear_solver = LinearSolverType::kSparseCholesky;
   int max_iterations = 50;
   // Converged when an accepted step has max |delta| below this (m, rad;
-  // spec §5.4), or lowers the cost by less than function_tolerance
+  // docs/method.md §5.4), or lowers the cost by less than function_tolerance
   // relatively, or when max |J^T e| falls below gradient_tolerance.
   double step_tolerance = 1e-4;
   double function_tolerance = 1e-8;
@@ -87,7 +87,7 @@ struct SolverOptions {
   // Keep the error and Jacobian of every factor with a linearisation slot
   // (Factor::linearization_slot) from one solve's linearisations to the
   // next, and reuse them where the factor's variables are bitwise
-  // unchanged: spec §9.6's Jacobian reuse. An O-SLAM proposal is
+  // unchanged: docs/method.md §9.6's Jacobian reuse. An O-SLAM proposal is
   // linearised at its parent state's solution, so all proposals from one
   // state but the first share nearly all their linearisations. The results
   // are the same bit for bit; a linearisation costs one more copy, so this
@@ -133,7 +133,7 @@ struct SolverSummary {
   bool IsUsable() const { return termination != TerminationType::kFailure; }
 };
 
-// log P(Z | C, J) by Laplace (spec §8.2), and its pieces:
+// log P(Z | C, J) by Laplace (docs/method.md §8.2), and its pieces:
 //   log_evidence = -1/2 squared_residual - 1/2 log_det_noise
 //                  - 1/2 log_det_information + normaliser
 //   normaliser   = 1/2 (n - m) log(2 pi)

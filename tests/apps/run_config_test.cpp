@@ -112,7 +112,7 @@ TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
   EXPECT_EQ(s.sampler.moves.class_proposal_uniform, 0.1);
   EXPECT_FALSE(s.sampler.moves.merge_count_includes_self);
   EXPECT_EQ(s.sampler.moves.split_sampler, SplitSampler::kUniform);
-  // Spec §9.8: E = 30 px, t0 = (0.4 m)^2, tau = (0.2 m)^2, eq. 6.1 gates.
+  // docs/method.md §9.8: E = 30 px, t0 = (0.4 m)^2, tau = (0.2 m)^2, eq. 6.1 gates.
   EXPECT_EQ(s.target.slam.pixel_std_px, 30.0);
   EXPECT_EQ(s.fusion.spurious_t0_m2, 0.16);
   EXPECT_EQ(s.fusion.spurious_tau_m2, 0.04);
@@ -122,8 +122,8 @@ TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
   EXPECT_EQ(s.tracks.max_relative_size_change, 0.2);
   EXPECT_EQ(s.tracks.min_length, 3);
   EXPECT_EQ(s.tracks.link_rule, TrackLinkRule::kNearest);
-  EXPECT_EQ(s.tracks.max_gap_frames, 2);  // oslam's occlusion bridging (docs/oslam.md 6b)
-  // Spec §13 #1: Q_add = diag(5 mm, 5 mm, 1 deg), Q_mult = diag(0.1, 0.01, 0.15), std devs.
+  EXPECT_EQ(s.tracks.max_gap_frames, 2);  // oslam's occlusion bridging (docs/method.md §9.7)
+  // docs/method.md §13 #1: Q_add = diag(5 mm, 5 mm, 1 deg), Q_mult = diag(0.1, 0.01, 0.15), std devs.
   const MotionNoiseOptions& q = s.target.slam.motion;
   EXPECT_EQ(q.additive_std[0], 0.005);
   EXPECT_EQ(q.additive_std[1], 0.005);

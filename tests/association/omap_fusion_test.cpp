@@ -1,5 +1,5 @@
-// O-Map fusion of samples (spec §7.3) and the identity merging beyond the
-// thesis (issue 7 item 6a): identities that describe one physical object in
+// O-Map fusion of samples (docs/method.md §7.3) and the identity merging beyond the
+// thesis: identities that describe one physical object in
 // different samples become one map object; distinct objects stay apart.
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // The samplers (sampler.h): detailed balance of Metropolis-Hastings and of
-// MC³'s cold chain on the enumerable 4-track, 2-class problem (spec §9.2-9.4):
+// MC³'s cold chain on the enumerable 4-track, 2-class problem (docs/method.md §9.2-9.4):
 // the visit frequencies must match the exact posterior of the same target;
 // hill climbing; reproducibility from the seed, with threads and speculation;
 // what a run records and how it fails; the Metropolis step; the effective

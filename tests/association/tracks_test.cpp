@@ -1,4 +1,4 @@
-// Pre-association into tracks (spec eq. 6.1, Algorithm 9 steps 1-2).
+// Pre-association into tracks (eq. 6.1, Algorithm 9 steps 1-2).
 #include "association/tracks.h"
 
 #include <gtest/gtest.h>

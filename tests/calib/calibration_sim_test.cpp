@@ -1,5 +1,5 @@
-// End-to-end calibration on simulator renders (issue 5, item 6 and the
-// "measured on simulator renders" targets): checkerboard views of a known
+// End-to-end calibration on simulator renders
+// (docs/calibration.md): checkerboard views of a known
 // camera are rendered by the simulator (shape: checkerboard), written as
 // PNGs, and calibrated by the real `oslam calibrate` (corner detection on the
 // raw image, rim detection, LM). Tolerances from the issue: f/c (Mei: fx/(1+ξ),

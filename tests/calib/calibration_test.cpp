@@ -123,7 +123,7 @@ TEST(Calibration, OutlierViewIsReportedNotDropped) {
 }
 
 TEST(Calibration, RecoversAKnownHyperbolicCamera) {
-  // Boards imaged by the spec's LPA hyperbolic camera: the hyperbolic model
+  // Boards imaged by the thesis' LPA hyperbolic camera: the hyperbolic model
   // must reproduce them (and its focal length) to noise level.
   HyperbolicCamera lpa = HyperbolicCamera::Preset("lpa");
   HyperbolicMirrorParameters hp = lpa.parameters();

@@ -1,4 +1,4 @@
-// The hyperbolic-mirror model against the spec §4.3 test vectors and against
+// The hyperbolic-mirror model against the docs/method.md §4.3 test vectors and against
 // the mirror geometry it is derived from.
 #include "calib/hyperbolic_camera.h"
 
@@ -18,7 +18,7 @@ struct RadiusVector {
   double range_m, height_m, radius_px;
 };
 
-// Spec §4.3 "Test vectors" (given to 2 decimals, so compared to 5e-3 px).
+// docs/method.md §4.3 "Test vectors" (given to 2 decimals, so compared to 5e-3 px).
 class ImageRadiusVectors : public ::testing::TestWithParam<RadiusVector> {};
 
 TEST_P(ImageRadiusVectors, MatchSpecToTwoDecimals) {

@@ -1,4 +1,4 @@
-// Observation model h_u, h_s (spec §4.2) against the spec §4.3 full
+// Observation model h_u, h_s (docs/method.md §4.2) against the docs/method.md §4.3 full
 // observation vectors and central differences.
 #include "calib/observation_model.h"
 

@@ -1,4 +1,4 @@
-// Motion model of spec §4.1.
+// Motion model of docs/method.md §4.1.
 #include "core/motion_model.h"
 
 #include <gtest/gtest.h>
@@ -19,7 +19,7 @@ TEST(MotionModel, MidpointStepMatchesFormula) {
 }
 
 TEST(MotionModel, MidpointIsCloseToTheExactArcOnAnLpaStep) {
-  // Spec §4.3 review note: about 0.2 mm on a 20 cm / 10 deg step.
+  // docs/method.md §4.3 review note: about 0.2 mm on a 20 cm / 10 deg step.
   const double v = 0.2, w = DegToRad(10), theta = 0.3;
   const Pose2 midpoint = ApplyIncrement({0, 0, theta}, {v, w});
   const double arc_x = v / w * (std::sin(theta + w) - std::sin(theta));

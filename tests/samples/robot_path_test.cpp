@@ -26,7 +26,7 @@ PathSpec MixedCommands() {
   return spec;
 }
 
-// Sum of e^T Q^-1 e over the path, with Q from the unscaled spec options.
+// Sum of e^T Q^-1 e over the path, with Q from the unscaled noise options.
 double Nees(const DrivenPath& path, const MotionNoiseOptions& options, long* dof) {
   const std::vector<Eigen::Vector3d> residuals = MotionResiduals(path);
   double sum = 0.0;

@@ -167,7 +167,7 @@ TEST(Scene, BoxGroundTruthDiameterIsTheFootprintDiagonal) {
   box.width_m = 0.47;
   box.height_m = 0.57;
   const GroundTruthObject truth = GroundTruthOf(box, 3);
-  EXPECT_NEAR(truth.diameter_m, 0.679, 1e-3);  // spec Table 6.3, green box: 0.68 m
+  EXPECT_NEAR(truth.diameter_m, 0.679, 1e-3);  // thesis Table 6.3, green box: 0.68 m
   EXPECT_EQ(truth.shape, "box");
   EXPECT_EQ(truth.id, 3);
 }

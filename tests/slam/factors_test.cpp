@@ -48,7 +48,7 @@ TEST(OdometryFactorTest, ZeroErrorOnTheModelAndWhitenedByQ) {
   Eigen::VectorXd error(3);
   ASSERT_TRUE(factor.Linearize(values, error, nullptr));
   EXPECT_LT(error.norm(), 1e-12);
-  // Off the model, ||e||^2 equals the Mahalanobis distance under spec Q_i.
+  // Off the model, ||e||^2 equals the Mahalanobis distance under Q_i (docs/method.md §4.1).
   const Eigen::Vector3d offset(0.01, -0.02, 0.03);
   values.Set(b, next.Vector() - offset);
   ASSERT_TRUE(factor.Linearize(values, error, nullptr));

@@ -308,7 +308,7 @@ void ExpectSameBits(const GeometricSlamResult& a, const GeometricSlamResult& b) 
   }
 }
 
-// Spec §9.6: proposals linearised at one state's solution share most
+// docs/method.md §9.6: proposals linearised at one state's solution share most
 // Jacobians. Kept linearisations must change nothing but the time: every
 // proposal equals a solve without them bit for bit, and only the factors
 // whose variables moved (a merge's absorbed detections; priors have no slot)

@@ -33,7 +33,7 @@ std::vector<OdometryIncrement> MixedDrive() {
 TEST(KeyframeStartTest, ComposedOdometryIsTheDriveAndItsCovarianceTheSampledSpread) {
   const std::vector<OdometryIncrement> increments = MixedDrive();
   const long last = static_cast<long>(increments.size()) - 1;
-  const MotionNoiseOptions motion;  // spec §13 item 1
+  const MotionNoiseOptions motion;  // docs/method.md §13 #1
   const KeyframeLink link = ComposeOdometrySteps(increments, 0, last, motion);
   Pose2 expected;
   for (long i = 1; i <= last; ++i) expected = ApplyIncrement(expected, increments[i]);

@@ -1,4 +1,4 @@
-// The solver and the Laplace evidence against closed forms (spec §8.3) and
+// The solver and the Laplace evidence against closed forms (docs/method.md §8.3) and
 // dense brute-force computations.
 #include "solver/sparse_solver.h"
 
@@ -29,7 +29,7 @@ struct ToyRow {
   double r2, sigma_r, sigma_o, res1, res2, log_e1, log_e2, p_j1;
 };
 
-// Spec §8.3 unit-test vectors (r1 = 1 m; log-evidences include log 0.5).
+// docs/method.md §8.3 unit-test vectors (r1 = 1 m; log-evidences include log 0.5).
 TEST(EvidenceTest, ToyExampleOfSpec83) {
   const ToyRow rows[] = {
       {1.00, 0.1, 5, 0.039992, 0.079968, -2.204547, -5.790284, 0.973031},
