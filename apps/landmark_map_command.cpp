@@ -49,6 +49,21 @@ void PrintGpsError(const std::string& gps_path, const LandmarkDataset& data,
       e.num_fixes, e.rmse_m, e.median_m, e.max_m, d.rmse_m, d.median_m, d.max_m);
 }
 
+// A true trajectory (oslam simulate-landmarks' true_trajectory.csv: pose,
+// x_m, y_m, theta_rad), one row per pose of the data set.
+std::vector<Pose2> ReadTrueTrajectory(const std::string& path, int num_poses) {
+  const CsvTable table = CsvTable::Read(path);
+  if (static_cast<int>(table.num_rows()) != num_poses)
+    throw Error::InFile(path, std::to_string(table.num_rows()) + " poses for a data set of " +
+                                  std::to_string(num_poses));
+  const int x = table.ColumnIndex("x_m"), y = table.ColumnIndex("y_m"),
+            theta = table.ColumnIndex("theta_rad");
+  std::vector<Pose2> poses;
+  for (size_t i = 0; i < table.num_rows(); ++i)
+    poses.push_back({table.Double(i, x), table.Double(i, y), table.Double(i, theta)});
+  return poses;
+}
+
 // The O-Map and the trajectory CSV (default: trajectory.csv beside the
 // O-Map); returns the trajectory's path.
 std::string WriteMapAndTrajectory(const std::string& output, std::string trajectory_path,
@@ -84,12 +99,69 @@ LandmarkDataset ReadDataset(const std::string& file, std::string* format,
   return data;
 }
 
+// Named sets of the flags below for data sets that need more than the
+// defaults; flags given on the command line override them.
+struct LandmarkPreset {
+  const char* name;
+  const char* help;
+  std::vector<std::pair<const char*, const char*>> flags;
+};
+
+const std::vector<LandmarkPreset>& LandmarkPresets() {
+  static const std::vector<LandmarkPreset> presets = {
+      {"victoria-raw",
+       "Victoria Park's raw laser scans (measurements.dat): ids unknown, most short tracks "
+       "clutter, a trunk diameter per track, 50-pose windows with few candidates per landmark",
+       {{"format", "victoria-raw"},
+        {"unknown-association", "1"},
+        {"min-track", "3"},
+        {"diameter-per-track", "1"},
+        {"diameter-std", "0.06"},
+        {"window", "50"},
+        {"hill-climb", "1"},
+        {"targeted-radius", "20"},
+        {"targeted-candidates", "10"},
+        {"sweep-radius", "1.5"},
+        {"joint-max-shift", "30"}}},
+  };
+  return presets;
+}
+
+std::string PresetHelp() {
+  std::string help = "set the flags of a named data set kind (flags given override them):";
+  for (const LandmarkPreset& p : LandmarkPresets()) {
+    help += std::string(" ") + p.name + " (" + p.help + ":";
+    for (const auto& [flag, value] : p.flags)
+      help +=
+          std::string(" --") + flag + (std::string(value) == "1" ? "" : std::string(" ") + value);
+    help += ")";
+  }
+  return help;
+}
+
 }  // namespace
+
+void LandmarkMode::ApplyPreset(const std::string& name) {
+  for (const LandmarkPreset& p : LandmarkPresets()) {
+    if (name != p.name) continue;
+    for (const auto& [flag, value] : p.flags) {
+      const Binding* binding = bindings_.FindFlag(flag);
+      if (!binding) throw Error(std::string("preset ") + p.name + ": no flag --" + flag);
+      const std::string problem = binding->Set(value);
+      if (!problem.empty()) throw Error(std::string("preset ") + p.name + ": --" + flag + problem);
+    }
+    return;
+  }
+  std::string names;
+  for (const LandmarkPreset& p : LandmarkPresets()) names += std::string(" ") + p.name;
+  throw UsageError("--preset: unknown preset '" + name + "' (known:" + names + ")");
+}
 
 void LandmarkMode::Declare(Arguments* arguments) {
   Options& o = options_;
   UnknownAssociationOptions& u = o.unknown;
   Bindings& b = bindings_;
+  arguments->AddOption("preset", "", "NAME", PresetHelp());
   arguments->AddOption("landmarks", "", "FILE",
                        "the data set: a text file (gtsam, g2o, toro, isam), or victoria-raw's "
                        "measurements.dat or its folder");
@@ -192,6 +264,9 @@ void LandmarkMode::Declare(Arguments* arguments) {
               "evaluation", "MODE",
               "unknown association: marginal (merges in closed form from the joint marginal "
               "covariance), local (poses held) or exact (whole re-solve)");
+  b.Add(&o.truth_trajectory, "truth-trajectory", "CSV",
+        "print the trajectory's RMSE against this true one (pose,x_m,y_m,theta_rad; the data "
+        "set's frame, e.g. from oslam simulate-landmarks)");
   b.Add(&o.gps, "gps", "FILE",
         "compare the trajectory with GPS fixes (gps.dat: time x y; needs pose times)");
   b.Declare(arguments);
@@ -199,6 +274,7 @@ void LandmarkMode::Declare(Arguments* arguments) {
 
 int LandmarkMode::Run(const Arguments& arguments) {
   if (!arguments.Has("output")) throw UsageError("give the output file with -o OMAP.json");
+  if (arguments.Has("preset")) ApplyPreset(arguments.Get("preset"));
   bindings_.Apply(arguments);
   Options& o = options_;
   const LandmarkDataset data = ReadDataset(arguments.Get("landmarks"), &o.format, o.inputs, o.poses,
@@ -250,6 +326,10 @@ int LandmarkMode::Run(const Arguments& arguments) {
     if (result.evidence.valid) std::printf("log evidence %.3f\n", result.evidence.log_evidence);
     std::printf("trajectory %.1f m (dead reckoning %.1f m)\n", TrajectoryLength(result.trajectory),
                 TrajectoryLength(data.dead_reckoning));
+    if (!o.truth_trajectory.empty())
+      std::printf("vs the true trajectory: RMSE %.3f m\n",
+                  TrajectoryRmse(result.trajectory,
+                                 ReadTrueTrajectory(o.truth_trajectory, data.num_poses)));
     std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());
   }
   return result.summary.IsUsable() ? 0 : 1;
@@ -333,6 +413,13 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
         "evidence %.1f, ours %.1f)\n",
         TrajectoryRmse(solution.trajectory, reference.trajectory), reference.evidence.log_evidence,
         result.log_target);
+    if (!options_.truth_trajectory.empty()) {
+      const std::vector<Pose2> truth =
+          ReadTrueTrajectory(options_.truth_trajectory, data.num_poses);
+      std::printf("vs the true trajectory: RMSE %.3f m (the shipped association's %.3f m)\n",
+                  TrajectoryRmse(solution.trajectory, truth),
+                  TrajectoryRmse(reference.trajectory, truth));
+    }
   }
   PrintGpsError(options_.gps, data, solution.trajectory);
   std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());
