@@ -24,6 +24,9 @@ const std::vector<Command>& Commands() {
        RunSlamCommand},
       {"simulate", "render a simulated robot run (frames, odometry, ground truth) from a scene",
        RunSimulateCommand},
+      {"simulate-landmarks",
+       "a synthetic planar landmark world (city grid or park) as a data set with its truth",
+       RunSimulateLandmarksCommand},
   };
   return commands;
 }

@@ -28,6 +28,7 @@ int RunMapCommand(const std::vector<std::string>& args);  // apps/map_modes.h
 int RunTrainColorsCommand(const std::vector<std::string>& args);
 int RunSlamCommand(const std::vector<std::string>& args);
 int RunSimulateCommand(const std::vector<std::string>& args);
+int RunSimulateLandmarksCommand(const std::vector<std::string>& args);
 int RunExportCommand(const std::vector<std::string>& args);
 int RunOverlayCommand(const std::vector<std::string>& args);
 int RunRenderCommand(const std::vector<std::string>& args);

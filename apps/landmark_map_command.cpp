@@ -14,6 +14,8 @@
 #include "core/csv.h"
 #include "core/error.h"
 #include "omap/omap_json.h"
+#include "slam/landmark_formats.h"
+#include "slam/landmark_noise.h"
 #include "slam/slam_omap.h"
 #include "solver/summary_report.h"
 
@@ -47,6 +49,21 @@ void PrintGpsError(const std::string& gps_path, const LandmarkDataset& data,
       e.num_fixes, e.rmse_m, e.median_m, e.max_m, d.rmse_m, d.median_m, d.max_m);
 }
 
+// A true trajectory (oslam simulate-landmarks' true_trajectory.csv: pose,
+// x_m, y_m, theta_rad), one row per pose of the data set.
+std::vector<Pose2> ReadTrueTrajectory(const std::string& path, int num_poses) {
+  const CsvTable table = CsvTable::Read(path);
+  if (static_cast<int>(table.num_rows()) != num_poses)
+    throw Error::InFile(path, std::to_string(table.num_rows()) + " poses for a data set of " +
+                                  std::to_string(num_poses));
+  const int x = table.ColumnIndex("x_m"), y = table.ColumnIndex("y_m"),
+            theta = table.ColumnIndex("theta_rad");
+  std::vector<Pose2> poses;
+  for (size_t i = 0; i < table.num_rows(); ++i)
+    poses.push_back({table.Double(i, x), table.Double(i, y), table.Double(i, theta)});
+  return poses;
+}
+
 // The O-Map and the trajectory CSV (default: trajectory.csv beside the
 // O-Map); returns the trajectory's path.
 std::string WriteMapAndTrajectory(const std::string& output, std::string trajectory_path,
@@ -64,35 +81,104 @@ std::string WriteMapAndTrajectory(const std::string& output, std::string traject
   return trajectory_path;
 }
 
-// The file's sightings, odometry scaled and cut to the first poses asked for.
-LandmarkDataset ReadDataset(const std::string& file, const std::string& format,
-                            const std::string& inputs_path, long poses, double odometry_scale) {
-  LandmarkDataset data;
-  if (format == "gtsam") {
-    data = ReadGtsamLandmarks(file);
+// The file's sightings (the format detected unless given), odometry scaled
+// and cut to the first poses asked for.
+LandmarkDataset ReadDataset(const std::string& file, std::string* format,
+                            const std::string& inputs_path, long poses, double odometry_scale,
+                            bool quiet) {
+  LandmarkFormat chosen;
+  if (*format == "auto") {
+    const DetectedLandmarkFormat detected = DetectLandmarkFormat(file);
+    chosen = detected.format;
+    *format = LandmarkFormatName(chosen);
+    if (!quiet) std::printf("format %s: %s\n", format->c_str(), detected.reason.c_str());
   } else {
-    namespace fs = std::filesystem;
-    const fs::path measurements =
-        fs::is_directory(file) ? fs::path(file) / "measurements.dat" : fs::path(file);
-    const std::string inputs =
-        inputs_path.empty() ? (measurements.parent_path() / "inputs.dat").string() : inputs_path;
-    data = ReadVictoriaRaw(measurements.string(), inputs);
+    chosen = *LandmarkFormatFromName(*format);
   }
+  LandmarkReadOptions read;
+  read.inputs_path = inputs_path;
+  LandmarkDataset data = ReadLandmarkDataset(file, chosen, read);
   if (poses > 0 && poses < data.num_poses) data = PosePrefix(data, static_cast<int>(poses));
   for (RelativePoseMeasurement& edge : data.odometry) edge.covariance *= odometry_scale;
   return data;
 }
 
+// Named sets of the flags below for data sets that need more than the
+// defaults; flags given on the command line override them.
+struct LandmarkPreset {
+  const char* name;
+  const char* help;
+  std::vector<std::pair<const char*, const char*>> flags;
+};
+
+const std::vector<LandmarkPreset>& LandmarkPresets() {
+  static const std::vector<LandmarkPreset> presets = {
+      {"victoria-raw",
+       "Victoria Park's raw laser scans (measurements.dat): ids unknown, most short tracks "
+       "clutter, a trunk diameter per track, 50-pose windows with few candidates per landmark",
+       {{"format", "victoria-raw"},
+        {"unknown-association", "1"},
+        {"min-track", "3"},
+        {"diameter-per-track", "1"},
+        {"diameter-std", "0.06"},
+        {"window", "50"},
+        {"hill-climb", "1"},
+        {"targeted-radius", "20"},
+        {"targeted-candidates", "10"},
+        {"sweep-radius", "1.5"},
+        {"joint-max-shift", "30"}}},
+  };
+  return presets;
+}
+
+std::string PresetHelp() {
+  std::string help = "set the flags of a named data set kind (flags given override them):";
+  for (const LandmarkPreset& p : LandmarkPresets()) {
+    help += std::string(" ") + p.name + " (" + p.help + ":";
+    for (const auto& [flag, value] : p.flags)
+      help +=
+          std::string(" --") + flag + (std::string(value) == "1" ? "" : std::string(" ") + value);
+    help += ")";
+  }
+  return help;
+}
+
 }  // namespace
+
+void LandmarkMode::ApplyPreset(const std::string& name) {
+  for (const LandmarkPreset& p : LandmarkPresets()) {
+    if (name != p.name) continue;
+    for (const auto& [flag, value] : p.flags) {
+      const Binding* binding = bindings_.FindFlag(flag);
+      if (!binding) throw Error(std::string("preset ") + p.name + ": no flag --" + flag);
+      const std::string problem = binding->Set(value);
+      if (!problem.empty()) throw Error(std::string("preset ") + p.name + ": --" + flag + problem);
+    }
+    return;
+  }
+  std::string names;
+  for (const LandmarkPreset& p : LandmarkPresets()) names += std::string(" ") + p.name;
+  throw UsageError("--preset: unknown preset '" + name + "' (known:" + names + ")");
+}
 
 void LandmarkMode::Declare(Arguments* arguments) {
   Options& o = options_;
   UnknownAssociationOptions& u = o.unknown;
   Bindings& b = bindings_;
+  arguments->AddOption("preset", "", "NAME", PresetHelp());
   arguments->AddOption("landmarks", "", "FILE",
-                       "gtsam: the text file; victoria-raw: measurements.dat or its folder");
-  b.AddChoice<std::string>(&o.format, {{"gtsam", "gtsam"}, {"victoria-raw", "victoria-raw"}},
-                           "format", "NAME", "gtsam or victoria-raw");
+                       "the data set: a text file (gtsam, g2o, toro, isam), or victoria-raw's "
+                       "measurements.dat or its folder");
+  b.AddChoice<std::string>(&o.format,
+                           {{"auto", "auto"},
+                            {"gtsam", "gtsam"},
+                            {"g2o", "g2o"},
+                            {"toro", "toro"},
+                            {"isam", "isam"},
+                            {"victoria-raw", "victoria-raw"}},
+                           "format", "NAME",
+                           "auto (from the file's records), gtsam, g2o, toro, isam or victoria-raw "
+                           "(docs/formats.md)");
   b.Add(&o.inputs, "inputs", "FILE",
         "victoria-raw: speed/steering file (default: inputs.dat beside FILE)");
   b.Add(&o.association, "association", "FILE",
@@ -103,8 +189,13 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&o.trajectory, "trajectory", "CSV",
         "where to write the trajectory (default: trajectory.csv beside the O-Map)");
   b.Add(&o.class_name, "class", "NAME", "class name of the landmarks in the O-Map");
+  b.Add(&o.slam.initialisation_gate, "init-gate", "CHI2",
+        "staged start: solve the poses so far wherever a sighting or loop closure is off its "
+        "prediction by more than this (squared errors, noise floored; 0: off)")
+      .Check([this] { return options_.slam.initialisation_gate >= 0; }, "must be >= 0");
   b.Add(&o.slam.initialisation_window_poses, "init-window", "POSES",
-        "staged initialisation window (0: start from dead reckoning)")
+        "staged start: fixed stages of this many poses, with the gate the longest stage (0: "
+        "none; both 0: start from dead reckoning)")
       .Check([this] { return options_.slam.initialisation_window_poses >= 0; }, "must be >= 0");
   b.Add(&o.slam.landmark_prior_std_m, "landmark-prior-std", "M",
         "std of a zero-mean location prior on every landmark (0: none; makes the evidence "
@@ -113,6 +204,9 @@ void LandmarkMode::Declare(Arguments* arguments) {
         "std of one trunk-diameter measurement (where the data set has them)");
   b.AddFlag(&o.slam.compute_pose_covariances, "pose-covariances",
             "also compute every pose's covariance (slower)");
+  b.AddFlag(&o.calibrate_noise, "calibrate-noise",
+            "known association: estimate the variance components of the sightings' and the "
+            "odometry's noise at the association and solve under them (docs/method.md §16.3)");
   b.AddFlag(&o.unknown_association, "unknown-association",
             "ignore the file's landmark ids: tracks, O-SLAM hill climbing in growing windows, "
             "optional MC3; compared with the ids when the file has them");
@@ -152,6 +246,13 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&u.joint_max_shift_m, "joint-max-shift", "M",
         "unknown association: joint merges only for alignments shifting the recent landmarks "
         "at most this far (0: no limit)");
+  b.AddChoice<bool>(&u.calibrate_on_tracks, {{"on", true}, {"off", false}}, "calibrate-tracks",
+                    "on|off",
+                    "unknown association: estimate the noise's variance components with every "
+                    "track its own landmark before the search, and search under that noise");
+  b.Add(&u.calibration_rounds, "calibration-rounds", "N",
+        "unknown association: after the search, re-estimate the noise at the association found "
+        "and refine it by split and merge sweeps, N times (0: none)");
   b.Add(&u.free_poses, "free-poses", "POSES",
         "unknown association: poses free in a window's solves, earlier ones held (0: all free)");
   b.Add(&o.poses, "poses", "N",
@@ -167,6 +268,9 @@ void LandmarkMode::Declare(Arguments* arguments) {
               "evaluation", "MODE",
               "unknown association: marginal (merges in closed form from the joint marginal "
               "covariance), local (poses held) or exact (whole re-solve)");
+  b.Add(&o.truth_trajectory, "truth-trajectory", "CSV",
+        "print the trajectory's RMSE against this true one (pose,x_m,y_m,theta_rad; the data "
+        "set's frame, e.g. from oslam simulate-landmarks)");
   b.Add(&o.gps, "gps", "FILE",
         "compare the trajectory with GPS fixes (gps.dat: time x y; needs pose times)");
   b.Declare(arguments);
@@ -174,10 +278,11 @@ void LandmarkMode::Declare(Arguments* arguments) {
 
 int LandmarkMode::Run(const Arguments& arguments) {
   if (!arguments.Has("output")) throw UsageError("give the output file with -o OMAP.json");
+  if (arguments.Has("preset")) ApplyPreset(arguments.Get("preset"));
   bindings_.Apply(arguments);
-  const Options& o = options_;
-  const LandmarkDataset data =
-      ReadDataset(arguments.Get("landmarks"), o.format, o.inputs, o.poses, o.odometry_noise_scale);
+  Options& o = options_;
+  const LandmarkDataset data = ReadDataset(arguments.Get("landmarks"), &o.format, o.inputs, o.poses,
+                                           o.odometry_noise_scale, arguments.Flag("quiet"));
   if (o.unknown_association) return RunUnknownAssociation(arguments, data);
   std::vector<int> association;
   std::string association_source = "known (landmark ids in the file)";
@@ -193,8 +298,21 @@ int LandmarkMode::Run(const Arguments& arguments) {
   }
   std::string why;
   if (!o.slam.Validate(&why)) throw UsageError(why);
-  LandmarkSlam slam(o.slam);
-  const LandmarkSlamResult result = slam.Solve(data, association);
+  LandmarkSlamResult result;
+  if (o.calibrate_noise) {
+    NoiseCalibrationResult c = CalibrateNoise(data, association, o.slam, NoiseCalibrationOptions());
+    const NoiseScales& n = c.scales;
+    if (!arguments.Flag("quiet"))
+      std::printf(
+          "noise calibration: the stated variances times %.3g (range), %.3g (bearing), %.3g "
+          "(point), %.3g (odometry translation), %.3g (heading); %d outliers left out, %.2f s\n",
+          n.range, n.bearing, n.point, n.odometry_translation, n.odometry_heading, c.outliers,
+          c.time_s);
+    result = std::move(c.solution);
+  } else {
+    LandmarkSlam slam(o.slam);
+    result = slam.Solve(data, association);
+  }
   const std::string output = arguments.Get("output");
   const std::string trajectory_path =
       WriteMapAndTrajectory(output, o.trajectory, data, result, o.class_name, association_source);
@@ -206,11 +324,16 @@ int LandmarkMode::Run(const Arguments& arguments) {
     std::printf("solver: %s (chi2 per residual %.3f), %.1f ms\n", BriefReport(s).c_str(),
                 s.num_residuals > 0 ? 2.0 * s.final_cost / s.num_residuals : 0.0,
                 1e3 * s.total_time_s);
-    std::printf("total %.1f ms (staged initialisation %.1f ms)\n", 1e3 * result.total_time_s,
-                1e3 * result.initialisation_time_s);
+    std::printf("total %.1f ms (staged initialisation %.1f ms, %d stages)\n",
+                1e3 * result.total_time_s, 1e3 * result.initialisation_time_s,
+                result.initialisation_stages);
     if (result.evidence.valid) std::printf("log evidence %.3f\n", result.evidence.log_evidence);
     std::printf("trajectory %.1f m (dead reckoning %.1f m)\n", TrajectoryLength(result.trajectory),
                 TrajectoryLength(data.dead_reckoning));
+    if (!o.truth_trajectory.empty())
+      std::printf("vs the true trajectory: RMSE %.3f m\n",
+                  TrajectoryRmse(result.trajectory,
+                                 ReadTrueTrajectory(o.truth_trajectory, data.num_poses)));
     std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());
   }
   return 0;
@@ -224,6 +347,7 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
   options.burn_in = options.samples / 10;
   options.moves.merge_sigma_m = options.moves.merge_distance_m / 2;
   options.target.slam.initialisation_window_poses = options_.slam.initialisation_window_poses;
+  options.target.slam.initialisation_gate = options_.slam.initialisation_gate;
   options.target.slam.diameter_std_m = options_.slam.diameter_std_m;
   // A location prior is required to compare landmark counts: the target's
   // default unless given.
@@ -265,6 +389,13 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
       result.proposals, result.accepted, result.solves, result.cold_retries,
       result.hill_climb_time_s, result.joint_tries, result.joint_merges, result.joint_time_s,
       result.sampling_time_s, result.total_time_s);
+  const NoiseScales& n = result.noise_scales;
+  if (options.calibrate_on_tracks || options.calibration_rounds > 0)
+    std::printf(
+        "noise: the stated variances times %.3g (range), %.3g (bearing), %.3g (point), %.3g "
+        "(odometry translation), %.3g (heading); calibration %.2f s\n",
+        n.range, n.bearing, n.point, n.odometry_translation, n.odometry_heading,
+        result.calibration_time_s);
   if (data.has_landmark_ids) {
     const std::vector<int> shipped = GivenAssociation(data);
     const PairwiseAgreement a = ComparePairwise(result.association, shipped);
@@ -275,15 +406,24 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
         "%.4f recall %.4f (%lld / %lld / %lld); landmarks %zu vs %zu\n",
         a.agreement, a.precision, a.recall, a.same_both, a.same_estimate, a.same_truth,
         solution.landmarks.size(), ids.size());
+    // The shipped association solved under the noise the search ended with.
     LandmarkSlamOptions known_options = options.target.slam;
     known_options.compute_landmark_covariances = false;
     LandmarkSlam known(known_options);
-    const LandmarkSlamResult reference = known.Solve(data, shipped);
+    const LandmarkSlamResult reference =
+        known.Solve(WithNoiseScales(data, result.noise_scales), shipped);
     std::printf(
-        "trajectory vs the shipped-association solve: RMSE %.3f m (its log evidence "
-        "%.1f, ours %.1f)\n",
+        "trajectory vs the shipped-association solve (same noise): RMSE %.3f m (its log "
+        "evidence %.1f, ours %.1f)\n",
         TrajectoryRmse(solution.trajectory, reference.trajectory), reference.evidence.log_evidence,
         result.log_target);
+    if (!options_.truth_trajectory.empty()) {
+      const std::vector<Pose2> truth =
+          ReadTrueTrajectory(options_.truth_trajectory, data.num_poses);
+      std::printf("vs the true trajectory: RMSE %.3f m (the shipped association's %.3f m)\n",
+                  TrajectoryRmse(solution.trajectory, truth),
+                  TrajectoryRmse(reference.trajectory, truth));
+    }
   }
   PrintGpsError(options_.gps, data, solution.trajectory);
   std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());

@@ -17,10 +17,11 @@ void PrintHelp() {
   std::cout << "usage: oslam <command> [options]\n\n"
                "Builds O-Maps (3D maps of objects with class, position, size and existence\n"
                "probability) from omnidirectional robot video and odometry.\n\ncommands:\n";
+  size_t width = 0;  // the longest name, so that the summaries line up
+  for (const auto& command : oslam::Commands()) width = std::max(width, command.name.size());
   for (const auto& command : oslam::Commands())
-    std::cout << "  " << command.name
-              << std::string(14 - std::min<size_t>(13, command.name.size()), ' ') << command.summary
-              << "\n";
+    std::cout << "  " << command.name << std::string(width + 2 - command.name.size(), ' ')
+              << command.summary << "\n";
   std::cout << "\nRun 'oslam <command> --help' for a command's options. 'oslam --version' prints\n"
                "the version.\n";
 }

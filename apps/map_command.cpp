@@ -106,7 +106,8 @@ int RunMapCommand(const std::vector<std::string>& args) {
   Arguments arguments(
       "oslam map RUN_DIR -o OMAP.json [options]\n"
       "       oslam map RUN_DIR --known-association -o OMAP.json [options]\n"
-      "       oslam map --landmarks FILE [--format gtsam|victoria-raw] -o OMAP.json [options]",
+      "       oslam map --landmarks FILE [--format auto|gtsam|g2o|toro|isam|victoria-raw] -o "
+      "OMAP.json [options]",
       "Builds an O-Map. Without a mode option: O-SLAM on the run's detections (as 'oslam "
       "slam');\nwith --known-association: geometric SLAM on the ground-truth association; with "
       "--landmarks FILE:\nlandmark SLAM on a range-bearing data set. Each mode takes the "
@@ -129,7 +130,8 @@ int RunMapCommand(const std::vector<std::string>& args) {
   LandmarkMode landmarks;
   arguments.BeginMode(
       "landmarks", "landmark SLAM on a range-bearing data set (--landmarks FILE)",
-      "oslam map --landmarks FILE [--format gtsam|victoria-raw] -o OMAP.json [options]",
+      "oslam map --landmarks FILE [--format auto|gtsam|g2o|toro|isam|victoria-raw] -o OMAP.json "
+      "[options]",
       "Landmark SLAM on a range-bearing data set (docs/formats.md, Landmark data sets) with "
       "the association its landmark ids (or --association) give; writes the O-Map (one 'tree' "
       "object per landmark) and the trajectory CSV.");

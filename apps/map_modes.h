@@ -53,18 +53,23 @@ class LandmarkMode {
  private:
   // The data set, the files written, and the solve's options.
   struct Options {
-    std::string format = "gtsam";  // gtsam | victoria-raw
-    std::string inputs;            // victoria-raw: "" = inputs.dat beside the measurements
-    std::string association;       // one landmark id per sighting; "" = the file's ids
+    std::string format = "auto";  // auto | gtsam | g2o | toro | isam | victoria-raw
+    std::string inputs;           // victoria-raw: "" = inputs.dat beside the measurements
+    std::string association;      // one landmark id per sighting; "" = the file's ids
     std::string association_out, trajectory, gps;
+    std::string truth_trajectory;  // CSV pose,x_m,y_m[,theta_rad]: ATE printed
     std::string class_name = "tree";
     long poses = 0;  // the first N poses only (0: all)
     double odometry_noise_scale = 1;
     bool unknown_association = false;
-    LandmarkSlamOptions slam;  // known association; some shared with `unknown`
+    bool calibrate_noise = false;  // known association: variance components first
+    LandmarkSlamOptions slam;      // known association; some shared with `unknown`
     UnknownAssociationOptions unknown;
   };
   int RunUnknownAssociation(const Arguments& arguments, const LandmarkDataset& data);
+  // Sets the preset's flags (before the command line's); UsageError for an
+  // unknown name.
+  void ApplyPreset(const std::string& name);
 
   Options options_;
   Bindings bindings_;

@@ -117,14 +117,7 @@ double SightingResidual2(const LandmarkDataset& data, const std::vector<Pose2>& 
   double sum = 0;
   for (int k : sightings) {
     const LandmarkSighting& s = data.sightings[k];
-    const Pose2& pose = trajectory[s.pose];
-    const Eigen::Vector3d sensor =
-        pose.RobotToWorld(Eigen::Vector3d(data.sensor_offset_m.x(), data.sensor_offset_m.y(), 0.0));
-    const Eigen::Vector2d d = landmark_m - sensor.head<2>();
-    const double range_error = (d.norm() - s.range_m) / s.range_std_m;
-    const double bearing_error =
-        WrapAngle(std::atan2(d.y(), d.x()) - pose.theta - s.bearing_rad) / s.bearing_std_rad;
-    sum += range_error * range_error + bearing_error * bearing_error;
+    sum += SightingSquaredError(s, trajectory[s.pose], landmark_m, data.sensor_offset_m);
   }
   return sum;
 }
@@ -232,8 +225,7 @@ const LandmarkEvaluator::BlockValue& LandmarkEvaluator::LocalBlock(const std::ve
       const Pose2& p = trajectory[s.pose];
       it = pose_keys.emplace(s.pose, graph.AddPose(p.x, p.y, p.theta, /*fixed=*/true)).first;
     }
-    graph.Emplace<RangeBearingFactor>(it->second, landmark, s.range_m, s.bearing_rad, s.range_std_m,
-                                      s.bearing_std_rad, data.sensor_offset_m);
+    AddSightingFactor(&graph, it->second, landmark, s, data.sensor_offset_m);
     if (diameter >= 0 && std::isfinite(s.diameter_m))
       graph.Emplace<PriorFactor>(diameter, Eigen::Matrix<double, 1, 1>(s.diameter_m), diameter_var,
                                  "diameter");

@@ -10,6 +10,7 @@
 #include "core/angles.h"
 #include "core/error.h"
 #include "slam/landmark_factors.h"
+#include "slam/landmark_noise.h"
 
 namespace oslam {
 namespace {
@@ -37,6 +38,11 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     if (why) *why = "the duplicate sweep needs the marginal evaluation";
     return false;
   }
+  if (calibration_rounds < 0 || !(refine_radius_m >= 0) || refine_sweeps < 0) {
+    if (why) *why = "calibration rounds, the refine radius and sweeps must be >= 0";
+    return false;
+  }
+  if (calibration_rounds > 0 && !calibration.Validate(why)) return false;
   if (min_track_sightings < 1 || targeted_max_candidates < 0 || !(sweep_radius_m >= 0)) {
     if (why) *why = "tracks need >= 1 sighting and the candidate cap must be >= 0 (0: none)";
     return false;
@@ -93,6 +99,7 @@ UnknownAssociationResult LandmarkAssociation::Run() {
   ran_ = true;
   start_ = std::chrono::steady_clock::now();
   BuildTracks();
+  if (options_.calibrate_on_tracks) CalibrateOnTracks();
   climb_start_ = std::chrono::steady_clock::now();
   for (size_t w = 0; w < ends_.size(); ++w) RunWindow(w);
   FinalGlobalPass();
@@ -102,6 +109,7 @@ UnknownAssociationResult LandmarkAssociation::Run() {
   result_.cache_hits = static_cast<long>(evaluator_->num_cache_hits());
   EvaluationPtr best = current_;
   if (options_.samples > 0) best = SampleMc3(best);
+  if (options_.calibration_rounds > 0) best = CalibrateAndRefine(best);
   FinalSolve(best);
   return std::move(result_);
 }
@@ -125,7 +133,7 @@ void LandmarkAssociation::BuildTracks() {
       if (diameter) per_track_.sightings[track.front()].diameter_m = *diameter;
     }
   }
-  data_ = options_.diameter_per_track ? &per_track_ : &input_;
+  data_ = stated_ = options_.diameter_per_track ? &per_track_ : &input_;
   const LandmarkDataset& data = *data_;
   num_tracks_ = static_cast<int>(result_.tracks.size());
   if (num_tracks_ == 0)
@@ -696,6 +704,155 @@ void LandmarkAssociation::FinalGlobalPass() {
                double(options_.final_hill_climb_steps), double(accepted),
                double(state_.blocks.size()), current_->log_target, SecondsSince(pass_start)));
   }
+}
+
+// ---- noise calibration and refinement (docs/method.md §16.3) ----
+
+void LandmarkAssociation::CalibrateOnTracks() {
+  std::vector<int> association(data_->sightings.size(), -1);
+  for (int t = 0; t < num_tracks_; ++t)
+    for (int k : result_.tracks[t]) association[k] = t;
+  LandmarkSlamOptions slam = options_.target.slam;
+  slam.held_poses = 0;
+  const NoiseCalibrationResult c =
+      CalibrateNoise(*stated_, association, slam, options_.calibration);
+  result_.noise_scales = c.scales;
+  calibrated_ = WithNoiseScales(*stated_, c.scales);
+  data_ = &calibrated_;
+  result_.calibration_time_s += c.time_s;
+  Say(Format("noise calibration on the tracks: variance x %.3g range, %.3g bearing, %.3g "
+             "point, %.3g odometry translation, %.3g heading",
+             c.scales.range, c.scales.bearing, c.scales.point, c.scales.odometry_translation,
+             c.scales.odometry_heading) +
+      Format(" (%.0f outliers left out), %.1f s", double(c.outliers), c.time_s));
+}
+
+EvaluationPtr LandmarkAssociation::CalibrateAndRefine(EvaluationPtr best) {
+  const auto start = std::chrono::steady_clock::now();
+  for (int round = 0; round < options_.calibration_rounds; ++round) {
+    current_ = best;
+    // The calibration starts from the current solution.
+    LandmarkSlamResult warm;
+    warm.trajectory = current_->solution->trajectory;
+    for (size_t j = 0; j < current_->state.blocks.size(); ++j) {
+      MappedLandmark l;
+      l.id = current_->state.blocks[j].front();
+      l.position_m = current_->locations[j].head<2>();
+      warm.landmarks.push_back(l);
+    }
+    std::sort(warm.landmarks.begin(), warm.landmarks.end(),
+              [](const MappedLandmark& a, const MappedLandmark& b) { return a.id < b.id; });
+    LandmarkSlamOptions slam = options_.target.slam;
+    slam.held_poses = 0;
+    const NoiseCalibrationResult c = CalibrateNoise(
+        *data_, evaluator_->Association(current_->state), slam, options_.calibration, &warm);
+    NoiseScales& total = result_.noise_scales;
+    total.range *= c.scales.range;
+    total.bearing *= c.scales.bearing;
+    total.point *= c.scales.point;
+    total.odometry_translation *= c.scales.odometry_translation;
+    total.odometry_heading *= c.scales.odometry_heading;
+    calibrated_ = WithNoiseScales(*stated_, total);
+    data_ = &calibrated_;
+    Say(Format("noise calibration %.0f at the association found: variance x %.3g range, %.3g "
+               "bearing, %.3g point, %.3g odometry translation, %.3g heading",
+               double(round + 1), c.scales.range, c.scales.bearing, c.scales.point,
+               c.scales.odometry_translation, c.scales.odometry_heading) +
+        Format(" (%.0f outliers left out), %.1f s", double(c.outliers), c.time_s));
+    // The whole problem under the calibrated noise, from the calibration's
+    // solution.
+    OpenWindowProblem(data_->num_poses, 0);
+    StateEvaluation seed = *current_;
+    auto solution = std::make_shared<GeometricSlamResult>();
+    solution->trajectory = c.solution.trajectory;
+    seed.solution = std::move(solution);
+    for (size_t j = 0; j < seed.state.blocks.size(); ++j) {
+      const int id = seed.state.blocks[j].front();
+      const auto it = std::lower_bound(c.solution.landmarks.begin(), c.solution.landmarks.end(), id,
+                                       [](const MappedLandmark& l, int v) { return l.id < v; });
+      if (it != c.solution.landmarks.end() && it->id == id)
+        seed.locations[j].head<2>() = it->position_m;
+    }
+    current_ = Refine(current_->state, &seed);
+    if (!current_->valid)
+      throw Error::InFile(data_->path, "the solve under the calibrated noise failed");
+    const double before = current_->log_target;
+    for (int sweep = 0; sweep < options_.refine_sweeps; ++sweep) {
+      const long splits = SplitSweep();
+      const long merges =
+          options_.refine_radius_m > 0 ? MergeRounds(0, options_.refine_radius_m) : 0;
+      result_.refine_splits += splits;
+      result_.refine_merges += merges;
+      Say(
+          Format("refinement sweep %.0f: %.0f splits, %.0f merges -> %.0f landmarks, log target "
+                 "%.1f",
+                 double(sweep + 1), double(splits), double(merges),
+                 double(current_->state.blocks.size()), current_->log_target));
+      if (splits + merges == 0) break;
+    }
+    Say(Format("refinement: log target %.1f -> %.1f", before, current_->log_target));
+    best = current_;
+  }
+  result_.calibration_time_s += SecondsSince(start);
+  return best;
+}
+
+long LandmarkAssociation::SplitSweep() {
+  struct Split {
+    double delta;
+    int block, track;
+    EvaluationPtr evaluation;
+  };
+  long made = 0;
+  for (int round = 0; round < 100; ++round) {
+    const EvaluationPtr before = current_;
+    const AssociationState& s = before->state;
+    const double base = before->log_target;
+    std::vector<Split> best;
+    for (size_t j = 0; j < s.blocks.size(); ++j) {
+      if (s.blocks[j].size() < 2) continue;
+      Split b{0, -1, -1, nullptr};
+      for (int t : s.blocks[j]) {
+        AssociationState split = s;
+        auto& block = split.blocks[j];
+        block.erase(std::find(block.begin(), block.end(), t));
+        split.blocks.push_back({t});
+        split.classes.assign(split.blocks.size(), 0);
+        split.Canonicalize();
+        const EvaluationPtr e = evaluator_->Evaluate(split, before.get());
+        ++result_.proposals;
+        if (e->valid && e->log_target - base > b.delta)
+          b = {e->log_target - base, static_cast<int>(j), t, e};
+      }
+      if (b.evaluation) best.push_back(b);
+    }
+    if (best.empty()) break;
+    std::sort(best.begin(), best.end(),
+              [](const Split& x, const Split& y) { return x.delta > y.delta; });
+    AssociationState all = s;
+    for (const Split& b : best) {
+      auto& block = all.blocks[b.block];
+      block.erase(std::find(block.begin(), block.end(), b.track));
+      all.blocks.push_back({b.track});
+    }
+    all.classes.assign(all.blocks.size(), 0);
+    all.Canonicalize();
+    int count = static_cast<int>(best.size());
+    EvaluationPtr refined = Refine(all, best.front().evaluation.get());
+    auto fell = [&] { return !refined->valid || refined->log_target <= base; };
+    if (fell() && count > 1) {
+      refined = Refine(best.front().evaluation->state, best.front().evaluation.get());
+      count = 1;
+    }
+    if (fell()) {
+      current_ = Refine(before->state, before.get());
+      break;
+    }
+    current_ = refined;
+    made += count;
+    result_.accepted += count;
+  }
+  return made;
 }
 
 EvaluationPtr LandmarkAssociation::SampleMc3(EvaluationPtr best) {

@@ -22,6 +22,7 @@
 #include "association/rigid_alignment.h"
 #include "association/sampler.h"
 #include "slam/landmark_data.h"
+#include "slam/landmark_noise.h"
 #include "slam/landmark_slam.h"
 
 namespace oslam {
@@ -131,7 +132,25 @@ struct UnknownAssociationOptions {
   int joint_anchors = 2;
   int joint_retry_inliers = 2;
   int joint_every_poses = 50;  // RANSAC at most once per this many poses
-  int samples = 0;             // MC³ iterations after hill climbing (0: hill climbing only)
+  // Noise calibration and refinement (docs/method.md §16.3). The evidence
+  // decides associations only as well as the stated noise is right: too
+  // loose (GTSAM's Victoria Park file: bearing std 0.2 rad for a laser) and
+  // merging landmarks metres apart pays. calibrate_on_tracks: before the
+  // windows, the variance components of the sightings and the odometry are
+  // estimated with every track its own landmark (the associations that are
+  // certain), and the whole search runs under the calibrated noise. After
+  // the windows (and MC³), calibration_rounds times (0: none), they are
+  // estimated again at the association found (its outliers left out), and
+  // the association is refined under that noise by split sweeps (every track
+  // of a landmark scored alone, the best paying split of each landmark made)
+  // and merge sweeps (every pair of landmarks within refine_radius_m), in
+  // turn until neither changes anything or refine_sweeps is reached.
+  bool calibrate_on_tracks = true;
+  int calibration_rounds = 1;
+  NoiseCalibrationOptions calibration;
+  double refine_radius_m = 10;
+  int refine_sweeps = 6;
+  int samples = 0;  // MC³ iterations after hill climbing (0: hill climbing only)
   int burn_in = 0;
   int num_chains = 2;
   unsigned long seed = 1;
@@ -158,7 +177,12 @@ struct UnknownAssociationResult {
   long refines = 0;            // full solves of the windows' states (hill climbing)
   double refine_time_s = 0;    // spent in them
   double targeted_time_s = 0;  // spent scoring targeted merges
-  SamplerSummary sampler;      // when samples > 0
+  // Noise calibration: the scales of the stated noise (product over the
+  // rounds), the refinement's splits and merges, and its time.
+  NoiseScales noise_scales;
+  long refine_splits = 0, refine_merges = 0;
+  double calibration_time_s = 0;
+  SamplerSummary sampler;  // when samples > 0
 };
 
 using LandmarkProgress = std::function<void(const std::string& line)>;
@@ -233,6 +257,15 @@ class LandmarkAssociation {
                            int n) const;
   // After the windows: every pose freed, the final sweep, the global pass.
   void FinalGlobalPass();
+  // Before the windows: the noise calibrated with every track its own
+  // landmark; data_ becomes the calibrated data set.
+  void CalibrateOnTracks();
+  // Noise calibration at `best`'s association and the split and merge
+  // sweeps under the calibrated noise; the refined state's evaluation.
+  EvaluationPtr CalibrateAndRefine(EvaluationPtr best);
+  // Rounds of the best paying split of each landmark (one track alone);
+  // returns the splits made.
+  long SplitSweep();
   // MC³ from the hill-climbing state; the better of its best and `best`.
   EvaluationPtr SampleMc3(EvaluationPtr best);
   void FinalSolve(const EvaluationPtr& best);
@@ -247,8 +280,10 @@ class LandmarkAssociation {
   std::chrono::steady_clock::time_point start_, climb_start_;
   UnknownAssociationResult result_;
 
-  LandmarkDataset per_track_;              // diameter_per_track: the diameters per track
-  const LandmarkDataset* data_ = nullptr;  // input_ or per_track_
+  LandmarkDataset per_track_;                // diameter_per_track: the diameters per track
+  LandmarkDataset calibrated_;               // stated_ with result_.noise_scales
+  const LandmarkDataset* stated_ = nullptr;  // the stated noise: input_ or per_track_
+  const LandmarkDataset* data_ = nullptr;    // stated_ or calibrated_
   int num_tracks_ = 0;
   std::vector<int> first_pose_, last_pose_, track_size_;  // per track
   std::optional<ClassConfusionModel> model_;

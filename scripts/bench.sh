@@ -537,11 +537,8 @@ group_victoria_raw() {
   mkdir -p "$dir"
   echo "| run | wall | CPU | measured |"
   echo "|---|---|---|---|"
-  if t=$(cpu_timed "$out_dir/victoria_raw.log" "$OSLAM" map --landmarks "$raw" \
-           --format victoria-raw --unknown-association --gps "$raw/gps.dat" \
-           -o "$dir/raw/omap.json" --min-track 3 --diameter-per-track --diameter-std 0.06 \
-           --window 50 --hill-climb 1 --targeted-radius 20 --targeted-candidates 10 \
-           --sweep-radius 1.5 --joint-max-shift 30); then
+  if t=$(cpu_timed "$out_dir/victoria_raw.log" "$OSLAM" map --preset victoria-raw \
+           --landmarks "$raw" --gps "$raw/gps.dat" -o "$dir/raw/omap.json"); then
     echo "| raw drive, the command of docs/benchmarks.md | ${t% *} s | ${t#* } s | $(date -u +%Y-%m-%d) |"
     echo
     grep -E "^ *([0-9]+ landmarks from|vs GPS)" "$out_dir/victoria_raw.log" | sed 's/^ */    /' || true

@@ -192,7 +192,15 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
                         : Number(path, line, t[3 + k], kNames[k]);
       RelativePoseMeasurement edge;
       edge.delta = {v[0], v[1], v[2]};
-      edge.covariance << v[3], v[4], v[5], v[4], v[6], v[7], v[5], v[7], v[8];
+      // load2D's automatic noise format: a diagonal at entries 1, 3, 4 is a
+      // covariance in TORO's order (ff fs ss rr fr sr); anything else is
+      // the upper triangle, row-major.
+      const bool graph_order =
+          v[4] == 0 && v[7] == 0 && v[8] == 0 && v[3] != 0 && v[5] != 0 && v[6] != 0;
+      if (graph_order)
+        edge.covariance << v[3], v[4], v[7], v[4], v[5], v[8], v[7], v[8], v[6];
+      else
+        edge.covariance << v[3], v[4], v[5], v[4], v[6], v[7], v[5], v[7], v[8];
       if (!PositiveDefinite(edge.covariance))
         throw Error::AtLine(path, line, "the odometry covariance is not positive definite");
       if (pose_index.empty()) {
@@ -238,17 +246,37 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
         s.bearing_std_rad = std::sqrt(c11 / 10.0);
         s.range_std_m = std::sqrt(c11);
       } else {
+        // load2D would use 1 and 1; the point with its own covariance is
+        // what the line says.
+        s.cartesian = true;
+        s.xy_covariance << c11, c12, c12, c22;
         const Eigen::Vector2d radial(x / s.range_m, y / s.range_m);
         const Eigen::Vector2d tangential(-radial.y(), radial.x());
-        Eigen::Matrix2d c;
-        c << c11, c12, c12, c22;
-        s.range_std_m = std::sqrt(radial.dot(c * radial));
-        s.bearing_std_rad = std::sqrt(tangential.dot(c * tangential)) / s.range_m;
+        s.range_std_m = std::sqrt(radial.dot(s.xy_covariance * radial));
+        s.bearing_std_rad = std::sqrt(tangential.dot(s.xy_covariance * tangential)) / s.range_m;
       }
+      pending.push_back(p);
+    } else if (t[0] == "BR") {
+      ExpectFields(path, line, t, 7, "BR i l bearing range bearing_std range_std");
+      PendingSighting p;
+      p.pose_id = Integer(path, line, t[1], "pose i");
+      LandmarkSighting& s = p.sighting;
+      s.line = line;
+      const long id = Integer(path, line, t[2], "landmark l");
+      if (id > std::numeric_limits<int>::max())
+        throw Error::AtLine(path, line, "landmark id " + t[2] + " is too large");
+      s.landmark = static_cast<int>(id);
+      s.bearing_rad = Number(path, line, t[3], "bearing");
+      s.range_m = Number(path, line, t[4], "range");
+      s.bearing_std_rad = Number(path, line, t[5], "bearing_std");
+      s.range_std_m = Number(path, line, t[6], "range_std");
+      if (!(s.range_m > 0)) throw Error::AtLine(path, line, "range must be > 0");
+      if (!(s.bearing_std_rad > 0) || !(s.range_std_m > 0))
+        throw Error::AtLine(path, line, "the noise stds must be > 0");
       pending.push_back(p);
     } else {
       throw Error::AtLine(path, line,
-                          "unknown record '" + t[0] + "' (expected ODOMETRY or LANDMARK)");
+                          "unknown record '" + t[0] + "' (expected ODOMETRY, LANDMARK or BR)");
     }
   });
   if (data.pose_ids.empty()) throw Error::InFile(path, "no ODOMETRY lines");

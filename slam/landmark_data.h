@@ -5,10 +5,13 @@
 //  * GTSAM's text format (`victoria_park.txt`, docs/formats.md): lines
 //      ODOMETRY i j dx dy dtheta c11 c12 c13 c22 c23 c33   (covariance, upper triangle)
 //      LANDMARK i l x y c11 c12 c22                        (robot frame, covariance)
+//      BR i l bearing range bearing_std range_std           (range-bearing)
 //    read as GTSAM's load2D does: (x, y) -> bearing atan2(y, x), range |(x, y)|,
 //    bearing std sqrt(c11 / 10) rad and range std sqrt(c11) m when c11 = c22;
-//    otherwise the (x, y) covariance is carried to (range, bearing) to first
-//    order (load2D uses 1 and 1 there). Landmark ids are kept.
+//    otherwise a Cartesian sighting with that covariance (load2D uses 1 and 1
+//    there); the odometry covariance in TORO's order when it is diagonal
+//    there (load2D's automatic noise format). Landmark ids are kept.
+//    g2o, TORO and iSAM files: slam/landmark_formats.h.
 //  * The raw Victoria Park files (RFS-SLAM's `measurements.dat` + `inputs.dat`):
 //    one pose per laser scan; the speed/steering inputs between two scans are
 //    integrated with the Ackermann model below into a relative pose whose
@@ -45,6 +48,12 @@ struct LandmarkSighting {
   double range_std_m = 1, bearing_std_rad = 1;
   double diameter_m = std::numeric_limits<double>::quiet_NaN();  // NaN: not measured
   int line = 0;  // line of the source file, for messages
+  // Cartesian sightings (g2o's EDGE_SE2_XY, iSAM's LANDMARK, GTSAM's LANDMARK
+  // with an anisotropic covariance): the landmark measured at (x, y) in the
+  // sensor frame with this covariance; range_m and bearing_rad hold the same
+  // point in polar form (for placing and gating), the two stds are unused.
+  bool cartesian = false;
+  Eigen::Matrix2d xy_covariance = Eigen::Matrix2d::Identity();
 };
 
 struct LandmarkDataset {

@@ -1,6 +1,7 @@
 #include "slam/landmark_factors.h"
 
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Cholesky>
 
@@ -78,6 +79,73 @@ Eigen::Vector2d LandmarkFromRangeBearing(const Pose2& pose, double range_m, doub
       pose.RobotToWorld(Eigen::Vector3d(mount_offset_m.x(), mount_offset_m.y(), 0.0));
   const double heading = pose.theta + bearing_rad;
   return {sensor.x() + range_m * std::cos(heading), sensor.y() + range_m * std::sin(heading)};
+}
+
+PointSightingFactor::PointSightingFactor(int pose_key, int landmark_key,
+                                         const Eigen::Vector2d& measured_m,
+                                         const Eigen::Matrix2d& covariance,
+                                         const Eigen::Vector2d& mount_offset_m)
+    : Factor({pose_key, landmark_key}), measured_m_(measured_m), mount_offset_m_(mount_offset_m) {
+  if (!measured_m.allFinite() || !mount_offset_m.allFinite())
+    throw Error("point sighting factor: the measurement and the mount offset must be finite");
+  if (!covariance.allFinite() || !covariance.isApprox(covariance.transpose(), 1e-9))
+    throw Error("point sighting factor: the covariance must be finite and symmetric");
+  const Eigen::LLT<Eigen::Matrix2d> llt(covariance);
+  if (llt.info() != Eigen::Success || !(llt.matrixL().toDenseMatrix().diagonal().minCoeff() > 0))
+    throw Error("point sighting factor: the covariance must be positive definite");
+  const Eigen::Matrix2d l = llt.matrixL();
+  sqrt_information_ = l.triangularView<Eigen::Lower>().solve(Eigen::Matrix2d::Identity());
+  log_det_ = 2.0 * l.diagonal().array().log().sum();
+}
+
+bool PointSightingFactor::Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd> error,
+                                    Eigen::MatrixXd* jacobian) const {
+  const Pose2 pose = PoseOf(values, keys()[0]);
+  const double* landmark = values.Data(keys()[1]);
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  const double dx = landmark[0] - pose.x, dy = landmark[1] - pose.y;
+  const Eigen::Vector2d h(c * dx + s * dy - mount_offset_m_.x(),
+                          -s * dx + c * dy - mount_offset_m_.y());
+  error = sqrt_information_ * (h - measured_m_);
+  if (!jacobian) return true;
+  Eigen::Matrix<double, 2, 5> j;
+  j << -c, -s, -s * dx + c * dy, c, s,  //
+      s, -c, -c * dx - s * dy, -s, c;
+  *jacobian = sqrt_information_ * j;
+  return true;
+}
+
+void AddSightingFactor(FactorGraph* graph, int pose_key, int landmark_key,
+                       const LandmarkSighting& s, const Eigen::Vector2d& mount_offset_m) {
+  if (s.cartesian)
+    graph->Emplace<PointSightingFactor>(
+        pose_key, landmark_key,
+        Eigen::Vector2d(s.range_m * std::cos(s.bearing_rad), s.range_m * std::sin(s.bearing_rad)),
+        s.xy_covariance, mount_offset_m);
+  else
+    graph->Emplace<RangeBearingFactor>(pose_key, landmark_key, s.range_m, s.bearing_rad,
+                                       s.range_std_m, s.bearing_std_rad, mount_offset_m);
+}
+
+double SightingSquaredError(const LandmarkSighting& s, const Pose2& pose,
+                            const Eigen::Vector2d& landmark_m,
+                            const Eigen::Vector2d& mount_offset_m) {
+  const Eigen::Vector3d sensor =
+      pose.RobotToWorld(Eigen::Vector3d(mount_offset_m.x(), mount_offset_m.y(), 0.0));
+  const Eigen::Vector2d d = landmark_m - sensor.head<2>();
+  if (s.cartesian) {
+    // The sensor faces the robot's heading: the point in its frame.
+    const double c = std::cos(pose.theta), sn = std::sin(pose.theta);
+    const Eigen::Vector2d r(c * d.x() + sn * d.y() - s.range_m * std::cos(s.bearing_rad),
+                            -sn * d.x() + c * d.y() - s.range_m * std::sin(s.bearing_rad));
+    return r.dot(s.xy_covariance.llt().solve(r));
+  }
+  const double range = d.norm();
+  if (!(range > 0)) return std::numeric_limits<double>::infinity();
+  const double range_error = (range - s.range_m) / s.range_std_m;
+  const double bearing_error =
+      WrapAngle(std::atan2(d.y(), d.x()) - pose.theta - s.bearing_rad) / s.bearing_std_rad;
+  return range_error * range_error + bearing_error * bearing_error;
 }
 
 // ---------------------------------------------------------------------------

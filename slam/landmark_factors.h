@@ -12,7 +12,9 @@
 #include <Eigen/Core>
 
 #include "core/pose2.h"
+#include "slam/landmark_data.h"
 #include "solver/factor.h"
+#include "solver/factor_graph.h"
 
 namespace oslam {
 
@@ -50,11 +52,49 @@ class RangeBearingFactor final : public Factor {
   double log_det_;
 };
 
+// z = (x, y) of landmark l seen in the frame of a sensor mounted at
+// `mount_offset_m` and facing the robot's heading (g2o's EdgeSE2PointXY,
+// iSAM's Pose2d_Point2d_Factor with the mount at the origin):
+//
+//   h(x, l) = Rot(theta)^T (l - (x, y)) - mount,  e = L^{-1} (h - z),  L L^T = P.
+//
+// Keys: (pose, landmark).
+class PointSightingFactor final : public Factor {
+ public:
+  // Throws oslam::Error unless z is finite and P symmetric positive definite.
+  PointSightingFactor(int pose_key, int landmark_key, const Eigen::Vector2d& measured_m,
+                      const Eigen::Matrix2d& covariance,
+                      const Eigen::Vector2d& mount_offset_m = Eigen::Vector2d::Zero());
+
+  int Dimension() const override { return 2; }
+  bool Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd> error,
+                 Eigen::MatrixXd* jacobian) const override;
+  double LogDetCovariance() const override { return log_det_; }
+  std::string Name() const override { return "point sighting"; }
+
+ private:
+  Eigen::Vector2d measured_m_, mount_offset_m_;
+  Eigen::Matrix2d sqrt_information_;  // L^{-1}
+  double log_det_;
+};
+
+// The factor of sighting `s` (a RangeBearingFactor, or a
+// PointSightingFactor when s.cartesian) between a pose and a landmark.
+void AddSightingFactor(FactorGraph* graph, int pose_key, int landmark_key,
+                       const LandmarkSighting& s, const Eigen::Vector2d& mount_offset_m);
+
 // The world position of a landmark at (range, bearing) from the sensor of
 // `pose` (the inverse of RangeBearingFactor's h without noise), for
 // initialisation.
 Eigen::Vector2d LandmarkFromRangeBearing(const Pose2& pose, double range_m, double bearing_rad,
                                          const Eigen::Vector2d& mount_offset_m);
+
+// The squared whitened error of sighting `s` of a landmark at `landmark_m`
+// from `pose` (its factor's ||e||^2; infinite for a range-bearing sighting
+// of a landmark on the sensor).
+double SightingSquaredError(const LandmarkSighting& s, const Pose2& pose,
+                            const Eigen::Vector2d& landmark_m,
+                            const Eigen::Vector2d& mount_offset_m);
 
 // Pose b seen from pose a: z = (dx, dy, dtheta) in a's frame with a full
 // covariance P (GTSAM's BetweenFactor<Pose2> up to second order):

@@ -4,7 +4,11 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <unordered_map>
 
+#include <Eigen/Cholesky>
+
+#include "core/angles.h"
 #include "core/error.h"
 #include "slam/factors.h"
 #include "slam/landmark_factors.h"
@@ -37,8 +41,8 @@ bool LandmarkSlamOptions::Validate(std::string* why) const {
     if (why) *why = "the held poses must be >= 0";
     return false;
   }
-  if (initialisation_window_poses < 0) {
-    if (why) *why = "the initialisation window must be >= 0 poses";
+  if (initialisation_window_poses < 0 || !(initialisation_gate >= 0)) {
+    if (why) *why = "the initialisation window (poses) and gate must be >= 0";
     return false;
   }
   return solver.Validate(why);
@@ -146,9 +150,7 @@ int AddLandmarkFactors(const LandmarkDataset& data, const LandmarkSlamOptions& o
           "landmark prior");
     for (int k : by_landmark.at(landmark.id)) {
       const LandmarkSighting& s = data.sightings[k];
-      graph->Emplace<RangeBearingFactor>(pose_keys[s.pose], landmark.position, s.range_m,
-                                         s.bearing_rad, s.range_std_m, s.bearing_std_rad,
-                                         data.sensor_offset_m);
+      AddSightingFactor(graph, pose_keys[s.pose], landmark.position, s, data.sensor_offset_m);
       if (landmark.diameter >= 0 && std::isfinite(s.diameter_m))
         graph->Emplace<PriorFactor>(landmark.diameter, Eigen::Matrix<double, 1, 1>(s.diameter_m),
                                     diameter_variance, "diameter");
@@ -192,8 +194,8 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
   const std::map<int, std::vector<int>> by_landmark = SightingsByLandmark(data, association);
 
   LandmarkSlamResult staged;
-  if (!warm_start && options_.initialisation_window_poses > 0 &&
-      data.num_poses > options_.initialisation_window_poses) {
+  if (!warm_start &&
+      (options_.initialisation_gate > 0 || options_.initialisation_window_poses > 0)) {
     staged = StagedInitialisation(data, association);
     if (!staged.trajectory.empty()) warm_start = &staged;
   }
@@ -221,6 +223,7 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
   result.evidence = solved.evidence;
   result.num_sightings_used = used;
   result.initialisation_time_s = initialisation_time_s;
+  result.initialisation_stages = staged.initialisation_stages;
   ReadSolution(graph.values(), pose_keys, landmarks, &result);
   if (result.summary.IsUsable()) {
     std::vector<std::vector<int>> groups;
@@ -254,17 +257,105 @@ void LandmarkSlam::Covariances(const std::vector<std::vector<int>>& landmark_gro
   }
 }
 
+namespace {
+
+// The gate's errors are whitened by the stated noise floored at what LM
+// corrects from anywhere in its linear regime (3 degrees of bearing or
+// heading, 5 % of a range or of an edge's length): with a precise sensor a
+// few centimetres of drift are many sigmas, yet no reason for a stage
+// (method.md §16.1).
+constexpr double kGateAngleFloor = 0.05, kGateLengthFloor = 0.05;
+
+double EdgeGateError(const RelativePoseMeasurement& edge, const std::vector<Pose2>& poses) {
+  const Pose2 d = BetweenPoses(poses[edge.from], poses[edge.to]);
+  const Eigen::Vector3d r(d.x - edge.delta.x, d.y - edge.delta.y,
+                          WrapAngle(d.theta - edge.delta.theta));
+  const double length_floor = kGateLengthFloor * (std::hypot(edge.delta.x, edge.delta.y) + 1.0);
+  const Eigen::Vector3d floor(length_floor, length_floor, kGateAngleFloor);
+  const Eigen::Vector3d std = edge.covariance.diagonal().cwiseSqrt().cwiseMax(floor);
+  return r.cwiseQuotient(std).squaredNorm();
+}
+
+double SightingGateError(const LandmarkSighting& z, const Pose2& pose,
+                         const Eigen::Vector2d& landmark_m, const Eigen::Vector2d& mount_m) {
+  const Eigen::Vector3d sensor = pose.RobotToWorld(Eigen::Vector3d(mount_m.x(), mount_m.y(), 0.0));
+  const Eigen::Vector2d d = landmark_m - sensor.head<2>();
+  const double range_error =
+      (d.norm() - z.range_m) / std::max(z.range_std_m, kGateLengthFloor * std::max(z.range_m, 1.0));
+  const double bearing_error = WrapAngle(std::atan2(d.y(), d.x()) - pose.theta - z.bearing_rad) /
+                               std::max(z.bearing_std_rad, kGateAngleFloor);
+  return range_error * range_error + bearing_error * bearing_error;
+}
+
+// Where the next stage of the staged initialisation ends (a pose count):
+// poses [0, solved) are solved in `previous`. Walking on from `solved` along
+// the trajectory extended by odometry, with the landmarks of `previous` where
+// it has them and the others at their first sighting, the stage ends after
+// the first pose with a sighting or an odometry edge back to an earlier pose
+// whose gate error exceeds the gate (a loop closing), or after
+// `window` poses; data.num_poses when neither happens.
+int NextStageEnd(const LandmarkDataset& data, const std::vector<int>& association,
+                 const std::vector<std::vector<int>>& sightings_at,
+                 const std::vector<std::vector<int>>& edges_at, const LandmarkSlamResult& previous,
+                 int solved, double gate, int window) {
+  const std::vector<Pose2> poses = ExtendByOdometry(previous.trajectory, data.dead_reckoning);
+  std::unordered_map<int, Eigen::Vector2d> placed;
+  for (const MappedLandmark& landmark : previous.landmarks)
+    placed[landmark.id] = landmark.position_m;
+  for (int i = solved; i < data.num_poses; ++i) {
+    if (window > 0 && i - solved >= window) return i;
+    if (gate <= 0) continue;
+    double worst = 0;
+    for (int k : sightings_at[i]) {
+      const LandmarkSighting& z = data.sightings[k];
+      const auto found = placed.find(association[k]);
+      if (found == placed.end()) {
+        placed[association[k]] =
+            LandmarkFromRangeBearing(poses[i], z.range_m, z.bearing_rad, data.sensor_offset_m);
+        continue;
+      }
+      worst = std::max(worst, SightingGateError(z, poses[i], found->second, data.sensor_offset_m));
+    }
+    for (int e : edges_at[i]) worst = std::max(worst, EdgeGateError(data.odometry[e], poses));
+    if (worst > gate) return i + 1;
+  }
+  return data.num_poses;
+}
+
+}  // namespace
+
 LandmarkSlamResult LandmarkSlam::StagedInitialisation(const LandmarkDataset& data,
                                                       const std::vector<int>& association) const {
   LandmarkSlamOptions inner = options_;
   inner.initialisation_window_poses = 0;
+  inner.initialisation_gate = 0;
   inner.compute_landmark_covariances = false;
   inner.compute_pose_covariances = false;
   inner.solver.compute_evidence = false;
+  // A stage only has to bring the next closure into the full solve's basin;
+  // the full solve converges tightly.
+  inner.solver.function_tolerance = std::max(inner.solver.function_tolerance, 1e-5);
+  inner.solver.step_tolerance = std::max(inner.solver.step_tolerance, 1e-2);
+  inner.solver.absolute_function_tolerance =
+      std::max(inner.solver.absolute_function_tolerance, 1.0);
   LandmarkSlam stage(inner);
+  // Per pose: the sightings used (range > 0) and the odometry edges to an
+  // earlier pose (loop closures and the chain; the chain's error is 0 on the
+  // extended trajectory).
+  std::vector<std::vector<int>> sightings_at(data.num_poses), edges_at(data.num_poses);
+  for (size_t k = 0; k < data.sightings.size(); ++k)
+    if (association[k] >= 0 && data.sightings[k].range_m > 0)
+      sightings_at[data.sightings[k].pose].push_back(static_cast<int>(k));
+  for (size_t e = 0; e < data.odometry.size(); ++e) {
+    const RelativePoseMeasurement& edge = data.odometry[e];
+    edges_at[std::max(edge.from, edge.to)].push_back(static_cast<int>(e));
+  }
   LandmarkSlamResult previous;
-  const int window = options_.initialisation_window_poses;
-  for (int n = window; n < data.num_poses; n += window) {
+  int solved = 0, stages = 0;
+  while (true) {
+    const int n = NextStageEnd(data, association, sightings_at, edges_at, previous, solved,
+                               options_.initialisation_gate, options_.initialisation_window_poses);
+    if (n >= data.num_poses) break;  // the rest is the full solve's
     std::vector<int> kept;
     const LandmarkDataset prefix = PosePrefix(data, n, &kept);
     std::vector<int> prefix_association;
@@ -273,13 +364,17 @@ LandmarkSlamResult LandmarkSlam::StagedInitialisation(const LandmarkDataset& dat
     LandmarkSlamResult start;
     start.landmarks = previous.landmarks;
     start.trajectory = ExtendByOdometry(previous.trajectory, prefix.dead_reckoning);
-    LandmarkSlamResult solved = stage.Solve(prefix, prefix_association, &start);
-    if (!solved.summary.IsUsable()) return {};  // fall back to dead reckoning
-    previous = std::move(solved);
+    LandmarkSlamResult solved_stage = stage.Solve(prefix, prefix_association, &start);
+    if (!solved_stage.summary.IsUsable()) return {};  // fall back to dead reckoning
+    previous = std::move(solved_stage);
+    solved = n;
+    ++stages;
   }
+  if (stages == 0) return {};
   LandmarkSlamResult start;
   start.landmarks = std::move(previous.landmarks);
   start.trajectory = ExtendByOdometry(previous.trajectory, data.dead_reckoning);
+  start.initialisation_stages = stages;
   return start;
 }
 

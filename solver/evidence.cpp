@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include <cholmod.h>
 
@@ -102,6 +103,49 @@ bool CovarianceBlocks(cholmod_factor* factor, const std::vector<int>& inverse_pe
     }
     cholmod_free_dense(&x, cc);
     g = end;
+  }
+  return true;
+}
+
+bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
+                       cholmod_common* cc, const std::vector<std::vector<int>>& columns, int count,
+                       unsigned long seed, std::vector<Eigen::MatrixXd>* samples,
+                       std::string* why) {
+  const int n = static_cast<int>(factor->n);
+  samples->assign(columns.size(), Eigen::MatrixXd());
+  for (size_t g = 0; g < columns.size(); ++g)
+    (*samples)[g].resize(static_cast<Eigen::Index>(columns[g].size()), count);
+  if (!factor->is_ll && factor->is_super) {
+    if (why) *why = "a supernodal LDL' factor";  // CHOLMOD makes none
+    return false;
+  }
+  // LDL' (simplicial): D is the factor's diagonal.
+  const auto* fx = static_cast<const double*>(factor->x);
+  const auto* fp = static_cast<const int*>(factor->p);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int first = 0; first < count; first += kCovarianceBatch) {
+    const int width = std::min(kCovarianceBatch, count - first);
+    cholmod_dense* z = cholmod_zeros(n, width, CHOLMOD_REAL, cc);
+    auto* zx = static_cast<double*>(z->x);
+    for (int c = 0; c < width; ++c)
+      for (int i = 0; i < n; ++i) {
+        const double d = factor->is_ll ? 1.0 : fx[fp[i]];
+        zx[static_cast<size_t>(c) * n + i] = normal(rng) / std::sqrt(std::abs(d));
+      }
+    cholmod_dense* y = cholmod_solve(CHOLMOD_Lt, factor, z, cc);
+    cholmod_free_dense(&z, cc);
+    if (!y) {
+      if (why) *why = "CHOLMOD solve failed";
+      return false;
+    }
+    const auto* yx = static_cast<const double*>(y->x);
+    for (size_t g = 0; g < columns.size(); ++g)
+      for (size_t r = 0; r < columns[g].size(); ++r)
+        for (int c = 0; c < width; ++c)
+          (*samples)[g](static_cast<Eigen::Index>(r), first + c) =
+              yx[static_cast<size_t>(c) * n + inverse_permutation[columns[g][r]]];
+    cholmod_free_dense(&y, cc);
   }
   return true;
 }

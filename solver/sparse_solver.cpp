@@ -367,19 +367,15 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   return finish(termination, message);
 }
 
-bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_groups,
-                                       std::vector<Eigen::MatrixXd>* blocks, std::string* why) {
-  const SerialOpenMpScope serial_openmp;
-  const NormalEquations& normal = impl_->normal;
-  if (!normal.factor_is_final()) {
-    if (why) *why = "no valid final factorisation (call Solve first)";
-    return false;
-  }
-  blocks->assign(key_groups.size(), Eigen::MatrixXd());
-  // The scalar columns of each group.
+namespace {
+
+// The scalar columns of each group of keys; false with `why` for an unknown
+// or fixed key.
+bool GroupColumns(const NormalEquations& normal, const std::vector<std::vector<int>>& key_groups,
+                  std::vector<std::vector<int>>* columns, std::string* why) {
   const std::vector<int>& free_index = normal.layout().free_index;
   const BlockPattern& pattern = normal.pattern();
-  std::vector<std::vector<int>> columns(key_groups.size());
+  columns->assign(key_groups.size(), {});
   for (size_t g = 0; g < key_groups.size(); ++g) {
     for (int key : key_groups[g]) {
       if (key < 0 || key >= static_cast<int>(free_index.size())) {
@@ -391,11 +387,46 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
         if (why) *why = "key " + std::to_string(key) + " is fixed";
         return false;
       }
-      for (int r = 0; r < pattern.dims[v]; ++r) columns[g].push_back(pattern.offsets[v] + r);
+      for (int r = 0; r < pattern.dims[v]; ++r) (*columns)[g].push_back(pattern.offsets[v] + r);
     }
   }
+  return true;
+}
+
+}  // namespace
+
+bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_groups,
+                                       std::vector<Eigen::MatrixXd>* blocks, std::string* why) {
+  const SerialOpenMpScope serial_openmp;
+  const NormalEquations& normal = impl_->normal;
+  if (!normal.factor_is_final()) {
+    if (why) *why = "no valid final factorisation (call Solve first)";
+    return false;
+  }
+  blocks->assign(key_groups.size(), Eigen::MatrixXd());
+  std::vector<std::vector<int>> columns;
+  if (!GroupColumns(normal, key_groups, &columns, why)) return false;
   return CovarianceBlocks(normal.factor(), normal.inverse_permutation(), normal.common(), columns,
                           blocks, why);
+}
+
+bool SparseSolver::CovarianceSamples(const std::vector<std::vector<int>>& key_groups, int count,
+                                     unsigned long seed, std::vector<Eigen::MatrixXd>* samples,
+                                     std::string* why) {
+  const SerialOpenMpScope serial_openmp;
+  const NormalEquations& normal = impl_->normal;
+  if (!normal.factor_is_final()) {
+    if (why) *why = "no valid final factorisation (call Solve first)";
+    return false;
+  }
+  if (count < 1) {
+    if (why) *why = "need at least one draw";
+    return false;
+  }
+  std::vector<std::vector<int>> columns;
+  if (!GroupColumns(normal, key_groups, &columns, why)) return false;
+  return oslam::CovarianceSamples(normal.factor(), normal.inverse_permutation(), normal.common(),
+                                  columns, count, seed, samples, why);
 }
 
 }  // namespace oslam

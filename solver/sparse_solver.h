@@ -179,6 +179,13 @@ class SparseSolver {
   bool MarginalCovariances(const std::vector<std::vector<int>>& key_groups,
                            std::vector<Eigen::MatrixXd>* blocks, std::string* why = nullptr);
 
+  // Draws from the Gaussian at the last Solve's final point, N(0, (J^T J)^{-1})
+  // (evidence.h's CovarianceSamples): per group of keys, a dimension x count
+  // matrix. Same failures as MarginalCovariances.
+  bool CovarianceSamples(const std::vector<std::vector<int>>& key_groups, int count,
+                         unsigned long seed, std::vector<Eigen::MatrixXd>* samples,
+                         std::string* why = nullptr);
+
   // Forget the cached symbolic analysis (the next Solve analyses afresh)
   // and the kept linearisations.
   void ClearCache();

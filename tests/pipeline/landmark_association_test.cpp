@@ -95,8 +95,9 @@ TEST(LandmarkAssociationTest, JointMergeClosesALoopNoSingleMergeCloses) {
   const UnknownAssociationResult with = SolveUnknownAssociation(data, options);
   const PairwiseAgreement a = ComparePairwise(without.association, truth);
   const PairwiseAgreement b = ComparePairwise(with.association, truth);
+  // The true association under the noise the search calibrated.
   const LandmarkSlamResult known =
-      LandmarkSlam(options.target.slam).Solve(data, GivenAssociation(data));
+      LandmarkSlam(options.target.slam).Solve(WithNoiseScales(data, with.noise_scales), truth);
   std::printf(
       "single merges only: P %.3f R %.3f, %zu landmarks, RMSE %.2f m, log target %.1f; joint: "
       "P %.3f R %.3f, %zu landmarks, RMSE %.2f m, log target %.1f (%ld tries, %ld pairs); "
@@ -159,6 +160,10 @@ TEST(LandmarkAssociationTest, NoLandmarkKeepsTwoSightingsOfOneScan) {
   options.tracks = {0.5, 2};
   options.window_poses = 20;
   options.joint_min_inliers = 0;
+  // Under the loose noise as stated (the calibrated noise would not merge
+  // them in the first place).
+  options.calibrate_on_tracks = false;
+  options.calibration_rounds = 0;
   const UnknownAssociationResult result = SolveUnknownAssociation(data, options);
   ASSERT_EQ(result.tracks.size(), 2u);  // one per tree
   std::set<std::pair<int, int>> seen;   // (landmark, pose)
@@ -232,6 +237,7 @@ TEST(LandmarkAssociationTest, TheSweepAloneJoinsDuplicates) {
   options.targeted_radius_m = 0;
   options.hill_climb_steps_per_track = 0;
   options.joint_min_inliers = 0;
+  options.calibration_rounds = 0;  // its merge sweeps too
   const UnknownAssociationResult without = SolveUnknownAssociation(data, options);
   EXPECT_EQ(without.solution.landmarks.size(), without.tracks.size());
   options.sweep_radius_m = 2.0;

@@ -1,5 +1,6 @@
-// Range-bearing and relative-pose factors: analytic Jacobians against central
-// differences, zero error on the model, whitening, bearing wrap-around.
+// Range-bearing, point-sighting and relative-pose factors: analytic
+// Jacobians against central differences, zero error on the model, whitening,
+// bearing wrap-around.
 #include "slam/landmark_factors.h"
 
 #include <cmath>
@@ -84,6 +85,49 @@ TEST(RangeBearingFactorTest, LandmarkOnTheSensorCannotBeEvaluatedAndBadInputThro
   EXPECT_THROW(RangeBearingFactor(p, l, 1.0, NAN, 0.1, 0.01), Error);
   EXPECT_THROW(RangeBearingFactor(p, l, 1.0, 0.0, 0.0, 0.01), Error);
   EXPECT_THROW(RangeBearingFactor(p, l, 1.0, 0.0, 0.1, -0.01), Error);
+}
+
+TEST(PointSightingFactorTest, JacobiansMatchAndZeroOnTheModel) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::Matrix2d covariance;
+  covariance << 0.04, 0.01, 0.01, 0.09;
+  for (const Eigen::Vector2d& mount : {Eigen::Vector2d(0, 0), Eigen::Vector2d(3.78, 0.5)}) {
+    for (int trial = 0; trial < 30; ++trial) {
+      Values values;
+      const int pose = values.AddPose(5 * u(rng), 5 * u(rng), 3.0 * u(rng));
+      const int landmark = values.Add(Eigen::Vector2d(20 * u(rng), 20 * u(rng)));
+      PointSightingFactor factor(pose, landmark, Eigen::Vector2d(10 * u(rng), 10 * u(rng)),
+                                 covariance, mount);
+      ExpectJacobianMatchesNumeric(factor, values, 1e-5);
+    }
+    // On the model the error is zero, and a sighting's squared error is the
+    // factor's.
+    const Pose2 pose{1.0, 2.0, 0.6};
+    LandmarkSighting s;
+    s.cartesian = true;
+    s.xy_covariance = covariance;
+    s.range_m = 9.0;
+    s.bearing_rad = 0.3;
+    const Eigen::Vector2d landmark = LandmarkFromRangeBearing(pose, 9.0, 0.3, mount);
+    Values values;
+    const int p = values.AddPose(pose.x, pose.y, pose.theta);
+    const int l = values.Add(landmark);
+    FactorGraph graph;
+    graph.AddPose(pose.x, pose.y, pose.theta);
+    graph.AddVariable(landmark + Eigen::Vector2d(0.3, -0.2));
+    AddSightingFactor(&graph, 0, 1, s, mount);
+    Eigen::VectorXd error(2);
+    ASSERT_TRUE(graph.factors()[0]->Linearize(values, error, nullptr));
+    EXPECT_LT(error.norm(), 1e-10);
+    ASSERT_TRUE(graph.factors()[0]->Linearize(graph.values(), error, nullptr));
+    EXPECT_NEAR(error.squaredNorm(),
+                SightingSquaredError(s, pose, landmark + Eigen::Vector2d(0.3, -0.2), mount), 1e-9);
+    EXPECT_NEAR(graph.factors()[0]->LogDetCovariance(), std::log(covariance.determinant()), 1e-12);
+    (void)p;
+    (void)l;
+  }
+  EXPECT_THROW(PointSightingFactor(0, 1, Eigen::Vector2d(1, 1), Eigen::Matrix2d::Zero()), Error);
 }
 
 TEST(RelativePoseFactorTest, JacobiansMatchCentralDifferences) {

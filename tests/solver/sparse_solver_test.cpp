@@ -492,5 +492,50 @@ TEST(SolverTest, SameStructureAsTheLastSolveGivesAFreshSolversNumbers) {
     EXPECT_EQ(star.values().Get(key), star_reference.values().Get(key)) << key;
 }
 
+// Draws of the solution's Gaussian (for traces where a block per variable
+// would cost a solve each): their sample covariance is the dense inverse
+// within sampling error, for the simplicial LDL' factor of a small problem
+// and the supernodal LL' factor of a bigger one; the same seed repeats them.
+TEST(SolverTest, CovarianceSamplesDrawFromTheDenseInverse) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  struct Case {
+    int poses, objects;
+  };
+  for (const Case c : {Case{25, 3}, Case{120, 14}}) {
+    FactorGraph graph = SmallSlamGraph(camera, 4, c.poses, c.objects);
+    SolverOptions options;
+    options.apply_final_step = false;
+    SparseSolver solver(options);
+    ASSERT_TRUE(solver.Solve(&graph).summary.IsUsable());
+    std::vector<std::vector<int>> groups;
+    for (int key = c.poses; key + 1 < graph.num_variables(); key += 2)
+      groups.push_back({key, key + 1});
+    groups.push_back({5, c.poses - 3});
+    std::vector<Eigen::MatrixXd> blocks, draws, again;
+    ASSERT_TRUE(solver.MarginalCovariances(groups, &blocks));
+    const int count = 20000;
+    ASSERT_TRUE(solver.CovarianceSamples(groups, count, 7, &draws));
+    ASSERT_TRUE(solver.CovarianceSamples(groups, 3, 7, &again));
+    ASSERT_EQ(draws.size(), groups.size());
+    for (size_t g = 0; g < groups.size(); ++g) {
+      ASSERT_EQ(draws[g].rows(), blocks[g].rows());
+      ASSERT_EQ(draws[g].cols(), count);
+      EXPECT_TRUE(again[g].isApprox(draws[g].leftCols(3), 1e-12));
+      const Eigen::MatrixXd sample = draws[g] * draws[g].transpose() / count;
+      for (int r = 0; r < sample.rows(); ++r)
+        for (int q = 0; q < sample.cols(); ++q)
+          // A sample covariance of n draws has a std of at most
+          // sqrt(2 / n) sqrt(S_rr S_qq) (1.4 %): 4 of them.
+          EXPECT_NEAR(sample(r, q), blocks[g](r, q),
+                      0.06 * std::sqrt(blocks[g](r, r) * blocks[g](q, q)))
+              << "group " << g << " (" << r << ", " << q << "), " << c.poses << " poses";
+    }
+    std::vector<Eigen::MatrixXd> none;
+    std::string why;
+    EXPECT_FALSE(solver.CovarianceSamples(groups, 0, 7, &none, &why));
+    EXPECT_FALSE(why.empty());
+  }
+}
+
 }  // namespace
 }  // namespace oslam
