@@ -10,6 +10,7 @@
 #include "apps/stage_bindings.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "pipeline/run_report.h"
 
 namespace oslam {
 namespace {
@@ -65,6 +66,7 @@ int RunRunCommand(const std::vector<std::string>& args) {
   const RunPipelineResult result =
       RunPipeline(arguments.Get("VIDEO_DIR"), out_dir, options, callbacks);
   if (!quiet) {
+    std::printf("input: %s\n", InputSummary(result).c_str());
     for (const StageTime& t : result.times) PrintTime(t);
     PrintTime(result.Total());
     if (result.metrics) std::fputs(result.metrics->Table().c_str(), stdout);

@@ -23,6 +23,27 @@ namespace fs = std::filesystem;
 
 // ---------------------------------------------------------------- classes
 
+const char* ObjectShapeName(ObjectShape shape) {
+  switch (shape) {
+    case ObjectShape::kBox:
+      return "box";
+    case ObjectShape::kSphere:
+      return "sphere";
+    case ObjectShape::kPanel:
+      return "panel";
+    case ObjectShape::kCylinder:
+      break;
+  }
+  return "cylinder";
+}
+
+std::optional<ObjectShape> ParseObjectShape(const std::string& name) {
+  for (const ObjectShape shape :
+       {ObjectShape::kCylinder, ObjectShape::kBox, ObjectShape::kSphere, ObjectShape::kPanel})
+    if (name == ObjectShapeName(shape)) return shape;
+  return std::nullopt;
+}
+
 namespace {
 
 // A colour box wider than this many standard deviations holds every colour.
@@ -30,9 +51,9 @@ constexpr double kMaxSigmas = 100.0;
 // Radial length over arc width of an object's image: far beyond any object.
 constexpr double kMaxElongation = 1000.0;
 
-const std::vector<std::string> kClassKeys = {"name",           "display_rgb",   "diameter_mean_m",
-                                             "diameter_std_m", "height_mean_m", "height_std_m",
-                                             "colour",         "image_shape"};
+const std::vector<std::string> kClassKeys = {
+    "name",          "display_rgb",  "shape",  "diameter_mean_m", "diameter_std_m",
+    "height_mean_m", "height_std_m", "colour", "image_shape"};
 
 ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std::string& prefix) {
   if (!node.isMap()) file.Fail(prefix, "each class must be a mapping");
@@ -45,6 +66,11 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
   for (int c = 0; c < 3; ++c) {
     if (rgb[c] < 0 || rgb[c] > 255) file.Fail(key + "display_rgb", "entries must be 0..255");
     object_class.display_rgb[c] = static_cast<int>(std::lround(rgb[c]));
+  }
+  if (!node["shape"].empty() && !node["shape"].isNone()) {
+    const std::optional<ObjectShape> shape = ParseObjectShape(file.String(node, "shape", key));
+    if (!shape) file.Fail(key + "shape", "must be one of cylinder, box, sphere, panel");
+    object_class.shape = *shape;
   }
   object_class.diameter_mean_m = file.Double(node, "diameter_mean_m", key);
   object_class.diameter_std_m = file.Double(node, "diameter_std_m", key);
@@ -154,6 +180,7 @@ void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& pa
     fs << "{";
     fs << "name" << c.name;
     fs << "display_rgb" << std::vector<int>(c.display_rgb.begin(), c.display_rgb.end());
+    if (c.shape != ObjectShape::kCylinder) fs << "shape" << ObjectShapeName(c.shape);
     fs << "diameter_mean_m" << c.diameter_mean_m << "diameter_std_m" << c.diameter_std_m;
     fs << "height_mean_m" << c.height_mean_m << "height_std_m" << c.height_std_m;
     if (c.colour) {

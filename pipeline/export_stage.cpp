@@ -12,6 +12,7 @@ ExportOptions ExportStageOptions::Models() const {
   ExportOptions models;
   models.min_existence = min_existence;
   models.floor_grid = floor_grid;
+  models.camera_every = camera_every;
   return models;
 }
 
@@ -26,6 +27,10 @@ bool ExportStageOptions::Validate(std::string* why) const {
   if (!Models().Validate(why) || !Figures().Validate(why)) return false;
   if (threads < 0) {
     if (why) *why = "the overlay threads must be >= 0 (0 = one per core)";
+    return false;
+  }
+  if (!ParseOverlayFormat(overlay_format)) {
+    if (why) *why = "the overlay format must be jpg or png, not '" + overlay_format + "'";
     return false;
   }
   return true;
@@ -48,11 +53,9 @@ void RunExportStage(const OMap& map, const ExportStageInput& input,
   }
   CreateOutputFolder(out);
 
-  WriteModels(scene, options.Models(), out, options.ascii_ply, output.quiet);
-  WriteFigures(scene, options.Figures(), out, output.quiet);
-  if (overlays)
-    WriteOverlays(scene, *overlays, options.min_existence, out / "overlays", output.quiet,
-                  options.threads);
+  WriteExportFiles(scene, options.Models(), options.ascii_ply, options.Figures(),
+                   overlays ? &*overlays : nullptr, *ParseOverlayFormat(options.overlay_format),
+                   out, output.quiet, options.threads);
   output.Print("wrote " + out.string());
 }
 

@@ -4,9 +4,7 @@
 #include <ctime>
 #include <filesystem>
 #include <functional>
-#include <sstream>
 
-#include <nlohmann/json.hpp>
 
 #include "calib/camera_io.h"
 #include "core/atomic_file.h"
@@ -14,57 +12,13 @@
 #include "core/run_folder.h"
 #include "core/text.h"
 #include "omap/omap_json.h"
+#include "pipeline/run_report.h"
 #include "pipeline/run_status.h"
 
 namespace oslam {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string Fixed(double value, int digits) {
-  return Format("%.*f", digits, value);
-}
-
-std::string Report(const std::string& run_dir, const std::string& out_dir,
-                   const RunPipelineOptions& options, const RunPipelineResult& result,
-                   const nlohmann::json& omap_json) {
-  std::ostringstream md;
-  md << "# oslam run\n\nInput: `" << run_dir << "`; method: " << SlamMethodName(options.slam.method)
-     << ", seed " << options.slam.sampler.seed << ". Configuration: `config.yaml`.\n\n";
-  md << "![bird's-eye view](birdseye.png) ![perspective view](perspective.png)\n\n";
-  if (fs::exists(fs::path(out_dir) / "trajectories.png"))
-    md << "![trajectory error](trajectories.png)\n\n";
-  md << "3D map: `map.glb` (Blender: File > Import > glTF 2.0), `map.ply` (MeshLab).\n\n";
-
-  md << "## Timings\n\n| stage | seconds | CPU seconds |\n|---|---|---|\n";
-  for (const StageTime& t : result.times)
-    md << "| " << t.name << " | " << Fixed(t.seconds, 2) << " | " << Fixed(t.cpu_seconds, 2)
-       << " |\n";
-  const StageTime total = result.Total();
-  md << "| total | " << Fixed(total.seconds, 2) << " | " << Fixed(total.cpu_seconds, 2) << " |\n\n";
-
-  md << "## Objects\n\n| id | class | existence | x m | y m | z m | diameter m | height m | "
-        "detections |\n|---|---|---|---|---|---|---|---|---|\n";
-  for (const OMapObject& o : result.map.objects) {
-    md << "| " << o.id << " | " << o.class_name << " | " << Fixed(o.existence_probability, 2)
-       << " | " << Fixed(o.base_world.x(), 2) << " | " << Fixed(o.base_world.y(), 2) << " | "
-       << Fixed(o.base_world.z(), 2) << " | " << Fixed(o.diameter_m, 2) << " | "
-       << Fixed(o.height_m, 2) << " | " << o.num_detections << " |\n";
-  }
-  if (omap_json.contains("sampler"))
-    md << "\n## Sampler convergence\n\n```json\n" << omap_json["sampler"].dump(1) << "\n```\n";
-  // Run times are kept out of omap.json (the same input and seed give the
-  // same file); here is where they are read.
-  if (!result.slam.timing.empty()) {
-    nlohmann::ordered_json timing = nlohmann::ordered_json::object();
-    for (const OMapReport& report : result.slam.timing)
-      timing[report.name] = nlohmann::ordered_json::parse(report.json);
-    md << "\n## Run times of the sampler\n\n```json\n" << timing.dump(1) << "\n```\n";
-  }
-  if (result.metrics)
-    md << "\n## Against ground truth\n\n```\n" << result.metrics->Table() << "```\n";
-  return md.str();
-}
 
 // Runs `body` as stage `index` of 3 and records its wall and CPU time.
 template <typename Body>
@@ -166,27 +120,33 @@ RunPipelineResult RunStagesOf(const std::string& run_dir, const std::string& out
   result.metrics = RunEvalStage(result.map, run_dir, eval_path, options.eval);
   if (result.metrics) result.eval_path = eval_path;
   status->Mark("eval", "complete");
-  // The raw JSON also carries the sampler's report.
-  const nlohmann::json omap_json = nlohmann::json::parse(ReadTextFile(result.omap_path));
-  result.report_path = (out / "report.md").string();
   status->Mark("report", "running");
-  WriteTextFileAtomically(result.report_path, Report(run_dir, out_dir, options, result, omap_json));
+  const std::string trace = options.slam.method == SlamMethod::kOSlam
+                                ? WriteSamplerTrace(result.slam.sampler.summary, out_dir)
+                                : "";
+  result.report_path = (out / "report.md").string();
+  WriteTextFileAtomically(result.report_path, RunReport(run_dir, options, result, trace));
   status->Mark("report", "complete");
   return result;
 }
 
 std::vector<RunStage> RunStages(const std::string& run_dir, const RunPipelineOptions& options) {
   const bool truth = fs::is_directory(fs::path(run_dir) / "ground_truth");
-  std::vector<std::string> exported = {"map.glb",        "map.gltf",     "map.ply",
-                                       "trajectory.ply", "birdseye.png", "perspective.png"};
-  if (truth) exported.push_back("trajectories.png");
+  std::vector<std::string> exported = {
+      "map.glb",      "map.gltf",     "map.ply",      "trajectory.ply", "trajectory_estimated.txt",
+      "birdseye.png", "birdseye.svg", "birdseye.csv", "perspective.png"};
+  if (fs::exists(RunFolderPaths::Of(run_dir).odometry)) exported.push_back("trajectory_odometry.txt");
+  if (truth)
+    for (const char* file :
+         {"trajectory_truth.txt", "trajectories.png", "trajectories.svg", "trajectories.csv"})
+      exported.push_back(file);
   if (options.export_.overlays) exported.push_back("overlays/");
   return {{"configuration", {"config.yaml"}},
           {"detect", {"detections.csv"}},
           {"o-slam", {"omap.json"}},
           {"export", exported},
           {"eval", truth ? std::vector<std::string>{"eval.json"} : std::vector<std::string>{}},
-          {"report", {"report.md"}}};
+          {"report", {"report.md", "sampler_trace.png", "sampler_trace.svg", "sampler_trace.csv"}}};
 }
 
 }  // namespace

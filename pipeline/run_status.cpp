@@ -63,9 +63,10 @@ bool IsFolder(const std::string& file) {
   return !file.empty() && file.back() == '/';
 }
 
-// An overlay image's name: six digits and ".png".
-bool IsNumberedPng(const std::string& name) {
-  return name.size() == 10 && name.compare(6, 4, ".png") == 0 &&
+// An overlay image's name: six digits and ".png" or ".jpg".
+bool IsNumberedImage(const std::string& name) {
+  return name.size() == 10 &&
+         (name.compare(6, 4, ".png") == 0 || name.compare(6, 4, ".jpg") == 0) &&
          std::all_of(name.begin(), name.begin() + 6, [](char c) { return c >= '0' && c <= '9'; });
 }
 
@@ -83,7 +84,7 @@ void Remove(const fs::path& out, const std::string& file) {
   const fs::path folder = out / file.substr(0, file.size() - 1);
   if (fs::is_symlink(folder, ec) || !fs::is_directory(folder, ec)) return;
   for (const fs::path& image : FilesOf(folder))
-    if (IsNumberedPng(image.filename().string())) fs::remove(image, ec);
+    if (IsNumberedImage(image.filename().string())) fs::remove(image, ec);
   if (fs::is_empty(folder, ec)) fs::remove(folder, ec);
 }
 

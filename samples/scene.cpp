@@ -550,6 +550,16 @@ Scene LoadScene(const std::string& path) {
       scene.objects.push_back(ParseObject(r, list[i], prefix, scene.classes));
     }
   }
+  // A class is exported in the shape of its objects in the scene (the first
+  // one's; cylinder when the scene has none of the class).
+  for (ObjectClass& c : scene.classes) {
+    for (const SceneObject& object : scene.objects) {
+      if (object.class_name != c.name) continue;
+      if (const std::optional<ObjectShape> shape = ParseObjectShape(ShapeName(object.shape)))
+        c.shape = *shape;
+      break;
+    }
+  }
   scene.lighting = ParseLighting(r, root);
   scene.sensor = ParseSensor(r, root);
   scene.path_spec = ParsePath(r, root);

@@ -44,6 +44,7 @@ TEST(Classes, WriteThenReadRoundTrips) {
   ball.name = "pink ball";
   ball.colour = ColourBox{{150, 120, 170}, {8, 3, 4}, 3.0};
   ball.image_shape = ImageShapeModel{1.02, 0.04};
+  ball.shape = ObjectShape::kSphere;
   WriteClasses({GreenBox(), ball}, dir.Path("classes.yaml"));
   const std::vector<ObjectClass> read = ReadClasses(dir.Path("classes.yaml"));
   ASSERT_EQ(read.size(), 2u);
@@ -57,6 +58,8 @@ TEST(Classes, WriteThenReadRoundTrips) {
   ASSERT_TRUE(read[1].image_shape.has_value());
   EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_mean, 1.02);
   EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_std, 0.04);
+  EXPECT_EQ(read[0].shape, ObjectShape::kCylinder);
+  EXPECT_EQ(read[1].shape, ObjectShape::kSphere);
   EXPECT_EQ(FindClass(read, "pink ball"), 1);
   EXPECT_EQ(FindClass(read, "unicorn"), -1);
 }
@@ -75,8 +78,15 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
   EXPECT_EQ(ReadClasses(path).at(0).name, "door");
   EXPECT_EQ(error_for(good + "    size: 3\n"),
             path +
-                ": classes[0].size: unknown key (allowed: name, display_rgb, diameter_mean_m, "
-                "diameter_std_m, height_mean_m, height_std_m, colour, image_shape)");
+                ": classes[0].size: unknown key (allowed: name, display_rgb, shape, "
+                "diameter_mean_m, diameter_std_m, height_mean_m, height_std_m, colour, "
+                "image_shape)");
+  EXPECT_EQ(error_for(good + "    shape: cone\n"),
+            path + ": classes[0].shape: must be one of cylinder, box, sphere, panel");
+  std::ofstream(path) << good;
+  EXPECT_EQ(ReadClasses(path).at(0).shape, ObjectShape::kCylinder);  // the default
+  std::ofstream(path) << good << "    shape: panel\n";
+  EXPECT_EQ(ReadClasses(path).at(0).shape, ObjectShape::kPanel);
   EXPECT_EQ(error_for(good + good.substr(9)), path + ": classes[1].name: duplicate class 'door'");
   EXPECT_TRUE(Contains(error_for("classes: []\n"), "no classes listed"));
   std::string negative = good;

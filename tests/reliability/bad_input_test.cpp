@@ -227,7 +227,7 @@ TEST_F(BadInput, AFigureSizeOf100000IsAUsageErrorBeforeAnyFile) {
     const std::string out = dir_.Path(std::string("out_") + command);
     const OslamResult r = Oslam(std::string(command) + " " + run_ + "/omap.json -o " + out +
                                 " --figure-size 100000 --quiet");
-    Row(std::string(command) + " --figure-size 100000", r, 2, {"at most 8192x8192"}, FilesLeft(out),
+    Row(std::string(command) + " --figure-size 100000", r, 2, {"64 to 8192 pixels"}, FilesLeft(out),
         5);
     EXPECT_TRUE(FilesUnder(out).empty());
   }
