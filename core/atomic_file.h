@@ -8,7 +8,7 @@
 
 namespace oslam {
 
-// For a library that can only write to a path (PCL's PLY writer): calls
+// For a library that can only write to a path: calls
 // write(memory_path), a path to an in-memory file (memfd), then writes what
 // it wrote to `path` with WriteFileAtomically. Libraries do not always check
 // their own writes; a memory file does not fill up, and the one write to

@@ -13,7 +13,8 @@
 namespace oslam {
 
 // One stage of a run and the files it writes, relative to the output folder
-// (a name ending in '/' is a folder of NNNNNN.png images, e.g. "overlays/").
+// (a name ending in '/' is a folder of NNNNNN.jpg or .png images, e.g.
+// "overlays/").
 struct RunStage {
   std::string name;
   std::vector<std::string> files;
