@@ -14,6 +14,7 @@
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
+#include "core/text.h"
 #include "core/yaml.h"
 
 namespace oslam {
@@ -126,46 +127,58 @@ std::optional<ConfusionMatrix> ReadConfusion(const std::string& path) {
   return matrix;
 }
 
+namespace {
+
+// YAML double-quoted scalar ("green box", with \" and \\ escaped).
+std::string QuotedYaml(const std::string& text) {
+  std::string quoted = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') quoted += '\\';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+// A YAML flow sequence of numbers, each in the shortest text that reads back
+// as the same double ("[0.6, 12.5, 3]").
+template <typename Range>
+std::string NumberList(const Range& values) {
+  std::string list = "[";
+  for (const auto& value : values) list += (list.size() > 1 ? ", " : "") + Number(value);
+  return list + "]";
+}
+
+}  // namespace
+
 void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& path,
                   const std::optional<ConfusionMatrix>& confusion) {
-  WriteAtomically(path, [&](const std::string& temp_path) {
-    cv::FileStorage fs(temp_path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
-    if (!fs.isOpened()) throw Error::InFile(path, "cannot open for writing");
-    fs << "classes"
-       << "[";
-    for (const ObjectClass& c : classes) {
-      fs << "{";
-      fs << "name" << c.name;
-      fs << "display_rgb" << std::vector<int>(c.display_rgb.begin(), c.display_rgb.end());
-      fs << "diameter_mean_m" << c.diameter_mean_m << "diameter_std_m" << c.diameter_std_m;
-      fs << "height_mean_m" << c.height_mean_m << "height_std_m" << c.height_std_m;
-      if (c.colour) {
-        fs << "colour"
-           << "{";
-        fs << "yuv_mean"
-           << std::vector<double>(c.colour->yuv_mean.begin(), c.colour->yuv_mean.end());
-        fs << "yuv_std" << std::vector<double>(c.colour->yuv_std.begin(), c.colour->yuv_std.end());
-        fs << "k_sigma" << c.colour->k_sigma;
-        fs << "}";
-      }
-      if (c.image_shape) {
-        fs << "image_shape"
-           << "{";
-        fs << "elongation_mean" << c.image_shape->elongation_mean;
-        fs << "elongation_std" << c.image_shape->elongation_std;
-        fs << "}";
-      }
-      fs << "}";
+  std::ostringstream out;
+  out << "%YAML:1.0\n---\n";  // cv::FileStorage needs the directive
+  out << "classes:\n";
+  for (const ObjectClass& c : classes) {
+    out << "  - name: " << QuotedYaml(c.name) << "\n";
+    out << "    display_rgb: " << NumberList(c.display_rgb) << "\n";
+    out << "    diameter_mean_m: " << Number(c.diameter_mean_m) << "\n";
+    out << "    diameter_std_m: " << Number(c.diameter_std_m) << "\n";
+    out << "    height_mean_m: " << Number(c.height_mean_m) << "\n";
+    out << "    height_std_m: " << Number(c.height_std_m) << "\n";
+    if (c.colour) {
+      out << "    colour:\n";
+      out << "      yuv_mean: " << NumberList(c.colour->yuv_mean) << "\n";
+      out << "      yuv_std: " << NumberList(c.colour->yuv_std) << "\n";
+      out << "      k_sigma: " << Number(c.colour->k_sigma) << "\n";
     }
-    fs << "]";
-    if (confusion) {
-      fs << "confusion"
-         << "[";
-      for (const std::vector<double>& row : *confusion) fs << row;
-      fs << "]";
+    if (c.image_shape) {
+      out << "    image_shape:\n";
+      out << "      elongation_mean: " << Number(c.image_shape->elongation_mean) << "\n";
+      out << "      elongation_std: " << Number(c.image_shape->elongation_std) << "\n";
     }
-    fs.release();
-  });
+  }
+  if (confusion) {
+    out << "confusion:\n";
+    for (const std::vector<double>& row : *confusion) out << "  - " << NumberList(row) << "\n";
+  }
+  WriteTextFileAtomically(path, out.str());
 }
 
 int FindClass(const std::vector<ObjectClass>& classes, const std::string& name) {

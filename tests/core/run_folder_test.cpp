@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "test_util.h"
 
@@ -59,6 +60,31 @@ TEST(Classes, WriteThenReadRoundTrips) {
   EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_std, 0.04);
   EXPECT_EQ(FindClass(read, "pink ball"), 1);
   EXPECT_EQ(FindClass(read, "unicorn"), -1);
+}
+
+// Numbers are stored in their shortest exact form, names quoted, so the file
+// stays readable and edits by hand are easy; and they read back bit-exactly.
+TEST(Classes, NumbersAreWrittenShortAndReadBackExactly) {
+  testing::TempDir dir;
+  ObjectClass odd = GreenBox();
+  odd.name = "say \"hi\" \\ box";
+  odd.diameter_std_m = 0.1 + 0.2;  // 0.30000000000000004: must survive exactly
+  odd.colour = ColourBox{{150.25, 0.6, 1e-8}, {8, 3, 4}, 2.5};
+  const ConfusionMatrix confusion = {{0.6, 0.4}, {0.3, 0.7}};
+  WriteClasses({GreenBox(), odd}, dir.Path("classes.yaml"), confusion);
+  const std::string text = ReadTextFile(dir.Path("classes.yaml"));
+  EXPECT_TRUE(Contains(text, "diameter_mean_m: 0.6\n")) << text;
+  EXPECT_TRUE(Contains(text, "yuv_mean: [150.25, 0.6, 1e-08]")) << text;
+  EXPECT_TRUE(Contains(text, "- [0.6, 0.4]")) << text;
+  EXPECT_FALSE(Contains(text, "e-01")) << text;
+  const std::vector<ObjectClass> read = ReadClasses(dir.Path("classes.yaml"));
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_EQ(read[1].name, odd.name);
+  EXPECT_EQ(read[1].diameter_std_m, 0.1 + 0.2);
+  ASSERT_TRUE(read[1].colour.has_value());
+  EXPECT_EQ(read[1].colour->yuv_mean, odd.colour->yuv_mean);
+  EXPECT_EQ(read[1].colour->k_sigma, 2.5);
+  EXPECT_EQ(ReadConfusion(dir.Path("classes.yaml")), confusion);
 }
 
 TEST(Classes, BadFilesAreReportedWithTheKey) {
