@@ -23,6 +23,8 @@ void CheckOutputFolder(const std::string& run_dir) {
   const fs::path frames = fs::path(run_dir) / "frames";
   if (fs::is_directory(frames) && !fs::is_empty(frames))
     throw Error::InFile(run_dir, "already holds a run (frames/ is not empty); choose a new folder");
+  if (fs::exists(fs::path(run_dir) / "video.mp4"))
+    throw Error::InFile(run_dir, "already holds a run (video.mp4); choose a new folder");
 }
 
 // Progress on stderr: updates overwrite one line on a terminal, and only the
@@ -47,6 +49,9 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
   arguments.AddOption("output", "-o", "RUN_DIR", "run folder to write (new or empty)");
   arguments.AddOption("seed", "", "N", "random seed (default: the scene's seed)");
   arguments.AddOption("frames", "", "N", "render at most N frames (default: the whole path)");
+  arguments.AddOption("video", "", "FPS",
+                      "write the frames as one video, RUN_DIR/video.mp4 at FPS frames/s,\n"
+                      "instead of PNGs in RUN_DIR/frames/");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("output")) throw UsageError("missing -o RUN_DIR");
@@ -63,6 +68,11 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
   if (arguments.Has("frames")) {
     options.max_frames = arguments.GetInt("frames");
     if (options.max_frames < 1) throw UsageError("--frames must be at least 1");
+  }
+  if (arguments.Has("video")) {
+    options.video_frame_rate_hz = arguments.GetDouble("video");
+    if (!(options.video_frame_rate_hz > 0) || options.video_frame_rate_hz > 1000)
+      throw UsageError("--video expects a frame rate in frames/s (e.g. 30)");
   }
   CheckOutputFolder(run_dir);
   const bool quiet = arguments.Flag("quiet");

@@ -13,6 +13,7 @@
 #include "core/run_folder.h"
 #include "core/text.h"
 #include "omap/omap_json.h"
+#include "pipeline/timed_run.h"
 
 namespace oslam {
 namespace {
@@ -27,8 +28,11 @@ std::string Report(const std::string& run_dir, const std::string& out_dir,
                    const RunPipelineOptions& options, const RunPipelineResult& result,
                    const nlohmann::json& omap_json) {
   std::ostringstream md;
-  md << "# oslam run\n\nInput: `" << run_dir << "`; method: " << SlamMethodName(options.slam.method)
-     << ", seed " << options.slam.sampler.seed << ". Configuration: `config.yaml`.\n\n";
+  md << "# oslam run\n\nInput: `" << run_dir << "`";
+  if (result.selection)
+    md << " (odometry by time: " << result.selection->Summary() << ", run folder `run/`)";
+  md << "; method: " << SlamMethodName(options.slam.method) << ", seed "
+     << options.slam.sampler.seed << ". Configuration: `config.yaml`.\n\n";
   md << "![bird's-eye view](birdseye.png) ![perspective view](perspective.png)\n\n";
   if (fs::exists(fs::path(out_dir) / "trajectories.png"))
     md << "![trajectory error](trajectories.png)\n\n";
@@ -71,7 +75,8 @@ void TimeStage(const std::string& name, int index, const RunPipelineCallbacks& c
 }  // namespace
 
 bool RunPipelineOptions::Validate(std::string* why) const {
-  return detect.Validate(why) && slam.Validate(why) && export_.Validate(why) && eval.Validate(why);
+  return detect.Validate(why) && slam.Validate(why) && export_.Validate(why) &&
+         eval.Validate(why) && frames.Validate(why);
 }
 
 StageTime RunPipelineResult::Total() const {
@@ -83,10 +88,23 @@ StageTime RunPipelineResult::Total() const {
   return total;
 }
 
-void CheckRunInputs(const std::string& run_dir) {
+void CheckRunInputs(const std::string& run_dir, const FrameSelectionOptions& frame_options) {
   const RunFolderPaths paths = RunFolderPaths::Of(run_dir);
   const FrameSource frames(run_dir);
-  ReadOdometry(paths.odometry, static_cast<long>(frames.size()));
+  if (fs::is_regular_file(paths.odometry) && IsTimedOdometry(paths.odometry)) {
+    if (frames.times().empty())
+      throw Error::InFile(paths.odometry,
+                          "is by time (stamp_s) but the frames have no times: give "
+                          "frame_times.csv (frame,stamp_s) or a video with a frame rate");
+    try {
+      SelectFrames(ReadTimedOdometry(paths.odometry), frames.times(), frame_options);
+    } catch (const Error& e) {
+      if (std::string(e.what()).rfind(paths.odometry, 0) == 0) throw;
+      throw Error::InFile(paths.odometry, e.what());
+    }
+  } else {
+    ReadOdometry(paths.odometry, static_cast<long>(frames.size()));
+  }
   LoadCamera(paths.camera);
   const std::vector<ObjectClass> classes = ReadClasses(paths.classes);
   bool any_colour = false;
@@ -96,12 +114,12 @@ void CheckRunInputs(const std::string& run_dir) {
                         "no class has a colour model (run 'oslam train-colors' first)");
 }
 
-RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out_dir,
+RunPipelineResult RunPipeline(const std::string& source_run, const std::string& out_dir,
                               const RunPipelineOptions& options,
                               const RunPipelineCallbacks& callbacks) {
   std::string why;
   if (!options.Validate(&why)) throw Error("configuration: " + why);
-  CheckRunInputs(run_dir);
+  CheckRunInputs(source_run, options.frames);
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) throw Error::InFile(out_dir, "cannot create the output folder: " + ec.message());
@@ -113,6 +131,16 @@ RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out
   SetFrameCacheLimit(size_t{1} << 30);
   RunPipelineResult result;
   const fs::path out(out_dir);
+  // Odometry by time: the stages run on the kept frames, written as a run
+  // folder with one odometry row per frame.
+  std::string run_dir = source_run;
+  if (IsTimedOdometry(RunFolderPaths::Of(source_run).odometry)) {
+    TimedRunResult timed =
+        PrepareTimedRun(source_run, (out / "run").string(), options.frames, callbacks.output);
+    callbacks.output.Print("frames: " + timed.selection.Summary());
+    run_dir = result.timed_run_dir = timed.run_dir;
+    result.selection = std::move(timed.selection);
+  }
   result.detections_path = (out / "detections.csv").string();
   result.omap_path = (out / "omap.json").string();
   const StageOutput& output = callbacks.output;
@@ -135,7 +163,8 @@ RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out
   // The raw JSON also carries the sampler's report.
   const nlohmann::json omap_json = nlohmann::json::parse(ReadTextFile(result.omap_path));
   result.report_path = (out / "report.md").string();
-  WriteTextFileAtomically(result.report_path, Report(run_dir, out_dir, options, result, omap_json));
+  WriteTextFileAtomically(result.report_path,
+                          Report(source_run, out_dir, options, result, omap_json));
   return result;
 }
 

@@ -49,7 +49,7 @@ LoadedInput Load(const SlamStageInput& input, const SlamStageOptions& options) {
   loaded.data.first_pose = odometry.poses.front();
   loaded.odometry = odometry.poses;
   const std::string detections_path =
-      input.detections_path.empty() ? input.run_dir + "/detections.csv" : input.detections_path;
+      input.detections_path.empty() ? paths.detections : input.detections_path;
   const std::vector<Detection> read =
       input.detections ? std::vector<Detection>() : ReadDetections(detections_path, classes);
   const long frames = static_cast<long>(odometry.increments.size());

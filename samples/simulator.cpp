@@ -5,10 +5,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <future>
+#include <optional>
 #include <random>
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "calib/camera_io.h"
 #include "core/atomic_file.h"
@@ -52,6 +54,32 @@ void WriteFrame(const cv::Mat& image, const std::string& path) {
       throw Error::InFile(path, "cannot write PNG");
   });
 }
+
+// RUN/video.mp4, written under a temporary name and renamed when complete
+// (a reader never sees half a video).
+class VideoOutput {
+ public:
+  VideoOutput(const std::string& run_dir, double frame_rate_hz, cv::Size size)
+      : path_((fs::path(run_dir) / "video.mp4").string()),
+        temp_path_((fs::path(run_dir) / "video.partial.mp4").string()) {
+    for (const char* codec : {"avc1", "mp4v"}) {
+      const int fourcc = cv::VideoWriter::fourcc(codec[0], codec[1], codec[2], codec[3]);
+      if (writer_.open(temp_path_, cv::CAP_FFMPEG, fourcc, frame_rate_hz, size)) return;
+    }
+    throw Error::InFile(path_, "OpenCV cannot write an mp4 video (no H.264 or MPEG-4 encoder)");
+  }
+  void Write(const cv::Mat& frame) { writer_.write(frame); }
+  void Finish() {
+    writer_.release();
+    std::error_code ec;
+    fs::rename(temp_path_, path_, ec);
+    if (ec) throw Error::InFile(path_, "cannot rename the finished video: " + ec.message());
+  }
+
+ private:
+  std::string path_, temp_path_;
+  cv::VideoWriter writer_;
+};
 
 // One row of ground_truth/visible_slices.csv: the pixel-measured slice of a
 // sighting's visible part.
@@ -129,7 +157,8 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
                 summary.frames, summary.path_length_m, summary.odometry_final_error_m);
   report(line, true);
 
-  fs::create_directories(fs::path(run_dir) / "frames");
+  const bool video = options.video_frame_rate_hz > 0;
+  fs::create_directories(video ? fs::path(run_dir) : fs::path(run_dir) / "frames");
   SaveCamera(*scene.camera, RunFolderPaths::Of(run_dir).camera);
   WriteClasses(scene.classes, RunFolderPaths::Of(run_dir).classes);
 
@@ -146,6 +175,10 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
   // PNG encoding of frame i overlaps the rendering of frame i + 1; the bytes
   // do not depend on the timing.
   std::future<void> pending_write;
+  std::optional<VideoOutput> video_output;
+  if (video)
+    video_output.emplace(run_dir, options.video_frame_rate_hz,
+                         cv::Size(scene.camera->image_width(), scene.camera->image_height()));
   for (long frame = 0; frame < summary.frames; ++frame) {
     const Clock::time_point frame_start = Clock::now();
     FrameConditions conditions;
@@ -157,8 +190,11 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
                  &truth.sightings, &visible_rows);
     summary.render_seconds += SecondsSince(frame_start);
     if (pending_write.valid()) pending_write.get();  // rethrows a failed write
-    pending_write =
-        std::async(std::launch::async, WriteFrame, render.image.clone(), FramePath(run_dir, frame));
+    if (video_output)
+      video_output->Write(render.image);
+    else
+      pending_write = std::async(std::launch::async, WriteFrame, render.image.clone(),
+                                 FramePath(run_dir, frame));
     if ((frame + 1) % 10 == 0 || frame + 1 == summary.frames) {
       std::snprintf(line, sizeof(line), "render: frame %ld/%ld (%.1f frames/s rendering)",
                     frame + 1, summary.frames,
@@ -167,6 +203,7 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
     }
   }
   if (pending_write.valid()) pending_write.get();
+  if (video_output) video_output->Finish();
   summary.sightings = static_cast<long>(truth.sightings.size());
 
   // Odometry and ground truth last: a run folder with odometry.csv is complete.

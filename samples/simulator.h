@@ -14,6 +14,10 @@ namespace oslam {
 struct SimulationOptions {
   std::uint64_t seed = 1;
   long max_frames = -1;  // -1: the scene's frames (or the whole path)
+  // > 0: the frames go into one video file RUN/video.mp4 at this frame rate
+  // (H.264 when OpenCV's FFmpeg has an encoder for it, else MPEG-4 part 2)
+  // instead of PNGs in RUN/frames/.
+  double video_frame_rate_hz = 0.0;
   // Called with one line per stage and, during rendering, with progress
   // updates (final = true for the stage's last line).
   std::function<void(const std::string& line, bool final)> progress;

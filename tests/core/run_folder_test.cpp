@@ -6,9 +6,11 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "test_util.h"
 
 namespace oslam {
@@ -181,10 +183,70 @@ TEST(Frames, ImagesAreSortedByNameAndBadImagesNamed) {
             dir.Path("frames/000003.jpg") + ": cannot read image (corrupt or not an image)");
 }
 
+// A short video whose frame i is a flat grey of level 10·i: lossy codecs
+// shift flat frames by a few levels (about -4 here), less than the half step
+// that would mistake one frame for its neighbour.
+std::string WriteGreyVideo(const std::string& path, int frames, double fps) {
+  cv::VideoWriter writer;
+  for (const char* codec : {"avc1", "mp4v"})
+    if (writer.open(path, cv::CAP_FFMPEG,
+                    cv::VideoWriter::fourcc(codec[0], codec[1], codec[2], codec[3]), fps,
+                    cv::Size(64, 48)))
+      break;
+  EXPECT_TRUE(writer.isOpened());
+  for (int i = 0; i < frames; ++i)
+    writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(10.0 * i)));
+  writer.release();
+  return path;
+}
+
+double GreyLevel(const cv::Mat& frame) {
+  return cv::mean(frame)[0];
+}
+
+TEST(Frames, VideoFramesAreTheRightOnesInAnyOrderOfReading) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir.Path("run"));
+  const std::string video = WriteGreyVideo(dir.Path("run/robot.mp4"), 25, 25.0);
+  // The video file itself names the run (its folder).
+  const FrameSource frames(video);
+  ASSERT_TRUE(frames.is_video());
+  ASSERT_EQ(frames.size(), 25u);
+  for (size_t i : {0, 1, 2, 20, 5, 6, 24, 7})
+    EXPECT_NEAR(GreyLevel(frames.Read(i)), 10.0 * i, 5.0) << i;
+  // Several threads reading in (nearly) increasing order share one decoder.
+  std::vector<double> levels(25);
+  ParallelFor(0, 25, 3, [&](size_t i) { levels[i] = GreyLevel(frames.Read(i)); });
+  for (size_t i = 0; i < 25; ++i) EXPECT_NEAR(levels[i], 10.0 * i, 5.0) << i;
+  // Frame times from the container's frame rate.
+  ASSERT_EQ(frames.times().size(), 25u);
+  EXPECT_EQ(frames.times_source(), "video frame rate");
+  EXPECT_NEAR(frames.times()[10], 10 / 25.0, 1e-9);
+  EXPECT_EQ(RunFolderPaths::Of(video).dir, dir.Path("run"));
+  EXPECT_EQ(RunFolderPaths::Of(video).odometry, dir.Path("run/odometry.csv"));
+}
+
+TEST(Frames, FrameTimesCsvGivesTheTimesAndIsChecked) {
+  testing::TempDir dir;
+  WriteGreyVideo(dir.Path("video.mp4"), 4, 30.0);
+  WriteTextFileAtomically(dir.Path("frame_times.csv"),
+                          "frame,stamp_s\n0,100.5\n1,100.53\n2,100.6\n3,100.61\n");
+  const FrameSource frames(dir.Path());
+  EXPECT_EQ(frames.times(), (std::vector<double>{100.5, 100.53, 100.6, 100.61}));
+  EXPECT_EQ(frames.times_source(), "frame_times.csv");
+  WriteTextFileAtomically(dir.Path("frame_times.csv"), "frame,stamp_s\n0,1\n1,1\n2,2\n3,3\n");
+  EXPECT_EQ(
+      ErrorOf([&] { FrameSource again(dir.Path()); }),
+      dir.Path("frame_times.csv") + ":3: stamp_s must be finite and increase from row to row");
+  WriteTextFileAtomically(dir.Path("frame_times.csv"), "frame,stamp_s\n0,1\n");
+  EXPECT_EQ(ErrorOf([&] { FrameSource again(dir.Path()); }),
+            dir.Path("frame_times.csv") + ": has 1 rows but the run has 4 frames");
+}
+
 TEST(Frames, MissingOrEmptyFoldersAreReported) {
   testing::TempDir dir;
   EXPECT_EQ(ErrorOf([&] { FrameSource frames(dir.Path("absent")); }),
-            dir.Path("absent") + ": run folder not found");
+            dir.Path("absent") + ": run folder (or video file) not found");
   EXPECT_EQ(ErrorOf([&] { FrameSource frames(dir.Path()); }),
             dir.Path() + ": no frames/ folder and no video.* file");
   std::filesystem::create_directories(dir.Path("frames"));
