@@ -1,6 +1,7 @@
 // oslam simulate: render a scene into a run folder with ground truth.
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -52,6 +53,12 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
   arguments.AddOption("video", "", "FPS",
                       "write the frames as one video, RUN_DIR/video.mp4 at FPS frames/s,\n"
                       "instead of PNGs in RUN_DIR/frames/");
+  arguments.AddOption("odometry-rate", "", "HZ",
+                      "with --video: odometry.csv by time, rows at HZ from the first frame to\n"
+                      "the last (docs/formats.md, Odometry by time)");
+  arguments.AddOption("odometry-offset", "", "S",
+                      "with --odometry-rate: the odometry clock is S seconds ahead of the video's",
+                      "0");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("output")) throw UsageError("missing -o RUN_DIR");
@@ -73,6 +80,17 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
     options.video_frame_rate_hz = arguments.GetDouble("video");
     if (!(options.video_frame_rate_hz > 0) || options.video_frame_rate_hz > 1000)
       throw UsageError("--video expects a frame rate in frames/s (e.g. 30)");
+  }
+  if (arguments.Has("odometry-rate")) {
+    if (!arguments.Has("video")) throw UsageError("--odometry-rate needs --video FPS");
+    options.odometry_rate_hz = arguments.GetDouble("odometry-rate");
+    if (!(options.odometry_rate_hz > 0) || options.odometry_rate_hz > 10000)
+      throw UsageError("--odometry-rate expects a rate in Hz (e.g. 20)");
+    options.odometry_offset_s = arguments.GetDouble("odometry-offset");
+    if (!std::isfinite(options.odometry_offset_s))
+      throw UsageError("--odometry-offset expects seconds");
+  } else if (arguments.Has("odometry-offset")) {
+    throw UsageError("--odometry-offset needs --odometry-rate HZ");
   }
   CheckOutputFolder(run_dir);
   const bool quiet = arguments.Flag("quiet");

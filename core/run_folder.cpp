@@ -207,6 +207,10 @@ void CheckFrameColumn(const CsvTable& table) {
 
 Odometry ReadOdometry(const std::string& path, long expected_rows) {
   const CsvTable table = CsvTable::Read(path);
+  if (table.HasColumn("stamp_s") && !table.HasColumn("frame"))
+    throw Error::InFile(path,
+                        "is odometry by time (stamp_s, no frame column): 'oslam run' matches it "
+                        "to the frames (its OUT/run/ then has one row per frame)");
   if (table.num_rows() == 0) throw Error::InFile(path, "no odometry rows");
   CheckFrameColumn(table);
   if (expected_rows >= 0 && static_cast<long>(table.num_rows()) != expected_rows) {

@@ -90,7 +90,7 @@ TimedRunResult PrepareTimedRun(const std::string& run_or_video, const std::strin
     progress.Update(k + 1);
   }
   SyncFileSystem((dir / "frames").string());
-  progress.Done(selection.Summary());
+  progress.Done();
 
   for (const std::string* file : {&paths.camera, &paths.classes})
     WriteTextFileAtomically((dir / fs::path(*file).filename()).string(), ReadTextFile(*file));

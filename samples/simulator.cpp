@@ -1,5 +1,6 @@
 #include "samples/simulator.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,11 +14,12 @@
 #include <opencv2/videoio.hpp>
 
 #include "calib/camera_io.h"
+#include "calib/observation_model.h"
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
+#include "core/odometry_sync.h"
 #include "core/run_folder.h"
-#include "calib/observation_model.h"
 #include "samples/renderer.h"
 #include "samples/robot_path.h"
 #include "samples/texture.h"
@@ -80,6 +82,28 @@ class VideoOutput {
   std::string path_, temp_path_;
   cv::VideoWriter writer_;
 };
+
+// odometry.csv by time: rows every 1 / rate s of the video's clock from the
+// first frame to the last, stamped on the odometry's clock (+ offset).
+void WriteTimedOdometry(const std::vector<Pose2>& per_frame, const SimulationOptions& options,
+                        const std::string& path) {
+  TimedOdometry frames;
+  for (size_t i = 0; i < per_frame.size(); ++i) {
+    frames.stamps_s.push_back(static_cast<double>(i) / options.video_frame_rate_hz);
+    frames.poses.push_back(per_frame[i]);
+  }
+  const double last = frames.stamps_s.back();
+  std::ostringstream out;
+  out << "stamp_s,x_m,y_m,theta_rad\n";
+  for (long k = 0;; ++k) {
+    const double t = std::min(last, static_cast<double>(k) / options.odometry_rate_hz);
+    const Pose2 pose = per_frame.size() > 1 ? InterpolateOdometry(frames, t) : per_frame[0];
+    out << CsvNumber(t + options.odometry_offset_s) << ',' << CsvNumber(pose.x) << ','
+        << CsvNumber(pose.y) << ',' << CsvNumber(pose.theta) << '\n';
+    if (t >= last) break;
+  }
+  WriteTextFileAtomically(path, out.str());
+}
 
 // One row of ground_truth/visible_slices.csv: the pixel-measured slice of a
 // sighting's visible part.
@@ -209,7 +233,10 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
   // Odometry and ground truth last: a run folder with odometry.csv is complete.
   WriteVisibleSlices(visible_rows, run_dir);
   WriteGroundTruth(truth, run_dir);
-  WriteOdometryPoses(path.odometry_poses, RunFolderPaths::Of(run_dir).odometry);
+  if (options.odometry_rate_hz > 0 && video)
+    WriteTimedOdometry(path.odometry_poses, options, RunFolderPaths::Of(run_dir).odometry);
+  else
+    WriteOdometryPoses(path.odometry_poses, RunFolderPaths::Of(run_dir).odometry);
   summary.total_seconds = SecondsSince(start);
   std::snprintf(line, sizeof(line), "ground truth: %zu objects, %ld sightings; wrote %s in %.1f s",
                 truth.objects.size(), summary.sightings, run_dir.c_str(), summary.total_seconds);
