@@ -31,8 +31,9 @@ std::vector<std::string> CameraModelNames() {
 std::unique_ptr<CameraModel> LoadCamera(const std::string& path) {
   YamlFile file(path);
   const cv::FileNode root = file.root();
-  file.RequireOnlyKeys(root, "", {"model", "image_width", "image_height", "blind_radius_px",
-                                  "rim_radius_px", "flip_image_angle", "intrinsics"});
+  file.RequireOnlyKeys(root, "",
+                       {"model", "image_width", "image_height", "blind_radius_px", "rim_radius_px",
+                        "flip_image_angle", "intrinsics"});
   const std::string model_name = file.String(root, "model");
   std::unique_ptr<CameraModel> camera;
   try {
@@ -41,8 +42,7 @@ std::unique_ptr<CameraModel> LoadCamera(const std::string& path) {
     throw Error::InFile(path, error.what());
   }
   camera->set_image_size(file.Int(root, "image_width"), file.Int(root, "image_height"));
-  camera->set_annulus(
-      {file.Double(root, "blind_radius_px"), file.Double(root, "rim_radius_px")});
+  camera->set_annulus({file.Double(root, "blind_radius_px"), file.Double(root, "rim_radius_px")});
 
   const cv::FileNode intrinsics_node = file.Map(root, "intrinsics");
   const std::vector<std::string> names = camera->IntrinsicNames();
@@ -64,7 +64,8 @@ std::unique_ptr<CameraModel> LoadCamera(const std::string& path) {
 
 void SaveCamera(const CameraModel& camera, const std::string& path) {
   std::string why;
-  if (!camera.Validate(&why)) throw Error::InFile(path, "refusing to save an invalid camera: " + why);
+  if (!camera.Validate(&why))
+    throw Error::InFile(path, "refusing to save an invalid camera: " + why);
   // Written by hand: cv::FileStorage prints doubles as 5.9999999999999998e-01;
   // Number gives the shortest text that reads back exactly.
   std::ostringstream out;
@@ -81,7 +82,7 @@ void SaveCamera(const CameraModel& camera, const std::string& path) {
   const Eigen::VectorXd values = camera.Intrinsics();
   for (size_t i = 0; i < names.size(); ++i)
     out << "  " << names[i] << ": " << Number(values[static_cast<Eigen::Index>(i)]) << "\n";
-  WriteTextFileAtomically(path, out.str());
+  WriteFileAtomically(path, out.str());
 }
 
 }  // namespace oslam

@@ -8,6 +8,7 @@
 
 #include "core/angles.h"
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/csv.h"
 #include "core/error.h"
 
@@ -192,22 +193,22 @@ void WriteDetections(const std::vector<Detection>& detections, const std::string
 std::vector<Detection> ReadDetections(const std::string& path,
                                       const std::vector<ObjectClass>& classes) {
   const CsvTable table = CsvTable::Read(path);
-  const int frame = table.ColumnIndex("frame"), cls = table.ColumnIndex("class"),
-            ur = table.ColumnIndex("u_r_px"), uphi = table.ColumnIndex("u_phi_rad"),
-            sr = table.ColumnIndex("s_r_px"), sphi = table.ColumnIndex("s_phi_rad");
+  const int frame = table.ColumnIndex("frame"), cls = table.ColumnIndex("class");
+  for (const char* column : {"u_r_px", "u_phi_rad", "s_r_px", "s_phi_rad"})
+    table.ColumnIndex(column);  // a missing column is an error even without rows
   std::vector<Detection> detections;
   for (size_t row = 0; row < table.num_rows(); ++row) {
     Detection d;
-    d.frame = table.Integer(row, frame);
+    d.frame = table.Integer(row, frame, 0, bounds::kFrames - 1);
     d.class_name = table.Text(row, cls);
     d.class_index = FindClass(classes, d.class_name);
     if (d.class_index < 0)
       throw Error::AtLine(path, table.line_of_row(row), "unknown class '" + d.class_name + "'");
-    d.slice = {table.Double(row, ur), table.Double(row, uphi), table.Double(row, sr),
-               table.Double(row, sphi)};
+    d.slice = SliceAtRow(table, row);
     if (table.HasColumn("area_px"))
-      d.area_px = static_cast<int>(table.Integer(row, table.ColumnIndex("area_px")));
-    if (table.HasColumn("score")) d.score = table.Double(row, table.ColumnIndex("score"));
+      d.area_px = static_cast<int>(
+          table.Integer(row, table.ColumnIndex("area_px"), 0, bounds::kImagePixels));
+    if (table.HasColumn("score")) d.score = table.Double(row, table.ColumnIndex("score"), 0, 1);
     detections.push_back(d);
   }
   return detections;

@@ -18,6 +18,7 @@
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
+#include "core/image_file.h"
 #include "core/odometry_sync.h"
 #include "core/run_folder.h"
 #include "samples/renderer.h"
@@ -50,11 +51,8 @@ std::string FramePath(const std::string& run_dir, long frame) {
 }
 
 void WriteFrame(const cv::Mat& image, const std::string& path) {
-  WriteAtomically(path, [&](const std::string& temp_path) {
-    // Fast compression: frames are large and noisy, level 1 is within a few % of 9.
-    if (!cv::imwrite(temp_path, image, {cv::IMWRITE_PNG_COMPRESSION, 1}))
-      throw Error::InFile(path, "cannot write PNG");
-  });
+  // Fast compression: frames are large and noisy, level 1 is within a few % of 9.
+  WriteImage(path, image, {cv::IMWRITE_PNG_COMPRESSION, 1});
 }
 
 // RUN/video.mp4, written under a temporary name and renamed when complete

@@ -138,6 +138,8 @@ std::vector<KeyCase> Cases() {
       {"export.figure_size_px", "640", [](O o) { return o.export_.figure_size_px == 640; }},
       {"export.floor_grid", "0", [](O o) { return !o.export_.floor_grid; }},
       {"export.ascii_ply", "1", [](O o) { return o.export_.ascii_ply; }},
+      {"export.overlay_format", "png", [](O o) { return o.export_.overlay_format == "png"; }},
+      {"export.camera_every", "4", [](O o) { return o.export_.camera_every == 4; }},
       {"eval.threshold", "0.7", [](O o) { return o.eval.metrics.existence_threshold == 0.7; }},
       {"eval.gate_m", "0.3", [](O o) { return o.eval.metrics.match_gate_m == 0.3; }},
       {"frames.time_offset_s", "-0.25", [](O o) { return o.frames.time_offset_s == -0.25; }},

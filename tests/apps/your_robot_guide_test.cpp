@@ -57,7 +57,7 @@ TEST(YourRobotGuide, RehearsalRunsAsWritten) {
     ASSERT_EQ(result.exit_code, 0) << command << "\n" << result.err;
   }
   const std::string report = ReadWhole(dir.Path("robot_out/report.md"));
-  EXPECT_NE(report.find("odometry by time: kept"), std::string::npos) << report;
+  EXPECT_NE(report.find("| odometry by time | kept"), std::string::npos) << report;
   for (const char* file : {"map.glb", "map.ply", "trajectory.ply", "eval.json", "run/frames.csv"})
     EXPECT_TRUE(std::filesystem::is_regular_file(dir.Path("robot_out/") + file)) << file;
 

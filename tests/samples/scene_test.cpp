@@ -100,7 +100,7 @@ TEST(Scene, BadInputGivesOneLineErrorsNamingFileAndKey) {
       LoadError(dir, Replace(kGoodScene, "colour: [200, 30, 30]}",
                              "colour: [200, 30, 30], texture: {pattern: image, file: nothere.png, "
                              "size_m: [1, 1]}}")),
-      file + "objects[0].texture.file: cannot read image '" + dir.Path("nothere.png") + "'");
+      file + "objects[0].texture.file: " + dir.Path("nothere.png") + ": file not found");
 }
 
 TEST(Scene, ParsesACheckerboard) {
