@@ -32,7 +32,14 @@ void BindCalibration(CalibrationFlowOptions* o, BoardPattern* pattern, Bindings*
       .Check([pattern] { return pattern->square_m > 0 && pattern->square_m <= 10; },
              "expects the square size in metres (e.g. 0.03)");
   b->Add(&c.model, "model", "NAME", "mei (unified model, like cv::omnidir) or hyperbolic");
-  b->Add(&c.focus_height_m, "focus-height", "METRES", "mirror viewpoint height above the floor");
+  b->Add(&c.focus_height_m, "focus-height", "METRES",
+         "mirror viewpoint height above the floor, measured on the robot\n"
+         "(required: boards do not show it)")
+      .ShowDefault("");
+  b->Add(&c.mount_yaw_rad, "mount-yaw", "RAD",
+         "image direction of the robot's forward axis, measured on the robot\n"
+         "(required: boards do not show it; docs/calibration.md, Mount)")
+      .ShowDefault("");
   b->Add(&c.mirror_a_m, "mirror-a", "METRES", "hyperbolic: mirror a (scale only)");
   b->Add(&c.mirror_b_m, "mirror-b", "METRES",
          "hyperbolic: mirror b from a data sheet (default: estimated)")
@@ -44,11 +51,13 @@ void BindCalibration(CalibrationFlowOptions* o, BoardPattern* pattern, Bindings*
 
 int RunCalibrateCommand(const std::vector<std::string>& args) {
   Arguments arguments(
-      "oslam calibrate IMAGES_DIR --pattern COLSxROWS --square METRES [--model mei|hyperbolic] "
-      "[--compare-opencv] [--report-dir DIR] -o CAMERA.yaml",
+      "oslam calibrate IMAGES_DIR --pattern COLSxROWS --square METRES --focus-height METRES "
+      "--mount-yaw RAD [--model mei|hyperbolic] [--compare-opencv] [--report-dir DIR] "
+      "-o CAMERA.yaml",
       "Calibrates a catadioptric camera from checkerboard images: corners on the raw images,\n"
       "Levenberg-Marquardt over intrinsics and board poses, every found board used, outlier\n"
-      "views reported. Writes camera.yaml (mirror axis vertical at --focus-height).");
+      "views reported. Writes camera.yaml (mirror axis vertical at --focus-height, turned by\n"
+      "--mount-yaw: both measured on the robot, not estimated).");
   arguments.AddPositional("IMAGES_DIR", "folder of checkerboard images (sorted by name)");
   CalibrationFlowOptions options;
   BoardPattern pattern;
@@ -69,6 +78,15 @@ int RunCalibrateCommand(const std::vector<std::string>& args) {
   if (!arguments.Has("pattern")) throw UsageError("missing --pattern COLSxROWS");
   if (!arguments.Has("square")) throw UsageError("missing --square METRES");
   if (!arguments.Has("output")) throw UsageError("missing -o CAMERA.yaml");
+  // The mount is not estimated here: a silent default would look calibrated.
+  if (!arguments.Has("focus-height"))
+    throw UsageError(
+        "missing --focus-height METRES (the mirror viewpoint's height above the floor is not "
+        "estimated from boards: measure it on the robot)");
+  if (!arguments.Has("mount-yaw"))
+    throw UsageError(
+        "missing --mount-yaw RAD (the image direction of the robot's forward axis is not "
+        "estimated from boards: measure it, docs/calibration.md)");
   bindings.Apply(arguments);
   flags.Apply(arguments);
   std::string why;

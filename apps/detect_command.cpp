@@ -4,6 +4,7 @@
 #include "apps/commands.h"
 #include "apps/stage_bindings.h"
 #include "core/error.h"
+#include "core/run_folder.h"
 
 namespace oslam {
 
@@ -12,7 +13,7 @@ int RunDetectCommand(const std::vector<std::string>& args) {
                       "Detects objects by colour in every frame of RUN_DIR and writes their "
                       "bounding slices as CSV.\nNeeds camera.yaml and classes.yaml with colour "
                       "models (see 'oslam train-colors').");
-  arguments.AddPositional("RUN_DIR", "the run folder");
+  arguments.AddPositional("RUN_DIR", "the run folder, or a video file in it (docs/formats.md)");
   arguments.AddOption("output", "-o", "FILE", "detections CSV", "RUN_DIR/detections.csv");
   DetectStageOptions options;
   Bindings bindings;
@@ -26,7 +27,7 @@ int RunDetectCommand(const std::vector<std::string>& args) {
 
   const std::string run_dir = arguments.Get("RUN_DIR");
   const std::string output =
-      arguments.Has("output") ? arguments.Get("output") : run_dir + "/detections.csv";
+      arguments.Has("output") ? arguments.Get("output") : RunFolderPaths::Of(run_dir).detections;
   RunDetectStage(run_dir, output, options, CommandOutput("detect", arguments.Flag("quiet")));
   return 0;
 }

@@ -36,8 +36,9 @@ int RunEvalDetectCommand(const std::vector<std::string>& args) {
   const std::optional<GroundTruth> truth = ReadGroundTruth(run_dir);
   if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder");
   const std::vector<ObjectClass> classes = ReadClasses(RunFolderPaths::Of(run_dir).classes);
-  const std::string detections_path =
-      arguments.Has("detections") ? arguments.Get("detections") : run_dir + "/detections.csv";
+  const std::string detections_path = arguments.Has("detections")
+                                          ? arguments.Get("detections")
+                                          : RunFolderPaths::Of(run_dir).detections;
   const DetectionEvaluation evaluation =
       EvaluateDetections(ReadDetections(detections_path, classes), *truth, classes, options);
   if (!arguments.Flag("quiet")) std::fputs(evaluation.Table().c_str(), stdout);

@@ -17,7 +17,8 @@ int RunOverlayCommand(const std::vector<std::string>& args) {
       "oslam overlay RUN_DIR OMAP.json -o OUT_DIR [--frames LIST] [options]",
       "Draws every map object's projected bounding slice (class colour, faded by its existence\n"
       "probability, labelled) and the frame's detections on the run's frames: OUT_DIR/NNNNNN.jpg.");
-  arguments.AddPositional("RUN_DIR", "the run folder the map was made from (frames, camera)");
+  arguments.AddPositional("RUN_DIR",
+                          "the run folder the map was made from (frames, camera), or its video");
   arguments.AddPositional("OMAP", "the O-Map JSON (oslam map)");
   arguments.AddOption("output", "-o", "DIR", "output folder (created)");
   // The export stage's overlay options, with its defaults.

@@ -27,8 +27,10 @@ int RunRunCommand(const std::vector<std::string>& args) {
                       "(omap.json, map.glb, map.ply,\nfigures, overlays) with a report; evaluates "
                       "against ground_truth/ when present.\nParameters: 'oslam config "
                       "--print-defaults'.");
-  arguments.AddPositional("VIDEO_DIR",
-                          "the run folder (frames, odometry.csv, camera.yaml, classes.yaml)");
+  arguments.AddPositional(
+      "VIDEO_DIR",
+      "the run folder (frames/ or video.*, odometry.csv, camera.yaml, classes.yaml),\n"
+      "or a video file (mp4, avi, mkv, ...) in such a folder");
   arguments.AddOption("output", "-o", "OUT_DIR", "where everything is written (created)");
   arguments.AddOption("config", "", "FILE.yaml", "configuration (unknown keys are errors)");
   arguments.AddRepeatedOption("set", "SECTION.KEY=VALUE", "override one configuration value");

@@ -32,10 +32,11 @@ RunConfig::RunConfig() {
   BindSlamOptions(&options_.slam, &slam_);
   BindExportOptions(&options_.export_, &export_);
   BindEvalOptions(&options_.eval, &eval_);
+  BindFrameOptions(&options_.frames, &frames_);
 }
 
 std::vector<const Bindings*> RunConfig::sections() const {
-  return {&detect_, &slam_, &export_, &eval_};
+  return {&frames_, &detect_, &slam_, &export_, &eval_};
 }
 
 const Binding* RunConfig::Find(const std::string& section, const std::string& key) const {

@@ -42,7 +42,7 @@ class RunConfig {
 
  private:
   RunPipelineOptions options_;
-  Bindings detect_{"detect"}, slam_{"slam"}, export_{"export"}, eval_{"eval"};
+  Bindings detect_{"detect"}, slam_{"slam"}, export_{"export"}, eval_{"eval"}, frames_{"frames"};
   std::string file_;         // the YAML file loaded, if any
   bool overridden_ = false;  // a --set was applied
 };

@@ -1,6 +1,7 @@
 // oslam simulate: render a scene into a run folder with ground truth.
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -23,6 +24,8 @@ void CheckOutputFolder(const std::string& run_dir) {
   const fs::path frames = fs::path(run_dir) / "frames";
   if (fs::is_directory(frames) && !fs::is_empty(frames))
     throw Error::InFile(run_dir, "already holds a run (frames/ is not empty); choose a new folder");
+  if (fs::exists(fs::path(run_dir) / "video.mp4"))
+    throw Error::InFile(run_dir, "already holds a run (video.mp4); choose a new folder");
 }
 
 // Progress on stderr: updates overwrite one line on a terminal, and only the
@@ -47,6 +50,15 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
   arguments.AddOption("output", "-o", "RUN_DIR", "run folder to write (new or empty)");
   arguments.AddOption("seed", "", "N", "random seed (default: the scene's seed)");
   arguments.AddOption("frames", "", "N", "render at most N frames (default: the whole path)");
+  arguments.AddOption("video", "", "FPS",
+                      "write the frames as one video, RUN_DIR/video.mp4 at FPS frames/s,\n"
+                      "instead of PNGs in RUN_DIR/frames/");
+  arguments.AddOption("odometry-rate", "", "HZ",
+                      "with --video: odometry.csv by time, rows at HZ from the first frame to\n"
+                      "the last (docs/formats.md, Odometry by time)");
+  arguments.AddOption("odometry-offset", "", "S",
+                      "with --odometry-rate: the odometry clock is S seconds ahead of the video's",
+                      "0");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("output")) throw UsageError("missing -o RUN_DIR");
@@ -63,6 +75,22 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
   if (arguments.Has("frames")) {
     options.max_frames = arguments.GetInt("frames");
     if (options.max_frames < 1) throw UsageError("--frames must be at least 1");
+  }
+  if (arguments.Has("video")) {
+    options.video_frame_rate_hz = arguments.GetDouble("video");
+    if (!(options.video_frame_rate_hz > 0) || options.video_frame_rate_hz > 1000)
+      throw UsageError("--video expects a frame rate in frames/s (e.g. 30)");
+  }
+  if (arguments.Has("odometry-rate")) {
+    if (!arguments.Has("video")) throw UsageError("--odometry-rate needs --video FPS");
+    options.odometry_rate_hz = arguments.GetDouble("odometry-rate");
+    if (!(options.odometry_rate_hz > 0) || options.odometry_rate_hz > 10000)
+      throw UsageError("--odometry-rate expects a rate in Hz (e.g. 20)");
+    options.odometry_offset_s = arguments.GetDouble("odometry-offset");
+    if (!std::isfinite(options.odometry_offset_s))
+      throw UsageError("--odometry-offset expects seconds");
+  } else if (arguments.Has("odometry-offset")) {
+    throw UsageError("--odometry-offset needs --odometry-rate HZ");
   }
   CheckOutputFolder(run_dir);
   const bool quiet = arguments.Flag("quiet");

@@ -93,6 +93,18 @@ void BindEvalOptions(EvalStageOptions* o, Bindings* b) {
       .Key("gate_m", "largest base-point distance of a match, m");
 }
 
+void BindFrameOptions(FrameSelectionOptions* o, Bindings* b) {
+  b->Add(&o->time_offset_s, "", "S", "odometry time of a frame = frame time + this offset")
+      .Key("time_offset_s", "odometry clock minus frame clock, s (odometry by time only)");
+  b->Add(&o->min_distance_m, "", "M", "keep a frame once the robot moved this far")
+      .Key("min_distance_m",
+           "keep a frame once the robot moved this far since the last kept one, m (or turned)");
+  b->Add(&o->min_turn_rad, "", "RAD", "... or turned this much")
+      .Key("min_turn_rad", "... or turned this much, rad (0.1745 = 10 deg)");
+  b->Add(&o->stride, "", "N", "keep every N-th frame instead (0: by distance and turn)")
+      .Key("stride", "> 0: keep every N-th frame in the odometry's span instead; 1 = all");
+}
+
 StageOutput CommandOutput(const std::string& command, bool quiet) {
   StageOutput output;
   output.quiet = quiet;

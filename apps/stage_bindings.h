@@ -8,6 +8,7 @@
 #include <string>
 
 #include "apps/bindings.h"
+#include "core/odometry_sync.h"
 #include "pipeline/detect_stage.h"
 #include "pipeline/eval_stage.h"
 #include "pipeline/export_stage.h"
@@ -20,6 +21,9 @@ void BindDetectOptions(DetectStageOptions* options, Bindings* bindings);
 void BindSlamOptions(SlamStageOptions* options, Bindings* bindings);
 void BindExportOptions(ExportStageOptions* options, Bindings* bindings);
 void BindEvalOptions(EvalStageOptions* options, Bindings* bindings);
+// `oslam run`'s frames section (configuration keys only): the frames a run
+// with odometry by time keeps.
+void BindFrameOptions(FrameSelectionOptions* options, Bindings* bindings);
 
 // A stage's output for a command: report lines on stdout, warnings on
 // stderr as "oslam COMMAND: warning: ...".

@@ -21,7 +21,10 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
                       "writes them into classes.yaml.");
   arguments.AddPositional("CLASSES.yaml", "the classes to train (updated in place unless -o)");
   arguments.AddOption("examples", "", "EXAMPLES.yaml",
-                      "example regions per class (docs/formats.md)");
+                      "example regions per class (docs/detection.md, Training)");
+  arguments.AddOption("camera", "", "CAMERA.yaml",
+                      "with --examples marked outline: 1, the camera of their images\n"
+                      "(default: camera.yaml beside CLASSES.yaml)");
   arguments.AddOption(
       "from-ground-truth", "", "RUN_DIR",
       "instead of --examples: ROIs on the ground-truth objects of a simulated run;\n"
@@ -35,6 +38,8 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
     throw UsageError("give exactly one of --examples and --from-ground-truth");
   const double k_sigma = arguments.GetDouble("k-sigma");
   if (!(k_sigma > 0)) throw UsageError("--k-sigma must be positive");
+  if (arguments.Has("camera") && !arguments.Has("examples"))
+    throw UsageError("--camera applies only with --examples (outline examples)");
 
   const std::string classes_path = arguments.Get("CLASSES.yaml");
   const std::vector<ObjectClass> classes = ReadClasses(classes_path);
@@ -52,7 +57,7 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
             : (std::filesystem::path(classes_path).parent_path() / "camera.yaml").string();
     if (!std::filesystem::exists(camera_path))
       throw Error::InFile(camera_path,
-                          "not found: outline examples need the camera (give --camera)");
+                          "not found: outline examples need the camera (give --camera CAMERA.yaml)");
     trained = LearnImageShapesFromExamples(trained, examples, *LoadCamera(camera_path));
   }
   if (arguments.Has("from-ground-truth")) {

@@ -17,6 +17,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "calib/hyperbolic_camera.h"
+#include "core/angles.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_file.h"
@@ -45,6 +46,7 @@ bool CalibrationOptions::Validate(std::string* why) const {
     return fail("mirror_b_m must be >= 0 (0: estimate)");
   if (!(focus_height_m > 0) || !std::isfinite(focus_height_m))
     return fail("focus_height_m must be positive");
+  if (!std::isfinite(mount_yaw_rad)) return fail("mount_yaw_rad must be finite");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(function_tolerance > 0)) return fail("function_tolerance must be positive");
   if (!(outlier_view_factor > 1)) return fail("outlier_view_factor must be > 1");
@@ -607,19 +609,24 @@ void EstimatedParameters(const Problem& problem, const std::vector<std::string>&
 }
 
 // The calibrated camera, mounted with the mirror axis vertical at the given
-// height, with a first annulus from the centre to the farthest image corner
-// (the rim detector refines it).
+// height and turned by `mount_yaw_rad` about it, with a first annulus from the
+// centre to the farthest image corner (the rim detector refines it).
 std::unique_ptr<CameraModel> CalibratedCamera(const Problem& problem, int image_width,
-                                              int image_height, double focus_height_m) {
+                                              int image_height, double focus_height_m,
+                                              double mount_yaw_rad) {
   std::unique_ptr<CameraModel> camera;
   if (problem.model == Model::kMei) {
     MeiParameters p = MeiFromVector(problem.intrinsics);
     p.focus_height_m = focus_height_m;
+    p.mount_yaw_rad = mount_yaw_rad;
     camera = MeiCamera(p, image_width, image_height, {}).Clone();
   } else {
     HyperbolicMirrorParameters p = HyperbolicFromVector(problem.intrinsics);
     p.focus_height_m = focus_height_m;
     p.flip_image_angle = true;
+    // Image angle = offset + s·bearing (s = -1, flipped): a camera turned by
+    // the yaw shows robot bearing b where the unturned one shows b - yaw.
+    p.angle_offset_rad = WrapAngle(p.angle_offset_rad + mount_yaw_rad);
     camera = HyperbolicCamera(p, image_width, image_height, {}).Clone();
   }
   const Eigen::Vector2d centre = camera->ImageCenter();
@@ -658,7 +665,8 @@ CalibrationResult CalibrateFromCorners(const std::vector<CalibrationView>& views
   result.views = views;
   ScoreViews(problem, used, options, &result);
   EstimatedParameters(problem, names, &result);
-  result.camera = CalibratedCamera(problem, image_width, image_height, options.focus_height_m);
+  result.camera = CalibratedCamera(problem, image_width, image_height, options.focus_height_m,
+                                   options.mount_yaw_rad);
   result.summary.iterations = report.iterations;
   result.summary.views_used = static_cast<int>(used.size());
   result.summary.points_used = static_cast<int>(used.size() * object.size());

@@ -62,8 +62,13 @@ struct CalibrationOptions {
   // Hyperbolic
   double mirror_a_m = 0.03929;  // fixed (scale only); default: the LPA mirror
   double mirror_b_m = 0.0;      // > 0: fixed from a data sheet; 0: estimated
-  // Mount (not observable from boards).
+  // Mount on the robot, not observable from boards (their own poses absorb
+  // it): the mirror viewpoint's height above the floor and the camera's yaw
+  // (the image direction of the robot's forward axis, rad, counter-clockwise
+  // about the robot's z). Measured on the robot and given; the mirror axis is
+  // taken as vertical.
   double focus_height_m = 1.0;
+  double mount_yaw_rad = 0.0;
   // Initial image centre; NaN: the image centre (W-1)/2, (H-1)/2.
   double initial_cx_px = std::numeric_limits<double>::quiet_NaN();
   double initial_cy_px = std::numeric_limits<double>::quiet_NaN();

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <sstream>
 
 #include <opencv2/core.hpp>
 
@@ -9,6 +10,7 @@
 #include "calib/mei_camera.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/text.h"
 #include "core/yaml.h"
 
 namespace oslam {
@@ -64,25 +66,23 @@ void SaveCamera(const CameraModel& camera, const std::string& path) {
   std::string why;
   if (!camera.Validate(&why))
     throw Error::InFile(path, "refusing to save an invalid camera: " + why);
-  // Formatted in memory, so the only write is WriteFileAtomically's, checked
-  // (cv::FileStorage does not report a failed write to a file).
-  cv::FileStorage fs(
-      ".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
-  if (!fs.isOpened()) throw Error::InFile(path, "cannot format the YAML");
-  fs << "model" << camera.ModelName();
-  fs << "image_width" << camera.image_width();
-  fs << "image_height" << camera.image_height();
-  fs << "blind_radius_px" << camera.annulus().blind_radius_px;
-  fs << "rim_radius_px" << camera.annulus().rim_radius_px;
+  // Written by hand: cv::FileStorage prints doubles as 5.9999999999999998e-01;
+  // Number gives the shortest text that reads back exactly.
+  std::ostringstream out;
+  out << "%YAML:1.0\n---\n";  // cv::FileStorage needs the directive
+  out << "model: " << camera.ModelName() << "\n";
+  out << "image_width: " << camera.image_width() << "\n";
+  out << "image_height: " << camera.image_height() << "\n";
+  out << "blind_radius_px: " << Number(camera.annulus().blind_radius_px) << "\n";
+  out << "rim_radius_px: " << Number(camera.annulus().rim_radius_px) << "\n";
   if (const auto* hyperbolic = dynamic_cast<const HyperbolicCamera*>(&camera))
-    fs << "flip_image_angle" << (hyperbolic->parameters().flip_image_angle ? 1 : 0);
-  fs << "intrinsics"
-     << "{";
+    out << "flip_image_angle: " << (hyperbolic->parameters().flip_image_angle ? 1 : 0) << "\n";
+  out << "intrinsics:\n";
   const std::vector<std::string> names = camera.IntrinsicNames();
   const Eigen::VectorXd values = camera.Intrinsics();
-  for (size_t i = 0; i < names.size(); ++i) fs << names[i] << values[i];
-  fs << "}";
-  WriteFileAtomically(path, fs.releaseAndGetString());
+  for (size_t i = 0; i < names.size(); ++i)
+    out << "  " << names[i] << ": " << Number(values[static_cast<Eigen::Index>(i)]) << "\n";
+  WriteFileAtomically(path, out.str());
 }
 
 }  // namespace oslam

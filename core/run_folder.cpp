@@ -16,6 +16,7 @@
 #include "core/csv.h"
 #include "core/error.h"
 #include "core/image_file.h"
+#include "core/text.h"
 #include "core/yaml.h"
 
 namespace oslam {
@@ -167,47 +168,59 @@ std::optional<ConfusionMatrix> ReadConfusion(const std::string& path) {
   return matrix;
 }
 
+namespace {
+
+// YAML double-quoted scalar ("green box", with \" and \\ escaped).
+std::string QuotedYaml(const std::string& text) {
+  std::string quoted = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') quoted += '\\';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+// A YAML flow sequence of numbers, each in the shortest text that reads back
+// as the same double ("[0.6, 12.5, 3]").
+template <typename Range>
+std::string NumberList(const Range& values) {
+  std::string list = "[";
+  for (const auto& value : values) list += (list.size() > 1 ? ", " : "") + Number(value);
+  return list + "]";
+}
+
+}  // namespace
+
 void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& path,
                   const std::optional<ConfusionMatrix>& confusion) {
-  // Formatted in memory, so the only write is WriteFileAtomically's, checked
-  // (cv::FileStorage does not report a failed write to a file).
-  cv::FileStorage fs(
-      ".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
-  if (!fs.isOpened()) throw Error::InFile(path, "cannot format the YAML");
-  fs << "classes"
-     << "[";
+  std::ostringstream out;
+  out << "%YAML:1.0\n---\n";  // cv::FileStorage needs the directive
+  out << "classes:\n";
   for (const ObjectClass& c : classes) {
-    fs << "{";
-    fs << "name" << c.name;
-    fs << "display_rgb" << std::vector<int>(c.display_rgb.begin(), c.display_rgb.end());
-    if (c.shape != ObjectShape::kCylinder) fs << "shape" << ObjectShapeName(c.shape);
-    fs << "diameter_mean_m" << c.diameter_mean_m << "diameter_std_m" << c.diameter_std_m;
-    fs << "height_mean_m" << c.height_mean_m << "height_std_m" << c.height_std_m;
+    out << "  - name: " << QuotedYaml(c.name) << "\n";
+    out << "    display_rgb: " << NumberList(c.display_rgb) << "\n";
+    if (c.shape != ObjectShape::kCylinder) out << "    shape: " << ObjectShapeName(c.shape) << "\n";
+    out << "    diameter_mean_m: " << Number(c.diameter_mean_m) << "\n";
+    out << "    diameter_std_m: " << Number(c.diameter_std_m) << "\n";
+    out << "    height_mean_m: " << Number(c.height_mean_m) << "\n";
+    out << "    height_std_m: " << Number(c.height_std_m) << "\n";
     if (c.colour) {
-      fs << "colour"
-         << "{";
-      fs << "yuv_mean" << std::vector<double>(c.colour->yuv_mean.begin(), c.colour->yuv_mean.end());
-      fs << "yuv_std" << std::vector<double>(c.colour->yuv_std.begin(), c.colour->yuv_std.end());
-      fs << "k_sigma" << c.colour->k_sigma;
-      fs << "}";
+      out << "    colour:\n";
+      out << "      yuv_mean: " << NumberList(c.colour->yuv_mean) << "\n";
+      out << "      yuv_std: " << NumberList(c.colour->yuv_std) << "\n";
+      out << "      k_sigma: " << Number(c.colour->k_sigma) << "\n";
     }
     if (c.image_shape) {
-      fs << "image_shape"
-         << "{";
-      fs << "elongation_mean" << c.image_shape->elongation_mean;
-      fs << "elongation_std" << c.image_shape->elongation_std;
-      fs << "}";
+      out << "    image_shape:\n";
+      out << "      elongation_mean: " << Number(c.image_shape->elongation_mean) << "\n";
+      out << "      elongation_std: " << Number(c.image_shape->elongation_std) << "\n";
     }
-    fs << "}";
   }
-  fs << "]";
   if (confusion) {
-    fs << "confusion"
-       << "[";
-    for (const std::vector<double>& row : *confusion) fs << row;
-    fs << "]";
+    out << "confusion:\n";
+    for (const std::vector<double>& row : *confusion) out << "  - " << NumberList(row) << "\n";
   }
-  WriteFileAtomically(path, fs.releaseAndGetString());
+  WriteTextFileAtomically(path, out.str());
 }
 
 int FindClass(const std::vector<ObjectClass>& classes, const std::string& name) {
@@ -241,6 +254,10 @@ void CheckFrameColumn(const CsvTable& table) {
 
 Odometry ReadOdometry(const std::string& path, long expected_rows) {
   const CsvTable table = CsvTable::Read(path);
+  if (table.HasColumn("stamp_s") && !table.HasColumn("frame"))
+    throw Error::InFile(path,
+                        "is odometry by time (stamp_s, no frame column): 'oslam run' matches it "
+                        "to the frames (its OUT/run/ then has one row per frame)");
   if (table.num_rows() == 0) throw Error::InFile(path, "no odometry rows");
   CheckFrameColumn(table);
   if (expected_rows >= 0 && static_cast<long>(table.num_rows()) != expected_rows) {
@@ -284,6 +301,49 @@ Odometry ReadOdometry(const std::string& path, long expected_rows) {
   return odometry;
 }
 
+bool IsTimedOdometry(const std::string& path) {
+  const CsvTable table = CsvTable::Read(path);
+  return table.HasColumn("stamp_s") && !table.HasColumn("frame");
+}
+
+TimedOdometry ReadTimedOdometry(const std::string& path) {
+  const CsvTable table = CsvTable::Read(path);
+  if (table.HasColumn("frame") || !table.HasColumn("stamp_s"))
+    throw Error::InFile(path, "odometry by time needs a stamp_s column and no frame column");
+  if (table.num_rows() < 2) throw Error::InFile(path, "odometry by time needs at least two rows");
+  const int stamp = table.ColumnIndex("stamp_s");
+  const bool poses = table.HasColumn("x_m");
+  if (!poses && !table.HasColumn("distance_m"))
+    throw Error::InFile(path,
+                        "needs columns x_m,y_m,theta_rad (poses) or distance_m,turn_rad "
+                        "(increments)");
+  const int a = table.ColumnIndex(poses ? "x_m" : "distance_m");
+  const int b = table.ColumnIndex(poses ? "y_m" : "turn_rad");
+  const int c = poses ? table.ColumnIndex("theta_rad") : -1;
+  TimedOdometry odometry;
+  Pose2 pose;
+  for (size_t row = 0; row < table.num_rows(); ++row) {
+    const double t = table.Double(row, stamp);
+    if (!std::isfinite(t) || (!odometry.stamps_s.empty() && !(t > odometry.stamps_s.back())))
+      throw Error::AtLine(path, table.line_of_row(row),
+                          "stamp_s must be finite and increase from row to row");
+    if (poses) {
+      pose = {table.Double(row, a, -kCoordinate, kCoordinate, "m"),
+              table.Double(row, b, -kCoordinate, kCoordinate, "m"),
+              WrapAngle(table.Double(row, c, -kAngle, kAngle, "rad"))};
+    } else if (row > 0) {
+      pose = ApplyIncrement(pose, {table.Double(row, a, -kCoordinate, kCoordinate, "m"),
+                                   table.Double(row, b, -kAngle, kAngle, "rad")});
+      if (!(std::abs(pose.x) <= kCoordinate && std::abs(pose.y) <= kCoordinate))
+        throw Error::AtLine(path, table.line_of_row(row),
+                            bounds::ReachMessage(pose.x, pose.y, "row " + std::to_string(row)));
+    }
+    odometry.stamps_s.push_back(t);
+    odometry.poses.push_back(pose);
+  }
+  return odometry;
+}
+
 void WriteOdometryPoses(const std::vector<Pose2>& poses, const std::string& path) {
   std::ostringstream out;
   out << "frame,x_m,y_m,theta_rad\n";
@@ -297,17 +357,23 @@ void WriteOdometryPoses(const std::vector<Pose2>& poses, const std::string& path
 
 namespace {
 
-bool IsImageFile(const fs::path& path) {
+bool HasExtension(const fs::path& path, std::initializer_list<const char*> extensions) {
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
-  for (const char* known : {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"})
+  for (const char* known : extensions)
     if (extension == known) return true;
   return false;
 }
 
-}  // namespace
+bool IsImageFile(const fs::path& path) {
+  return HasExtension(path, {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"});
+}
 
-namespace {
+// Frames decoded ahead of the one asked for and kept for the threads that
+// ask for them next; and how far ahead a read may be before the decoder
+// seeks instead of decoding the frames in between.
+constexpr size_t kDecodedAheadFrames = 64;
+constexpr size_t kMaxDecodeAhead = 256;
 
 struct FrameCache {
   std::mutex mutex;
@@ -320,7 +386,33 @@ FrameCache& TheFrameCache() {
   return cache;
 }
 
+// RUN/frame_times.csv: frame,stamp_s with one row per frame, times increasing.
+std::vector<double> ReadFrameTimes(const std::string& path, size_t frames) {
+  const CsvTable table = CsvTable::Read(path);
+  CheckFrameColumn(table);
+  if (table.num_rows() != frames)
+    throw Error::InFile(path, "has " + std::to_string(table.num_rows()) + " rows but the run has " +
+                                  std::to_string(frames) + " frames");
+  const int stamp = table.ColumnIndex("stamp_s");
+  std::vector<double> times;
+  for (size_t row = 0; row < table.num_rows(); ++row) {
+    const double t = table.Double(row, stamp);
+    if (!std::isfinite(t) || (!times.empty() && !(t > times.back())))
+      throw Error::AtLine(path, table.line_of_row(row),
+                          "stamp_s must be finite and increase from row to row");
+    times.push_back(t);
+  }
+  return times;
+}
+
 }  // namespace
+
+struct FrameSource::Decoder {
+  std::mutex mutex;
+  cv::VideoCapture capture;
+  size_t next = 0;                    // the frame capture.read() returns next
+  std::map<size_t, cv::Mat> decoded;  // decoded ahead, not yet read
+};
 
 void SetFrameCacheLimit(size_t bytes) {
   FrameCache& cache = TheFrameCache();
@@ -332,64 +424,112 @@ void SetFrameCacheLimit(size_t bytes) {
   }
 }
 
-FrameSource::FrameSource(const std::string& run_dir) {
-  if (!fs::is_directory(run_dir)) throw Error::InFile(run_dir, "run folder not found");
-  const fs::path frames_dir = fs::path(run_dir) / "frames";
-  if (fs::is_directory(frames_dir)) {
-    for (const auto& entry : fs::directory_iterator(frames_dir))
-      if (entry.is_regular_file() && IsImageFile(entry.path()))
-        image_paths_.push_back(entry.path().string());
-    std::sort(image_paths_.begin(), image_paths_.end());
-    if (static_cast<long>(image_paths_.size()) > bounds::kFrames)
-      throw Error::InFile(frames_dir.string(), "more than " + std::to_string(bounds::kFrames) +
-                                                   " frames (docs/formats.md, Bounds)");
-    if (image_paths_.empty())
-      throw Error::InFile(frames_dir.string(), "no image files (png, jpg, bmp, tif)");
-    count_ = image_paths_.size();
-    return;
+FrameSource::FrameSource(const std::string& run_or_video) {
+  const RunFolderPaths paths = RunFolderPaths::Of(run_or_video);
+  if (!paths.video.empty()) {
+    video_path_ = paths.video;
+  } else {
+    const std::string& run_dir = paths.dir;
+    if (!fs::is_directory(run_dir))
+      throw Error::InFile(run_dir, "run folder (or video file) not found");
+    const fs::path frames_dir = fs::path(run_dir) / "frames";
+    if (fs::is_directory(frames_dir)) {
+      for (const auto& entry : fs::directory_iterator(frames_dir))
+        if (entry.is_regular_file() && IsImageFile(entry.path()))
+          image_paths_.push_back(entry.path().string());
+      std::sort(image_paths_.begin(), image_paths_.end());
+      if (static_cast<long>(image_paths_.size()) > bounds::kFrames)
+        throw Error::InFile(frames_dir.string(), "more than " + std::to_string(bounds::kFrames) +
+                                                     " frames (docs/formats.md, Bounds)");
+      if (image_paths_.empty())
+        throw Error::InFile(frames_dir.string(), "no image files (png, jpg, bmp, tif)");
+      count_ = image_paths_.size();
+    } else {
+      for (const auto& entry : fs::directory_iterator(run_dir))
+        if (entry.is_regular_file() && entry.path().stem() == "video")
+          video_path_ = entry.path().string();
+      if (video_path_.empty())
+        throw Error::InFile(run_dir, "no frames/ folder and no video.* file");
+    }
   }
-  for (const auto& entry : fs::directory_iterator(run_dir))
-    if (entry.is_regular_file() && entry.path().stem() == "video")
-      video_path_ = entry.path().string();
-  if (video_path_.empty()) throw Error::InFile(run_dir, "no frames/ folder and no video.* file");
-  cv::VideoCapture capture(video_path_);
-  if (!capture.isOpened()) throw Error::InFile(video_path_, "OpenCV cannot open this video");
-  const double frames = capture.get(cv::CAP_PROP_FRAME_COUNT);
-  if (!(frames > 0)) throw Error::InFile(video_path_, "video has no frames");
-  if (frames > bounds::kFrames)
-    throw Error::InFile(
-        video_path_, "declares " + bounds::OutsideMessage(frames, 1, bounds::kFrames) + " frames");
-  const double width = capture.get(cv::CAP_PROP_FRAME_WIDTH),
-               height = capture.get(cv::CAP_PROP_FRAME_HEIGHT);
-  if (!(width <= bounds::kImageSidePx && height <= bounds::kImageSidePx &&
-        width * height <= bounds::kImagePixels))
-    throw Error::InFile(
-        video_path_, "declares frames of " + std::to_string(width) + "x" + std::to_string(height) +
-                         " pixels, beyond the image bounds (docs/formats.md, Bounds)");
-  count_ = static_cast<size_t>(frames);
+  double frame_rate = 0;
+  if (!video_path_.empty()) {
+    decoder_ = std::make_unique<Decoder>();
+    if (!decoder_->capture.open(video_path_))
+      throw Error::InFile(video_path_, "OpenCV cannot open this video");
+    const double frames = decoder_->capture.get(cv::CAP_PROP_FRAME_COUNT);
+    if (!(frames > 0)) throw Error::InFile(video_path_, "video has no frames");
+    if (frames > bounds::kFrames)
+      throw Error::InFile(video_path_, "declares " +
+                                           bounds::OutsideMessage(frames, 1, bounds::kFrames) +
+                                           " frames");
+    const double width = decoder_->capture.get(cv::CAP_PROP_FRAME_WIDTH),
+                 height = decoder_->capture.get(cv::CAP_PROP_FRAME_HEIGHT);
+    if (!(width <= bounds::kImageSidePx && height <= bounds::kImageSidePx &&
+          width * height <= bounds::kImagePixels))
+      throw Error::InFile(video_path_, "declares frames of " + std::to_string(width) + "x" +
+                                           std::to_string(height) +
+                                           " pixels, beyond the image bounds (docs/formats.md, Bounds)");
+    count_ = static_cast<size_t>(frames);
+    frame_rate = decoder_->capture.get(cv::CAP_PROP_FPS);
+  }
+  const std::string times_path = (fs::path(paths.dir) / "frame_times.csv").string();
+  if (fs::exists(times_path)) {
+    times_ = ReadFrameTimes(times_path, count_);
+    times_source_ = "frame_times.csv";
+  } else if (std::isfinite(frame_rate) && frame_rate > 0) {
+    for (size_t i = 0; i < count_; ++i) times_.push_back(static_cast<double>(i) / frame_rate);
+    times_source_ = "video frame rate";
+  }
+}
+
+FrameSource::~FrameSource() = default;
+
+cv::Mat FrameSource::Decode(size_t index) const {
+  Decoder& decoder = *decoder_;
+  const std::lock_guard<std::mutex> lock(decoder.mutex);
+  const auto ahead = decoder.decoded.find(index);
+  if (ahead != decoder.decoded.end()) {
+    cv::Mat frame = ahead->second;
+    decoder.decoded.erase(ahead);
+    return frame;
+  }
+  if (index < decoder.next || index > decoder.next + kMaxDecodeAhead) {
+    if (!decoder.capture.set(cv::CAP_PROP_POS_FRAMES, static_cast<double>(index)))
+      throw Error::InFile(video_path_, "cannot seek to frame " + std::to_string(index));
+    decoder.next = index;
+    decoder.decoded.clear();
+  }
+  cv::Mat frame;
+  for (; decoder.next <= index; ++decoder.next) {
+    cv::Mat decoded;
+    if (!decoder.capture.read(decoded) || decoded.empty())
+      throw Error::InFile(video_path_, "cannot decode frame " + std::to_string(decoder.next));
+    if (decoder.next == index) {
+      frame = decoded;
+    } else {
+      decoder.decoded.emplace(decoder.next, decoded);
+      if (decoder.decoded.size() > kDecodedAheadFrames)
+        decoder.decoded.erase(decoder.decoded.begin());
+    }
+  }
+  return frame;
 }
 
 cv::Mat FrameSource::Read(size_t index) const {
   if (index >= count_) throw Error("frame index " + std::to_string(index) + " out of range");
-  if (!video_path_.empty()) {
-    cv::VideoCapture capture(video_path_);
-    capture.set(cv::CAP_PROP_POS_FRAMES, static_cast<double>(index));
-    cv::Mat frame;
-    if (!capture.read(frame) || frame.empty())
-      throw Error::InFile(video_path_, "cannot decode frame " + std::to_string(index));
-    return frame;
-  }
-  const std::string& path = image_paths_[index];
+  const std::string key =
+      video_path_.empty() ? image_paths_[index] : video_path_ + "#" + std::to_string(index);
   FrameCache& cache = TheFrameCache();
   {
     const std::lock_guard<std::mutex> lock(cache.mutex);
-    const auto it = cache.frames.find(path);
+    const auto it = cache.frames.find(key);
     if (it != cache.frames.end()) return it->second;
   }
-  cv::Mat image = ReadImage(path);
+  const cv::Mat image = video_path_.empty() ? ReadImage(key) : Decode(index);
   const size_t bytes = image.total() * image.elemSize();
   const std::lock_guard<std::mutex> lock(cache.mutex);
-  if (cache.used_bytes + bytes <= cache.limit_bytes && cache.frames.emplace(path, image).second)
+  if (cache.used_bytes + bytes <= cache.limit_bytes && cache.frames.emplace(key, image).second)
     cache.used_bytes += bytes;
   return image;
 }
@@ -461,7 +601,7 @@ std::vector<GroundTruthSighting> ReadSightings(const std::string& path) {
 }  // namespace
 
 std::optional<GroundTruth> ReadGroundTruth(const std::string& run_dir) {
-  const fs::path dir = fs::path(run_dir) / "ground_truth";
+  const fs::path dir = RunFolderPaths::Of(run_dir).ground_truth;
   if (!fs::is_directory(dir)) return std::nullopt;
   GroundTruth truth;
   truth.trajectory = ReadTrajectory((dir / "trajectory.csv").string());
@@ -511,10 +651,21 @@ BoundingSlice SliceAtRow(const CsvTable& table, size_t row) {
           table.Double(row, table.ColumnIndex("s_phi_rad"), 0, 2 * kPi, "rad")};
 }
 
-RunFolderPaths RunFolderPaths::Of(const std::string& run_dir) {
+RunFolderPaths RunFolderPaths::Of(const std::string& run_or_video) {
+  std::string run_dir = run_or_video, video;
+  if (fs::is_regular_file(run_or_video)) {
+    video = run_or_video;
+    run_dir = fs::path(run_or_video).parent_path().string();
+    if (run_dir.empty()) run_dir = ".";
+  }
   const fs::path dir(run_dir);
-  return {run_dir, (dir / "camera.yaml").string(), (dir / "classes.yaml").string(),
-          (dir / "odometry.csv").string(), (dir / "ground_truth").string()};
+  return {run_dir,
+          (dir / "camera.yaml").string(),
+          (dir / "classes.yaml").string(),
+          (dir / "odometry.csv").string(),
+          (dir / "ground_truth").string(),
+          (dir / "detections.csv").string(),
+          video};
 }
 
 }  // namespace oslam

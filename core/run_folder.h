@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "core/bounding_slice.h"
 #include "core/csv.h"
 #include "core/motion_model.h"
+#include "core/odometry_sync.h"
 #include "core/pose2.h"
 
 namespace oslam {
@@ -92,6 +94,13 @@ struct Odometry {
 Odometry ReadOdometry(const std::string& path, long expected_rows = -1);
 void WriteOdometryPoses(const std::vector<Pose2>& poses, const std::string& path);
 
+// Odometry by time: a `stamp_s` column and no `frame` column. Rows at the
+// odometry's own rate, stamps strictly increasing, with x_m,y_m,theta_rad
+// (poses) or distance_m,turn_rad (increments, integrated from the origin;
+// row 0's ignored). docs/formats.md, "Odometry by time".
+bool IsTimedOdometry(const std::string& path);
+TimedOdometry ReadTimedOdometry(const std::string& path);
+
 // ---- frames ----
 
 // Decoded image frames may be kept in memory, process-wide, up to `bytes`
@@ -102,10 +111,22 @@ void WriteOdometryPoses(const std::vector<Pose2>& poses, const std::string& path
 void SetFrameCacheLimit(size_t bytes);
 
 // Frames of a run: the images in RUN/frames/ sorted by name (png, jpg, jpeg,
-// bmp, tif, tiff), or else a single video file RUN/video.* read by OpenCV.
+// bmp, tif, tiff), or else a video read by OpenCV: the file given instead of
+// the run folder, or RUN/video.*.
+//
+// A video is decoded once, in order: reading frame i continues the decoder
+// from where the last read stopped (frames decoded on the way and not yet
+// asked for wait in a short queue, so threads asking in nearly increasing
+// order share one pass); only a read behind the decoder or far ahead of it
+// seeks.
 class FrameSource {
  public:
-  explicit FrameSource(const std::string& run_dir);
+  // `run_or_video`: a run folder, or a video file whose folder is the run folder.
+  explicit FrameSource(const std::string& run_or_video);
+  ~FrameSource();
+  FrameSource(const FrameSource&) = delete;
+  FrameSource& operator=(const FrameSource&) = delete;
+
   size_t size() const { return count_; }
   // Colour (BGR 8-bit) frame i; throws naming the file when it cannot be read.
   // Safe to call from several threads at once.
@@ -113,11 +134,23 @@ class FrameSource {
   // File name of frame i (the video file for videos).
   std::string Name(size_t index) const;
   bool is_video() const { return !video_path_.empty(); }
+  // Each frame's time in seconds: RUN/frame_times.csv (columns frame,stamp_s,
+  // one row per frame, increasing) when present; else, for a video, the
+  // container's frame rate (frame i at i / fps); else empty.
+  const std::vector<double>& times() const { return times_; }
+  // Where the times came from: "frame_times.csv", "video frame rate" or "".
+  const std::string& times_source() const { return times_source_; }
 
  private:
+  struct Decoder;
+  cv::Mat Decode(size_t index) const;
+
   std::vector<std::string> image_paths_;
   std::string video_path_;
   size_t count_ = 0;
+  std::vector<double> times_;
+  std::string times_source_;
+  std::unique_ptr<Decoder> decoder_;
 };
 
 // ---- ground_truth/ (written by the simulator) ----
@@ -161,9 +194,11 @@ BoundingSlice SliceAtRow(const CsvTable& table, size_t row);
 
 // ---- the whole folder ----
 
+// The files of a run. `run_or_video` is the run folder, or a video file in
+// it (then `video` is that file and `dir` its folder).
 struct RunFolderPaths {
-  std::string dir, camera, classes, odometry, ground_truth;
-  static RunFolderPaths Of(const std::string& run_dir);
+  std::string dir, camera, classes, odometry, ground_truth, detections, video;
+  static RunFolderPaths Of(const std::string& run_or_video);
 };
 
 }  // namespace oslam

@@ -151,8 +151,6 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
   if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder to learn colours from");
   const std::unique_ptr<CameraModel> camera = LoadCamera(paths.camera);
   const FrameSource frames(run_dir);
-  if (frames.is_video())
-    throw Error::InFile(run_dir, "learning from ground truth needs frames/, not a video");
   std::vector<ColourExample> examples;
   for (const ObjectClass& object_class : classes) {
     std::vector<const GroundTruthSighting*> candidates;
@@ -186,6 +184,7 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
         if (cv::countNonZero(mask) < 8) continue;  // mostly beyond the rim or another colour
         ColourExample example;
         example.image_path = frames.Name(static_cast<size_t>(s->frame));
+        if (frames.is_video()) example.image = frame;
         example.class_name = object_class.name;
         example.mask = mask;
         examples.push_back(example);
@@ -264,7 +263,7 @@ std::vector<ObjectClass> TrainColourModels(const std::vector<ObjectClass>& class
     std::vector<cv::Mat> images, masks;
     for (const ColourExample& example : examples) {
       if (example.class_name != classes[c].name) continue;
-      cv::Mat image = ReadImage(example.image_path);
+      cv::Mat image = example.image.empty() ? ReadImage(example.image_path) : example.image;
       cv::Mat mask;
       if (!example.mask.empty()) {
         mask = example.mask;

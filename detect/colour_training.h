@@ -24,6 +24,7 @@ namespace oslam {
 
 struct ColourExample {
   std::string image_path;
+  cv::Mat image;  // in-memory image (a video's frame); overrides image_path, which names it
   std::string class_name;
   cv::Rect roi;  // used when mask_path is empty
   std::string mask_path;

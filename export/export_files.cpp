@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 
 void ReadRunContext(const std::string& run_dir, ExportScene* scene) {
   const RunFolderPaths paths = RunFolderPaths::Of(run_dir);
-  if (!fs::is_directory(run_dir)) throw Error::InFile(run_dir, "no such run folder");
+  if (!fs::is_directory(paths.dir)) throw Error::InFile(run_dir, "no such run folder");
   if (fs::exists(paths.classes)) scene->classes = ReadClasses(paths.classes);
   if (fs::exists(paths.odometry)) scene->odometry = ReadOdometry(paths.odometry).poses;
   if (const auto truth = ReadGroundTruth(run_dir)) scene->ground_truth = truth->trajectory;
@@ -151,8 +151,8 @@ OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_di
   input.camera = LoadCamera(RunFolderPaths::Of(run_dir).camera);
   if (!detections_path.empty()) {
     input.detections = ReadDetections(detections_path, scene.classes);
-  } else if (fs::exists(run_dir + "/detections.csv")) {
-    input.detections = ReadDetections(run_dir + "/detections.csv", scene.classes);
+  } else if (fs::exists(RunFolderPaths::Of(run_dir).detections)) {
+    input.detections = ReadDetections(RunFolderPaths::Of(run_dir).detections, scene.classes);
   }
   const long count = static_cast<long>(std::min(input.frames->size(), scene.map.trajectory.size()));
   if (count == 0) throw Error::InFile(run_dir, "no frames with an estimated pose to overlay");

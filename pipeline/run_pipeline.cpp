@@ -4,6 +4,7 @@
 #include <ctime>
 #include <filesystem>
 #include <functional>
+#include <optional>
 
 
 #include "calib/camera_io.h"
@@ -14,6 +15,7 @@
 #include "omap/omap_json.h"
 #include "pipeline/run_report.h"
 #include "pipeline/run_status.h"
+#include "pipeline/timed_run.h"
 
 namespace oslam {
 namespace {
@@ -35,7 +37,8 @@ void TimeStage(const std::string& name, int index, const RunPipelineCallbacks& c
 }  // namespace
 
 bool RunPipelineOptions::Validate(std::string* why) const {
-  return detect.Validate(why) && slam.Validate(why) && export_.Validate(why) && eval.Validate(why);
+  return detect.Validate(why) && slam.Validate(why) && export_.Validate(why) &&
+         eval.Validate(why) && frames.Validate(why);
 }
 
 StageTime RunPipelineResult::Total() const {
@@ -47,10 +50,23 @@ StageTime RunPipelineResult::Total() const {
   return total;
 }
 
-void CheckRunInputs(const std::string& run_dir) {
+void CheckRunInputs(const std::string& run_dir, const FrameSelectionOptions& frame_options) {
   const RunFolderPaths paths = RunFolderPaths::Of(run_dir);
   const FrameSource frames(run_dir);
-  ReadOdometry(paths.odometry, static_cast<long>(frames.size()));
+  if (fs::is_regular_file(paths.odometry) && IsTimedOdometry(paths.odometry)) {
+    if (frames.times().empty())
+      throw Error::InFile(paths.odometry,
+                          "is by time (stamp_s) but the frames have no times: give "
+                          "frame_times.csv (frame,stamp_s) or a video with a frame rate");
+    try {
+      SelectFrames(ReadTimedOdometry(paths.odometry), frames.times(), frame_options);
+    } catch (const Error& e) {
+      if (std::string(e.what()).rfind(paths.odometry, 0) == 0) throw;
+      throw Error::InFile(paths.odometry, e.what());
+    }
+  } else {
+    ReadOdometry(paths.odometry, static_cast<long>(frames.size()));
+  }
   LoadCamera(paths.camera);
   const std::vector<ObjectClass> classes = ReadClasses(paths.classes);
   bool any_colour = false;
@@ -67,12 +83,14 @@ namespace {
 RunPipelineResult RunStagesOf(const std::string& run_dir, const std::string& out_dir,
                               const RunPipelineOptions& options,
                               const RunPipelineCallbacks& callbacks,
-                              const std::function<bool(const char*)>& reused, RunStatus* status) {
+                              const std::function<bool(const char*)>& reused, RunStatus* status,
+                              const FrameSelection* selection) {
   // The export stage's overlays reuse the frames the detect stage decoded
   // (1 GiB holds about 1100 frames of 640x480; beyond it frames are decoded
   // again).
   SetFrameCacheLimit(size_t{1} << 30);
   RunPipelineResult result;
+  if (selection) result.selection = *selection;
   const fs::path out(out_dir);
   result.detections_path = (out / "detections.csv").string();
   result.omap_path = (out / "omap.json").string();
@@ -156,7 +174,7 @@ RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out
                               const RunPipelineCallbacks& callbacks) {
   std::string why;
   if (!options.Validate(&why)) throw Error("configuration: " + why);
-  CheckRunInputs(run_dir);
+  CheckRunInputs(run_dir, options.frames);
   if (options.export_.overlays) CheckOutputSubfolder(out_dir, "overlays");
   std::error_code ec;
   fs::create_directories(out_dir, ec);
@@ -178,8 +196,19 @@ RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out
   try {
     if (callbacks.ready) callbacks.ready();
     status.Mark("configuration", "complete");
-    RunPipelineResult result =
-        RunStagesOf(run_dir, out_dir, options, callbacks, is_reused, &status);
+    // Odometry by time: the stages run on the kept frames, written as a run
+    // folder with one odometry row per frame (OUT_DIR/run).
+    std::string stage_run = run_dir;
+    std::optional<TimedRunResult> timed;
+    if (IsTimedOdometry(RunFolderPaths::Of(run_dir).odometry)) {
+      timed = PrepareTimedRun(run_dir, (fs::path(out_dir) / "run").string(), options.frames,
+                              callbacks.output);
+      callbacks.output.Print("frames: " + timed->selection.Summary());
+      stage_run = timed->run_dir;
+    }
+    RunPipelineResult result = RunStagesOf(stage_run, out_dir, options, callbacks, is_reused,
+                                           &status, timed ? &timed->selection : nullptr);
+    if (timed) result.timed_run_dir = timed->run_dir;
     status.Complete();
     return result;
   } catch (const std::exception& e) {

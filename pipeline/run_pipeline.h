@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/odometry_sync.h"
 #include "omap/evaluation.h"
 #include "omap/omap.h"
 #include "pipeline/detect_stage.h"
@@ -27,6 +28,9 @@ struct RunPipelineOptions {
   SlamStageOptions slam;
   ExportStageOptions export_;  // `export` is a keyword
   EvalStageOptions eval;
+  // Which frames a run with odometry by time keeps (unused with one
+  // odometry row per frame: every frame is kept).
+  FrameSelectionOptions frames;
 
   // Reuse the stages that the last run into the same output folder
   // completed with the same `settings` on the same inputs (run.json);
@@ -50,6 +54,10 @@ struct StageTime {
 
 struct RunPipelineResult {
   std::string detections_path, omap_path, report_path;
+  // With odometry by time: the frames kept and the run folder of them the
+  // stages ran on (OUT_DIR/run); else "" and no selection.
+  std::string timed_run_dir;
+  std::optional<FrameSelection> selection;
   std::string eval_path;  // "" without ground truth
   DetectStageResult detect;
   SlamStageResult slam;
@@ -70,16 +78,20 @@ struct RunPipelineCallbacks {
 };
 
 // What every run needs, checked before anything is written: frames,
-// odometry.csv with one row per frame, camera.yaml, classes.yaml with a
-// colour model. Throws oslam::Error naming the file and problem.
-void CheckRunInputs(const std::string& run_dir);
+// odometry.csv with one row per frame (or by time, with frame times and at
+// least one frame in its span), camera.yaml, classes.yaml with a colour
+// model. Throws oslam::Error naming the file and problem.
+void CheckRunInputs(const std::string& run_dir, const FrameSelectionOptions& frames = {});
 
 // Writes into `out_dir` (created): detections.csv, omap.json, the export's
 // files, eval.json (with ground truth) and report.md, and run.json, the
 // folder's status (pipeline/run_status.h): running from the start, then
 // complete, or failed with the error. A re-run first removes the files it
-// writes, so no older result is left beside the new ones. Throws
-// oslam::Error (invalid options, bad input: before anything is written).
+// writes, so no older result is left beside the new ones. With odometry by
+// time, first OUT_DIR/run, the kept frames as a run folder
+// (pipeline/timed_run.h), on which the stages then run. `run_dir` may be a
+// video file in the run folder. Throws oslam::Error (invalid options, bad
+// input: before anything is written).
 RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out_dir,
                               const RunPipelineOptions& options,
                               const RunPipelineCallbacks& callbacks = {});

@@ -34,6 +34,8 @@ void InputSection(const std::string& run_dir, const RunPipelineOptions& options,
         "trajectories in TUM format (`trajectory_*.txt`, for evo).\n\n";
 
   md << "## Input and configuration\n\n| | |\n|---|---|\n";
+  if (result.selection)
+    md << "| odometry by time | " << result.selection->Summary() << ", as the run folder `run/` |\n";
   md << "| frames | " << result.detect.frames;
   if (result.detect.skipped_frames > 0)
     md << " (" << result.detect.skipped_frames << " unreadable, skipped)";

@@ -50,7 +50,7 @@ LoadedInput Load(const SlamStageInput& input, const SlamStageOptions& options) {
   loaded.data.first_pose = odometry.poses.front();
   loaded.odometry = odometry.poses;
   const std::string detections_path =
-      input.detections_path.empty() ? input.run_dir + "/detections.csv" : input.detections_path;
+      input.detections_path.empty() ? paths.detections : input.detections_path;
   loaded.detections_path = detections_path;
   const std::vector<Detection> read =
       input.detections ? std::vector<Detection>() : ReadDetections(detections_path, classes);

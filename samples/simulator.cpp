@@ -1,14 +1,17 @@
 #include "samples/simulator.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <future>
+#include <optional>
 #include <random>
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "calib/camera_io.h"
 #include "calib/observation_model.h"
@@ -16,6 +19,7 @@
 #include "core/csv.h"
 #include "core/error.h"
 #include "core/image_file.h"
+#include "core/odometry_sync.h"
 #include "core/run_folder.h"
 #include "samples/renderer.h"
 #include "samples/robot_path.h"
@@ -49,6 +53,54 @@ std::string FramePath(const std::string& run_dir, long frame) {
 void WriteFrame(const cv::Mat& image, const std::string& path) {
   // Fast compression: frames are large and noisy, level 1 is within a few % of 9.
   WriteImage(path, image, {cv::IMWRITE_PNG_COMPRESSION, 1});
+}
+
+// RUN/video.mp4, written under a temporary name and renamed when complete
+// (a reader never sees half a video).
+class VideoOutput {
+ public:
+  VideoOutput(const std::string& run_dir, double frame_rate_hz, cv::Size size)
+      : path_((fs::path(run_dir) / "video.mp4").string()),
+        temp_path_((fs::path(run_dir) / "video.partial.mp4").string()) {
+    for (const char* codec : {"avc1", "mp4v"}) {
+      const int fourcc = cv::VideoWriter::fourcc(codec[0], codec[1], codec[2], codec[3]);
+      if (writer_.open(temp_path_, cv::CAP_FFMPEG, fourcc, frame_rate_hz, size)) return;
+    }
+    throw Error::InFile(path_, "OpenCV cannot write an mp4 video (no H.264 or MPEG-4 encoder)");
+  }
+  void Write(const cv::Mat& frame) { writer_.write(frame); }
+  void Finish() {
+    writer_.release();
+    std::error_code ec;
+    fs::rename(temp_path_, path_, ec);
+    if (ec) throw Error::InFile(path_, "cannot rename the finished video: " + ec.message());
+  }
+
+ private:
+  std::string path_, temp_path_;
+  cv::VideoWriter writer_;
+};
+
+// odometry.csv by time: rows every 1 / rate s of the video's clock from the
+// first frame to the last, stamped on the odometry's clock (+ offset).
+void WriteTimedOdometry(const std::vector<Pose2>& per_frame, const SimulationOptions& options,
+                        const std::string& path) {
+  TimedOdometry frames;
+  for (size_t i = 0; i < per_frame.size(); ++i) {
+    frames.stamps_s.push_back(static_cast<double>(i) / options.video_frame_rate_hz);
+    frames.poses.push_back(per_frame[i]);
+  }
+  const double last = frames.stamps_s.back();
+  std::ostringstream out;
+  out << "stamp_s,x_m,y_m,theta_rad\n";
+  for (long k = 0;; ++k) {
+    const double t = std::min(last, static_cast<double>(k) / options.odometry_rate_hz);
+    const Pose2 pose = per_frame.size() > 1 ? InterpolateOdometry(frames, t) : per_frame[0];
+    out << CsvNumber(t + options.odometry_offset_s) << ',' << CsvNumber(pose.x) << ','
+        << CsvNumber(pose.y) << ',' << CsvNumber(pose.theta) << '\n';
+    if (t >= last) break;
+  }
+  WriteTextFileAtomically(path, out.str());
 }
 
 // One row of ground_truth/visible_slices.csv: the pixel-measured slice of a
@@ -127,7 +179,8 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
                 summary.frames, summary.path_length_m, summary.odometry_final_error_m);
   report(line, true);
 
-  fs::create_directories(fs::path(run_dir) / "frames");
+  const bool video = options.video_frame_rate_hz > 0;
+  fs::create_directories(video ? fs::path(run_dir) : fs::path(run_dir) / "frames");
   SaveCamera(*scene.camera, RunFolderPaths::Of(run_dir).camera);
   WriteClasses(scene.classes, RunFolderPaths::Of(run_dir).classes);
 
@@ -144,6 +197,10 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
   // PNG encoding of frame i overlaps the rendering of frame i + 1; the bytes
   // do not depend on the timing.
   std::future<void> pending_write;
+  std::optional<VideoOutput> video_output;
+  if (video)
+    video_output.emplace(run_dir, options.video_frame_rate_hz,
+                         cv::Size(scene.camera->image_width(), scene.camera->image_height()));
   for (long frame = 0; frame < summary.frames; ++frame) {
     const Clock::time_point frame_start = Clock::now();
     FrameConditions conditions;
@@ -155,8 +212,11 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
                  &truth.sightings, &visible_rows);
     summary.render_seconds += SecondsSince(frame_start);
     if (pending_write.valid()) pending_write.get();  // rethrows a failed write
-    pending_write =
-        std::async(std::launch::async, WriteFrame, render.image.clone(), FramePath(run_dir, frame));
+    if (video_output)
+      video_output->Write(render.image);
+    else
+      pending_write = std::async(std::launch::async, WriteFrame, render.image.clone(),
+                                 FramePath(run_dir, frame));
     if ((frame + 1) % 10 == 0 || frame + 1 == summary.frames) {
       std::snprintf(line, sizeof(line), "render: frame %ld/%ld (%.1f frames/s rendering)",
                     frame + 1, summary.frames,
@@ -165,12 +225,16 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
     }
   }
   if (pending_write.valid()) pending_write.get();
+  if (video_output) video_output->Finish();
   summary.sightings = static_cast<long>(truth.sightings.size());
 
   // Odometry and ground truth last: a run folder with odometry.csv is complete.
   WriteVisibleSlices(visible_rows, run_dir);
   WriteGroundTruth(truth, run_dir);
-  WriteOdometryPoses(path.odometry_poses, RunFolderPaths::Of(run_dir).odometry);
+  if (options.odometry_rate_hz > 0 && video)
+    WriteTimedOdometry(path.odometry_poses, options, RunFolderPaths::Of(run_dir).odometry);
+  else
+    WriteOdometryPoses(path.odometry_poses, RunFolderPaths::Of(run_dir).odometry);
   summary.total_seconds = SecondsSince(start);
   std::snprintf(line, sizeof(line), "ground truth: %zu objects, %ld sightings; wrote %s in %.1f s",
                 truth.objects.size(), summary.sightings, run_dir.c_str(), summary.total_seconds);

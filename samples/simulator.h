@@ -14,6 +14,16 @@ namespace oslam {
 struct SimulationOptions {
   std::uint64_t seed = 1;
   long max_frames = -1;  // -1: the scene's frames (or the whole path)
+  // > 0: the frames go into one video file RUN/video.mp4 at this frame rate
+  // (H.264 when OpenCV's FFmpeg has an encoder for it, else MPEG-4 part 2)
+  // instead of PNGs in RUN/frames/.
+  double video_frame_rate_hz = 0.0;
+  // > 0 (with a video): odometry.csv by time (docs/formats.md) with rows at
+  // this rate on a clock `odometry_offset_s` ahead of the video's (frame i
+  // at i / video_frame_rate_hz), from the first to the last frame: the
+  // per-frame odometry poses interpolated in SE(2) at the rows' times.
+  double odometry_rate_hz = 0.0;
+  double odometry_offset_s = 0.0;
   // Called with one line per stage and, during rendering, with progress
   // updates (final = true for the stage's last line).
   std::function<void(const std::string& line, bool final)> progress;

@@ -151,6 +151,10 @@ std::vector<KeyCase> Cases() {
       {"export.camera_every", "4", [](O o) { return o.export_.camera_every == 4; }},
       {"eval.threshold", "0.7", [](O o) { return o.eval.metrics.existence_threshold == 0.7; }},
       {"eval.gate_m", "0.3", [](O o) { return o.eval.metrics.match_gate_m == 0.3; }},
+      {"frames.time_offset_s", "-0.25", [](O o) { return o.frames.time_offset_s == -0.25; }},
+      {"frames.min_distance_m", "0.5", [](O o) { return o.frames.min_distance_m == 0.5; }},
+      {"frames.min_turn_rad", "0.3", [](O o) { return o.frames.min_turn_rad == 0.3; }},
+      {"frames.stride", "3", [](O o) { return o.frames.stride == 3; }},
   };
 }
 
@@ -161,6 +165,7 @@ void BindSection(const std::string& section, RunPipelineOptions* options, Bindin
   if (section == "slam") BindSlamOptions(&options->slam, bindings);
   if (section == "export") BindExportOptions(&options->export_, bindings);
   if (section == "eval") BindEvalOptions(&options->eval, bindings);
+  if (section == "frames") BindFrameOptions(&options->frames, bindings);
 }
 
 TEST(Bindings, EveryConfigurationKeyReachesItsFieldByFileSetAndFlag) {

@@ -9,6 +9,11 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/atomic_file.h"
+#include "core/run_folder.h"
 
 #include "test_util.h"
 
@@ -45,6 +50,20 @@ TEST(Cli, UsageErrorsExitWithTwo) {
   }
 }
 
+// The mount is not seen by boards: calibrate asks for it instead of writing
+// a default that would look calibrated.
+TEST(Cli, CalibrateRequiresTheMeasuredMount) {
+  const std::string base = "calibrate /nonexistent --pattern 7x6 --square 0.03 -o c.yaml";
+  const Result no_height = RunOslam(base + " --mount-yaw 0");
+  EXPECT_EQ(no_height.exit_code, 2);
+  EXPECT_NE(no_height.err.find("missing --focus-height METRES"), std::string::npos)
+      << no_height.err;
+  const Result no_yaw = RunOslam(base + " --focus-height 0.8");
+  EXPECT_EQ(no_yaw.exit_code, 2);
+  EXPECT_NE(no_yaw.err.find("missing --mount-yaw RAD"), std::string::npos) << no_yaw.err;
+  EXPECT_EQ(Lines(no_yaw.err), 1);
+}
+
 TEST(Cli, RuntimeErrorsExitWithOneAndNameTheFile) {
   const Result missing = RunOslam("camera --from /nonexistent/camera.yaml");
   EXPECT_EQ(missing.exit_code, 1);
@@ -66,6 +85,53 @@ TEST(Cli, CameraPresetIsWrittenAndReadBack) {
   const Result read = RunOslam("camera --from " + path + " --project 3,0,0");
   ASSERT_EQ(read.exit_code, 0) << read.err;
   EXPECT_NE(read.out.find("polar (184.488 px, 0.00000 rad)"), std::string::npos) << read.out;
+}
+
+// Outline examples whose camera.yaml is not beside classes.yaml: --camera
+// names it; the classes come back with readable numbers and a learnt shape.
+TEST(Cli, TrainColorsTakesTheCameraOfOutlineExamples) {
+  testing::TempDir dir;
+  ASSERT_EQ(RunOslam("camera --preset lpa --quiet -o " + dir.Path("rig/camera.yaml")).exit_code, 0);
+  ObjectClass ball;
+  ball.name = "orange ball";
+  ball.diameter_mean_m = 0.2;
+  ball.diameter_std_m = 0.05;
+  ball.height_mean_m = 0.2;
+  ball.height_std_m = 0.05;
+  WriteClasses({ball}, dir.Path("classes.yaml"));
+  std::string examples = "examples:\n";
+  for (int i = 0; i < 3; ++i) {  // three whole silhouettes: enough for a shape model
+    cv::Mat image(480, 640, CV_8UC3, cv::Scalar(128, 128, 128));
+    cv::Mat mask(480, 640, CV_8UC1, cv::Scalar(0));
+    const cv::Point centre(200 + 60 * i, 150 + 20 * i);
+    cv::circle(image, centre, 12 + 2 * i, cv::Scalar(30, 130, 250), cv::FILLED);
+    cv::circle(mask, centre, 12 + 2 * i, cv::Scalar(255), cv::FILLED);
+    const std::string name = "view" + std::to_string(i);
+    ASSERT_TRUE(cv::imwrite(dir.Path(name + ".png"), image));
+    ASSERT_TRUE(cv::imwrite(dir.Path(name + "_mask.png"), mask));
+    examples += "  - {image: " + name + ".png, class: orange ball, mask: " + name +
+                "_mask.png, outline: 1}\n";
+  }
+  WriteTextFileAtomically(dir.Path("examples.yaml"), examples);
+  const std::string train =
+      "train-colors " + dir.Path("classes.yaml") + " --examples " + dir.Path("examples.yaml");
+  const Result without = RunOslam(train);
+  EXPECT_EQ(without.exit_code, 1);
+  EXPECT_NE(without.err.find("give --camera"), std::string::npos) << without.err;
+  const Result with = RunOslam(train + " --camera " + dir.Path("rig/camera.yaml") + " --quiet");
+  ASSERT_EQ(with.exit_code, 0) << with.err;
+  const std::vector<ObjectClass> trained = ReadClasses(dir.Path("classes.yaml"));
+  ASSERT_TRUE(trained[0].colour.has_value());
+  EXPECT_TRUE(trained[0].image_shape.has_value());
+  const std::string text = ReadTextFile(dir.Path("classes.yaml"));
+  EXPECT_NE(text.find("diameter_mean_m: 0.2\n"), std::string::npos) << text;
+  EXPECT_EQ(text.find("e-01"), std::string::npos) << text;
+  // --camera belongs to the examples mode; the help points at the examples' format.
+  EXPECT_EQ(RunOslam("train-colors " + dir.Path("classes.yaml") + " --from-ground-truth " +
+                     dir.Path("") + " --camera x.yaml")
+                .exit_code,
+            2);
+  EXPECT_NE(RunOslam("train-colors --help").out.find("docs/detection.md"), std::string::npos);
 }
 
 }  // namespace

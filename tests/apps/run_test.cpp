@@ -135,7 +135,7 @@ TEST_F(RunCommand, BadInputIsReportedBeforeAnythingIsWritten) {
   {
     const std::string run = CopyOfRun("untrained");
     std::string text = ReadFile(run + "/classes.yaml");
-    text.erase(text.find("      colour:"), text.find("confusion:") - text.find("      colour:"));
+    text.erase(text.find("    colour:"), text.find("confusion:") - text.find("    colour:"));
     text.erase(text.find("confusion:"));
     std::ofstream(run + "/classes.yaml") << text;
     ExpectInputError(Oslam("run " + run + " -o " + out), "classes.yaml",

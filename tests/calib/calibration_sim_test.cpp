@@ -171,7 +171,8 @@ TEST(CalibrationOnRenders, RecoversTheLpaHyperbolicCamera) {
   // interchangeable for this almost-parabolic mirror).
   const testing::CommandResult fixed_b =
       Calibrate(dir.Path("images"),
-                "--model hyperbolic --mirror-a 0.03929 --mirror-b 0.01965 --focus-height 0.76",
+                "--model hyperbolic --mirror-a 0.03929 --mirror-b 0.01965 --focus-height 0.76 "
+                "--mount-yaw 0",
                 dir.Path("lpa.yaml"));
   const std::unique_ptr<CameraModel> calibrated = LoadCamera(dir.Path("lpa.yaml"));
   const auto* hyperbolic = dynamic_cast<const HyperbolicCamera*>(calibrated.get());
@@ -188,7 +189,8 @@ TEST(CalibrationOnRenders, RecoversTheLpaHyperbolicCamera) {
 
   // b estimated: reported; only the fit quality and the centre are asserted.
   const testing::CommandResult free_b =
-      Calibrate(dir.Path("images"), "--model hyperbolic --mirror-a 0.03929 --focus-height 0.76",
+      Calibrate(dir.Path("images"),
+                "--model hyperbolic --mirror-a 0.03929 --focus-height 0.76 --mount-yaw 0",
                 dir.Path("lpa_free_b.yaml"));
   const std::unique_ptr<CameraModel> free_camera = LoadCamera(dir.Path("lpa_free_b.yaml"));
   const auto* free_hyperbolic = dynamic_cast<const HyperbolicCamera*>(free_camera.get());
@@ -216,7 +218,8 @@ TEST(CalibrationOnRenders, RecoversAMeiCameraFromItsCameraYaml) {
   std::printf("rendered %d Mei views in %.1f s\n", kViews, render_seconds);
 
   const testing::CommandResult result =
-      Calibrate(dir.Path("images"), "--model mei --focus-height 1.0", dir.Path("mei.yaml"));
+      Calibrate(dir.Path("images"), "--model mei --focus-height 1.0 --mount-yaw 0",
+                dir.Path("mei.yaml"));
   const std::unique_ptr<CameraModel> calibrated = LoadCamera(dir.Path("mei.yaml"));
   const auto* mei = dynamic_cast<const MeiCamera*>(calibrated.get());
   ASSERT_NE(mei, nullptr);

@@ -99,6 +99,16 @@ TEST(Calibration, RecoversAKnownMeiCameraFromNoisyBoards) {
   for (const CalibrationView& view : result.views) EXPECT_FALSE(view.outlier) << view.name;
   for (int i = 0; i < result.standard_deviations.size(); ++i)
     EXPECT_GT(result.standard_deviations[i], 0.0) << result.parameter_names[i];
+  // A given mount yaw turns the camera about the vertical axis (as for the
+  // hyperbolic model below).
+  options.mount_yaw_rad = -0.7;
+  const CalibrationResult turned = CalibrateFromCorners(views, pattern, 1024, 768, options);
+  const Eigen::Vector3d point(1.2, 0.9, 0.1);
+  Eigen::Vector2d straight_pixel, turned_pixel;
+  ASSERT_TRUE(result.camera->ProjectToPixel(point, &straight_pixel));
+  ASSERT_TRUE(turned.camera->ProjectToPixel(
+      Eigen::AngleAxisd(-0.7, Eigen::Vector3d::UnitZ()) * point, &turned_pixel));
+  EXPECT_LT((straight_pixel - turned_pixel).norm(), 1e-6);
   std::printf(
       "synthetic Mei: RMS %.4f px, xi %.4f (%.4f), fx %.3f (%.3f), fy %.3f (%.3f), "
       "centre (%.3f, %.3f) (%.3f, %.3f), %.3f s\n",
@@ -184,6 +194,17 @@ TEST(Calibration, RecoversAKnownHyperbolicCamera) {
   ASSERT_TRUE(lpa.ProjectToPixel({1.5, -0.7, 0.2}, &a));
   ASSERT_TRUE(hyperbolic->ProjectToPixel({1.5, -0.7, 0.2}, &b));
   EXPECT_LT((a - b).norm(), 1.0);
+
+  // A given mount yaw turns the camera about the vertical axis: the turned
+  // camera images a point turned with it where the unturned one did.
+  options.mount_yaw_rad = 0.4;
+  const CalibrationResult turned = CalibrateFromCorners(views, pattern, 640, 480, options);
+  const Eigen::Vector3d point(1.5, -0.7, 0.2);
+  Eigen::Vector2d straight_pixel, turned_pixel;
+  ASSERT_TRUE(result.camera->ProjectToPixel(point, &straight_pixel));
+  ASSERT_TRUE(turned.camera->ProjectToPixel(
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()) * point, &turned_pixel));
+  EXPECT_LT((straight_pixel - turned_pixel).norm(), 1e-6);
 }
 
 TEST(Calibration, TooFewViewsIsAnError) {

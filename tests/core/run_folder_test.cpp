@@ -6,8 +6,11 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "test_util.h"
 
 namespace oslam {
@@ -62,6 +65,31 @@ TEST(Classes, WriteThenReadRoundTrips) {
   EXPECT_EQ(read[1].shape, ObjectShape::kSphere);
   EXPECT_EQ(FindClass(read, "pink ball"), 1);
   EXPECT_EQ(FindClass(read, "unicorn"), -1);
+}
+
+// Numbers are stored in their shortest exact form, names quoted, so the file
+// stays readable and edits by hand are easy; and they read back bit-exactly.
+TEST(Classes, NumbersAreWrittenShortAndReadBackExactly) {
+  testing::TempDir dir;
+  ObjectClass odd = GreenBox();
+  odd.name = "say \"hi\" \\ box";
+  odd.diameter_std_m = 0.1 + 0.2;  // 0.30000000000000004: must survive exactly
+  odd.colour = ColourBox{{150.25, 0.6, 1e-8}, {8, 3, 4}, 2.5};
+  const ConfusionMatrix confusion = {{0.6, 0.4}, {0.3, 0.7}};
+  WriteClasses({GreenBox(), odd}, dir.Path("classes.yaml"), confusion);
+  const std::string text = ReadTextFile(dir.Path("classes.yaml"));
+  EXPECT_TRUE(Contains(text, "diameter_mean_m: 0.6\n")) << text;
+  EXPECT_TRUE(Contains(text, "yuv_mean: [150.25, 0.6, 1e-08]")) << text;
+  EXPECT_TRUE(Contains(text, "- [0.6, 0.4]")) << text;
+  EXPECT_FALSE(Contains(text, "e-01")) << text;
+  const std::vector<ObjectClass> read = ReadClasses(dir.Path("classes.yaml"));
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_EQ(read[1].name, odd.name);
+  EXPECT_EQ(read[1].diameter_std_m, 0.1 + 0.2);
+  ASSERT_TRUE(read[1].colour.has_value());
+  EXPECT_EQ(read[1].colour->yuv_mean, odd.colour->yuv_mean);
+  EXPECT_EQ(read[1].colour->k_sigma, 2.5);
+  EXPECT_EQ(ReadConfusion(dir.Path("classes.yaml")), confusion);
 }
 
 TEST(Classes, BadFilesAreReportedWithTheKey) {
@@ -187,10 +215,70 @@ TEST(Frames, ImagesAreSortedByNameAndBadImagesNamed) {
       dir.Path("frames/000003.jpg") + ": not an image (expected PNG, JPEG, BMP, TIFF or PNM data)");
 }
 
+// A short video whose frame i is a flat grey of level 10·i: lossy codecs
+// shift flat frames by a few levels (about -4 here), less than the half step
+// that would mistake one frame for its neighbour.
+std::string WriteGreyVideo(const std::string& path, int frames, double fps) {
+  cv::VideoWriter writer;
+  for (const char* codec : {"avc1", "mp4v"})
+    if (writer.open(path, cv::CAP_FFMPEG,
+                    cv::VideoWriter::fourcc(codec[0], codec[1], codec[2], codec[3]), fps,
+                    cv::Size(64, 48)))
+      break;
+  EXPECT_TRUE(writer.isOpened());
+  for (int i = 0; i < frames; ++i)
+    writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(10.0 * i)));
+  writer.release();
+  return path;
+}
+
+double GreyLevel(const cv::Mat& frame) {
+  return cv::mean(frame)[0];
+}
+
+TEST(Frames, VideoFramesAreTheRightOnesInAnyOrderOfReading) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir.Path("run"));
+  const std::string video = WriteGreyVideo(dir.Path("run/robot.mp4"), 25, 25.0);
+  // The video file itself names the run (its folder).
+  const FrameSource frames(video);
+  ASSERT_TRUE(frames.is_video());
+  ASSERT_EQ(frames.size(), 25u);
+  for (size_t i : {0, 1, 2, 20, 5, 6, 24, 7})
+    EXPECT_NEAR(GreyLevel(frames.Read(i)), 10.0 * i, 5.0) << i;
+  // Several threads reading in (nearly) increasing order share one decoder.
+  std::vector<double> levels(25);
+  ParallelFor(0, 25, 3, [&](size_t i) { levels[i] = GreyLevel(frames.Read(i)); });
+  for (size_t i = 0; i < 25; ++i) EXPECT_NEAR(levels[i], 10.0 * i, 5.0) << i;
+  // Frame times from the container's frame rate.
+  ASSERT_EQ(frames.times().size(), 25u);
+  EXPECT_EQ(frames.times_source(), "video frame rate");
+  EXPECT_NEAR(frames.times()[10], 10 / 25.0, 1e-9);
+  EXPECT_EQ(RunFolderPaths::Of(video).dir, dir.Path("run"));
+  EXPECT_EQ(RunFolderPaths::Of(video).odometry, dir.Path("run/odometry.csv"));
+}
+
+TEST(Frames, FrameTimesCsvGivesTheTimesAndIsChecked) {
+  testing::TempDir dir;
+  WriteGreyVideo(dir.Path("video.mp4"), 4, 30.0);
+  WriteTextFileAtomically(dir.Path("frame_times.csv"),
+                          "frame,stamp_s\n0,100.5\n1,100.53\n2,100.6\n3,100.61\n");
+  const FrameSource frames(dir.Path());
+  EXPECT_EQ(frames.times(), (std::vector<double>{100.5, 100.53, 100.6, 100.61}));
+  EXPECT_EQ(frames.times_source(), "frame_times.csv");
+  WriteTextFileAtomically(dir.Path("frame_times.csv"), "frame,stamp_s\n0,1\n1,1\n2,2\n3,3\n");
+  EXPECT_EQ(
+      ErrorOf([&] { FrameSource again(dir.Path()); }),
+      dir.Path("frame_times.csv") + ":3: stamp_s must be finite and increase from row to row");
+  WriteTextFileAtomically(dir.Path("frame_times.csv"), "frame,stamp_s\n0,1\n");
+  EXPECT_EQ(ErrorOf([&] { FrameSource again(dir.Path()); }),
+            dir.Path("frame_times.csv") + ": has 1 rows but the run has 4 frames");
+}
+
 TEST(Frames, MissingOrEmptyFoldersAreReported) {
   testing::TempDir dir;
   EXPECT_EQ(ErrorOf([&] { FrameSource frames(dir.Path("absent")); }),
-            dir.Path("absent") + ": run folder not found");
+            dir.Path("absent") + ": run folder (or video file) not found");
   EXPECT_EQ(ErrorOf([&] { FrameSource frames(dir.Path()); }),
             dir.Path() + ": no frames/ folder and no video.* file");
   std::filesystem::create_directories(dir.Path("frames"));
