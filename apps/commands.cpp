@@ -19,6 +19,7 @@ const std::vector<Command>& Commands() {
        RunExportCommand},
       {"overlay", "draw an O-Map on a run's frames (reprojection overlays)", RunOverlayCommand},
       {"render", "figures of an O-Map: bird's-eye, perspective, trajectories", RunRenderCommand},
+      {"view", "look at an O-Map in 3D (interactive, or --screenshot off-screen)", RunViewCommand},
       {"slam", "O-SLAM: association and classes by MCMC over tracks; O-Map with existence",
        RunSlamCommand},
       {"simulate", "render a simulated robot run (frames, odometry, ground truth) from a scene",

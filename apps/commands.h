@@ -32,5 +32,6 @@ int RunSimulateLandmarksCommand(const std::vector<std::string>& args);
 int RunExportCommand(const std::vector<std::string>& args);
 int RunOverlayCommand(const std::vector<std::string>& args);
 int RunRenderCommand(const std::vector<std::string>& args);
+int RunViewCommand(const std::vector<std::string>& args);
 
 }  // namespace oslam

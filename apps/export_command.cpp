@@ -11,10 +11,11 @@ namespace oslam {
 int RunExportCommand(const std::vector<std::string>& args) {
   Arguments arguments(
       "oslam export OMAP.json -o OUT_DIR [--run RUN_DIR] [options]",
-      "Writes an O-Map as map.glb and map.gltf (glTF 2.0, Y up, for Blender), map.ply and\n"
-      "trajectory.ply (for MeshLab), and birdseye.png, perspective.png, trajectories.png.\n"
-      "RUN_DIR supplies class colours, odometry, ground truth, and for --overlays the frames,\n"
-      "camera and detections.");
+      "Writes an O-Map as map.glb and map.gltf (glTF 2.0 scene, Y up, for Blender), map.ply\n"
+      "and trajectory.ply (for MeshLab), trajectory_*.txt (TUM format, for evo), and the\n"
+      "figures birdseye and trajectories (PNG, SVG, CSV) and perspective.png (docs/export.md).\n"
+      "RUN_DIR supplies class colours and shapes, odometry, ground truth, and for --overlays\n"
+      "the frames, camera and detections.");
   arguments.AddPositional("OMAP", "the O-Map JSON (oslam map)");
   arguments.AddOption("output", "-o", "DIR", "output folder (created)");
   ExportStageInput input;

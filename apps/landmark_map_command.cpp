@@ -69,6 +69,10 @@ std::vector<Pose2> ReadTrueTrajectory(const std::string& path, int num_poses) {
 std::string WriteMapAndTrajectory(const std::string& output, std::string trajectory_path,
                                   const LandmarkDataset& data, const LandmarkSlamResult& result,
                                   const std::string& class_name, const std::string& association) {
+  // A failed solve is no map: say so, naming the data set, and write nothing.
+  if (!result.summary.IsUsable())
+    throw Error::InFile(data.path, "the solver failed on this data set (" + result.summary.message +
+                                       "); no map written");
   if (trajectory_path.empty())
     trajectory_path = (std::filesystem::path(output).parent_path() / "trajectory.csv").string();
   const OMapSource source{data.path, association, std::nullopt, std::nan(""), 0};
@@ -332,7 +336,7 @@ int LandmarkMode::Run(const Arguments& arguments) {
                                  ReadTrueTrajectory(o.truth_trajectory, data.num_poses)));
     std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());
   }
-  return result.summary.IsUsable() ? 0 : 1;
+  return 0;
 }
 
 // --unknown-association: the file's ids are hidden from the solve and used
@@ -368,7 +372,7 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
     for (int id : result.association) out << id << '\n';
     WriteTextFileAtomically(options_.association_out, out.str());
   }
-  if (quiet) return solution.summary.IsUsable() ? 0 : 1;
+  if (quiet) return 0;
 
   if (result.clutter_tracks > 0)
     std::printf("clutter: %ld tracks of fewer than %d sightings, %ld sightings, left out\n",
@@ -423,7 +427,7 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
   }
   PrintGpsError(options_.gps, data, solution.trajectory);
   std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());
-  return solution.summary.IsUsable() ? 0 : 1;
+  return 0;
 }
 
 }  // namespace oslam

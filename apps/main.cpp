@@ -35,7 +35,9 @@ std::string OneLine(std::string text) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
+  // Every failure oslam cares about comes back as an error it reports itself,
+  // on one line; OpenCV's own log lines would only add to it.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
   oslam::InstallInterruptCleanup();
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty()) {

@@ -62,6 +62,10 @@ int KnownAssociationMode::Run(const Arguments& arguments) {
       input_.pixel_noise_px > 0 ? input_.pixel_noise_px : GeometricSlamOptions().pixel_std_px;
   GeometricSlam slam(*camera, slam_);
   const GeometricSlamResult result = slam.Solve(input.problem);
+  // A failed solve is no map: say so, naming the run, and write nothing.
+  if (!result.summary.IsUsable())
+    throw Error::InFile(run_dir, "the solver failed on the run's ground-truth sightings (" +
+                                     result.summary.message + "); no map written");
 
   const OMapSource source{run_dir, "known (ground truth)", std::nullopt, input_.pixel_noise_px,
                           input_.seed};
@@ -95,7 +99,7 @@ int KnownAssociationMode::Run(const Arguments& arguments) {
         errors.diameter_error_mean_m, errors.height_error_mean_m);
     std::printf("wrote %s\n", arguments.Get("output").c_str());
   }
-  return result.summary.IsUsable() ? 0 : 1;
+  return 0;
 }
 
 int RunMapCommand(const std::vector<std::string>& args) {

@@ -1,5 +1,5 @@
 // oslam overlay: the O-Map reprojected onto a run's frames (thesis figs. 6.4b,
-// 6.11), one PNG per frame; the drawing is in export/overlay.h.
+// 6.11), one image per frame; the drawing is in export/overlay.h.
 #include <cstdio>
 
 #include "apps/arguments.h"
@@ -16,7 +16,7 @@ int RunOverlayCommand(const std::vector<std::string>& args) {
   Arguments arguments(
       "oslam overlay RUN_DIR OMAP.json -o OUT_DIR [--frames LIST] [options]",
       "Draws every map object's projected bounding slice (class colour, faded by its existence\n"
-      "probability, labelled) and the frame's detections on the run's frames: OUT_DIR/NNNNNN.png.");
+      "probability, labelled) and the frame's detections on the run's frames: OUT_DIR/NNNNNN.jpg.");
   arguments.AddPositional("RUN_DIR", "the run folder the map was made from (frames, camera)");
   arguments.AddPositional("OMAP", "the O-Map JSON (oslam map)");
   arguments.AddOption("output", "-o", "DIR", "output folder (created)");
@@ -27,6 +27,11 @@ int RunOverlayCommand(const std::vector<std::string>& args) {
                "only these frames, e.g. 0,10,20-30 (default: all)");
   bindings.Add(&options.min_existence, "min-existence", "P",
                "leave out objects with existence probability < P");
+  bindings
+      .Add(&options.overlay_format, "format", "jpg|png",
+           "image format (png: lossless, about 3x slower)")
+      .Check([&options] { return ParseOverlayFormat(options.overlay_format).has_value(); },
+             "must be jpg or png");
   bindings
       .Add(&options.threads, "threads", "N",
            "overlays drawn and written at once (0 = one per core)")
@@ -46,7 +51,8 @@ int RunOverlayCommand(const std::vector<std::string>& args) {
   const OverlayInput input =
       PrepareOverlays(scene, arguments.Get("RUN_DIR"), options.overlay_frames);
   const std::string out = arguments.Get("output");
-  WriteOverlays(scene, input, options.min_existence, out, quiet, options.threads);
+  WriteOverlays(scene, input, options.min_existence, out, quiet, options.threads,
+                *ParseOverlayFormat(options.overlay_format));
   if (!quiet) std::printf("wrote %zu overlays to %s\n", input.chosen.size(), out.c_str());
   return 0;
 }

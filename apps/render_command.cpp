@@ -16,8 +16,8 @@ namespace oslam {
 int RunRenderCommand(const std::vector<std::string>& args) {
   Arguments arguments(
       "oslam render OMAP.json -o OUT_DIR [--run RUN_DIR] [options]",
-      "Writes birdseye.png and perspective.png, and trajectories.png when RUN_DIR has ground\n"
-      "truth. RUN_DIR also supplies class colours and odometry.");
+      "Writes birdseye.{png,svg,csv} and perspective.png, and trajectories.{png,svg,csv} when\n"
+      "RUN_DIR has ground truth. RUN_DIR also supplies class colours and shapes, and odometry.");
   arguments.AddPositional("OMAP", "the O-Map JSON (oslam map)");
   arguments.AddOption("output", "-o", "DIR", "output folder (created)");
   arguments.AddOption("run", "", "RUN_DIR", "the run folder the map was made from");

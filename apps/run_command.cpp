@@ -10,6 +10,7 @@
 #include "apps/stage_bindings.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "pipeline/run_report.h"
 
 namespace oslam {
 namespace {
@@ -32,6 +33,9 @@ int RunRunCommand(const std::vector<std::string>& args) {
   arguments.AddOption("config", "", "FILE.yaml", "configuration (unknown keys are errors)");
   arguments.AddRepeatedOption("set", "SECTION.KEY=VALUE", "override one configuration value");
   arguments.AddOption("seed", "", "N", "seed of the sampler (same as --set slam.seed=N)");
+  arguments.AddFlag("resume",
+                    "reuse the stages the last run into OUT_DIR completed with the same "
+                    "configuration and inputs (run.json)");
   arguments.AddFlag("quiet", "print nothing but errors");
   arguments.AddFlag("verbose", "also print the resolved configuration");
   if (!arguments.Parse(args)) return 0;
@@ -46,6 +50,9 @@ int RunRunCommand(const std::vector<std::string>& args) {
   config.Check();
 
   const std::string out_dir = arguments.Get("output");
+  RunPipelineOptions options = config.options();
+  options.resume = arguments.Flag("resume");
+  options.settings = config.ToYaml();
   RunPipelineCallbacks callbacks;
   callbacks.ready = [&] {
     WriteTextFileAtomically((std::filesystem::path(out_dir) / "config.yaml").string(),
@@ -57,8 +64,9 @@ int RunRunCommand(const std::vector<std::string>& args) {
   };
   callbacks.output = CommandOutput("run", quiet);
   const RunPipelineResult result =
-      RunPipeline(arguments.Get("VIDEO_DIR"), out_dir, config.options(), callbacks);
+      RunPipeline(arguments.Get("VIDEO_DIR"), out_dir, options, callbacks);
   if (!quiet) {
+    std::printf("input: %s\n", InputSummary(result).c_str());
     for (const StageTime& t : result.times) PrintTime(t);
     PrintTime(result.Total());
     if (result.metrics) std::fputs(result.metrics->Table().c_str(), stdout);

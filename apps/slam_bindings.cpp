@@ -211,6 +211,18 @@ void BindFusionAndSchedule(SlamStageOptions* o, Bindings* b) {
       .Key("spurious_t0_m2", "spurious sigmoid t0, m^2: (0.4 m)^2 (docs/method.md §7.2, §9.8)");
   b->Add(&f.spurious_tau_m2, "spurious-tau", "M2", "spurious sigmoid tau (docs/method.md §7.2: (0.2 m)^2)")
       .Key("spurious_tau_m2", "spurious sigmoid tau, m^2: (0.2 m)^2 (docs/method.md §7.2, §9.8)");
+  b->AddNegatedFlag(&f.class_geometry_evidence, "no-class-geometry-evidence",
+                    "P(xi) from the location uncertainty alone (docs/method.md §7.2, thesis), "
+                    "not also from how well the geometry fits the class")
+      .Key("class_geometry_evidence",
+           "1: P(xi)'s odds times the Bayes factor of the geometry under the class against a "
+           "look-alike (docs/method.md §7.2)");
+  b->Add(&f.lookalike_size_std_m, "lookalike-size-std", "M",
+         "spread of a look-alike's diameter and height about the class's (docs/method.md §7.2)")
+      .Key("lookalike_size_std_m", "spread of a look-alike's diameter and height, m");
+  b->Add(&f.lookalike_base_std_m, "lookalike-base-std", "M",
+         "least spread of a look-alike's base height (docs/method.md §7.2)")
+      .Key("lookalike_base_std_m", "least spread of a look-alike's base height, m");
   b->AddFlag(&o->class_likelihood_per_detection, "class-likelihood-per-detection",
              "count log P(a | c) once per detection (eq. 4.32 as printed), not once per track")
       .Key("class_likelihood_per_detection",

@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "export/export_files.h"
+
 namespace oslam {
 
 void BindDetectOptions(DetectStageOptions* o, Bindings* b) {
@@ -36,6 +38,15 @@ void BindDetectOptions(DetectStageOptions* o, Bindings* b) {
       .Key("max_shape_distance",
            "drop detections whose slice elongation is further than this many sigmas from their "
            "class's image shape; inf = off");
+  b->AddNumberOrInfinity(&d.max_view_distance, "max-view-distance", "SIGMAS",
+                         "drop detections whose image shape and size standing on the floor are "
+                         "further than this from their class's (inf = off)")
+      .Key("max_view_distance",
+           "drop detections whose image shape plus the size they would have standing on the "
+           "floor are further than this many sigmas from their class's; inf = off");
+  b->Add(&d.fragment_gap_px, "fragment-gap", "PX",
+         "same-class blobs this close in one frame are checked together as one view")
+      .Key("fragment_gap_px", "same-class blobs this close in one frame are checked as one view");
   b->Add(&o->sift_templates, "sift-templates", "FILE.yaml",
          "keep a detection of a class with templates only if SIFT verifies it")
       .Key("sift_templates", "templates.yaml for SIFT verification; empty = colour only");
@@ -51,10 +62,15 @@ void BindExportOptions(ExportStageOptions* o, Bindings* b) {
          "leave out objects with existence probability < P")
       .Key("min_existence", "leave out objects with a lower existence probability");
   b->AddFlag(&o->overlays, "overlays",
-             "also draw the map on the run's frames (overlays/NNNNNN.png)")
+             "also draw the map on the run's frames (overlays/NNNNNN.jpg)")
       .Key("overlays", "1: draw the map on every frame");
   b->Add(&o->overlay_frames, "frames", "LIST", "overlay only these frames, e.g. 0,10,20-30")
       .Key("overlay_frames", "only these frames, e.g. 0,10,20-30");
+  b->Add(&o->overlay_format, "overlay-format", "jpg|png",
+         "overlay image format (png: lossless, about 3x slower)")
+      .Key("overlay_format", "jpg, or png: lossless, about 3x slower")
+      .Check([o] { return ParseOverlayFormat(o->overlay_format).has_value(); },
+             "must be jpg or png");
   b->Add(&o->threads, "threads", "N", "overlays drawn and written at once (0 = one per core)")
       .Key("threads", "overlays drawn and written at once, 0 = one per core (same output)")
       .Check([o] { return o->threads >= 0; }, "must be >= 0");
@@ -62,6 +78,9 @@ void BindExportOptions(ExportStageOptions* o, Bindings* b) {
       .Key("figure_size_px", "width and height of the figures");
   b->AddNegatedFlag(&o->floor_grid, "no-grid", "no floor grid in the glTF")
       .Key("floor_grid", "1: a floor grid in the glTF");
+  b->Add(&o->camera_every, "cameras", "N", "glTF: a camera pyramid at every Nth estimated pose")
+      .Key("camera_every", "glTF: a camera pyramid at every Nth estimated pose, 0 = none")
+      .Check([o] { return o->camera_every >= 0; }, "must be >= 0");
   b->AddFlag(&o->ascii_ply, "ascii-ply", "write ASCII PLY instead of binary")
       .Key("ascii_ply", "1: ASCII PLY instead of binary");
 }

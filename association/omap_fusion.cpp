@@ -94,10 +94,10 @@ bool Combinable(const Accumulator& a, const Accumulator& b, const FusionOptions&
   return CoOccurrences(a, b) <= options.identity_max_cooccurrence * rarer;
 }
 
-// Greedy agglomeration (identity merging, docs/method.md §7.3): candidate pairs of identities, closest
-// first; two groups are joined when their pooled means are still close and
-// they rarely co-occur, so two distinct objects that are both present in
-// most samples are never joined through a rare identity that spans both.
+// Greedy agglomeration (identity merging, docs/method.md §7.3): candidate pairs of identities,
+// closest first; two groups are joined when their pooled means are still close and they rarely
+// co-occur, so two distinct objects that are both present in most samples are never joined through
+// a rare identity that spans both.
 std::vector<Accumulator> CombineIdentities(std::vector<Accumulator> identities,
                                            const FusionOptions& options) {
   const size_t n = identities.size();
@@ -162,6 +162,11 @@ bool FusionOptions::Validate(std::string* why) const {
     if (why) *why = "the spurious sigmoid needs t0 >= 0 and tau >= 0 (m^2)";
     return false;
   }
+  if (!(lookalike_size_std_m > 0) || !(lookalike_base_std_m > 0) ||
+      std::isinf(lookalike_size_std_m) || std::isinf(lookalike_base_std_m)) {
+    if (why) *why = "the look-alike size and base spreads must be positive (m)";
+    return false;
+  }
   if (!(min_existence >= 0 && min_existence <= 1)) {
     if (why) *why = "the minimum existence probability must be in [0, 1]";
     return false;
@@ -169,8 +174,9 @@ bool FusionOptions::Validate(std::string* why) const {
   if (!(identity_merge_distance_m >= 0) || !(identity_class_mismatch_penalty >= 1) ||
       !(identity_max_cooccurrence >= 0 && identity_max_cooccurrence <= 1)) {
     if (why)
-      *why = "identity merging needs a distance >= 0 m, a class-mismatch penalty >= 1 and a "
-             "co-occurrence fraction in [0, 1]";
+      *why =
+          "identity merging needs a distance >= 0 m, a class-mismatch penalty >= 1 and a "
+          "co-occurrence fraction in [0, 1]";
     return false;
   }
   return true;
@@ -210,6 +216,61 @@ double NonSpuriousProbability(const Matrix5d& covariance, const ClassPrior& prio
                          options.spurious_tau_m2);
 }
 
+namespace {
+
+// log of the integral of exp(-theta' L theta / 2 + eta' theta) N(theta; mu,
+// diag(std^2)) d theta, without the (2 pi)^(5/2) that every prior shares.
+double LogPriorIntegral(const Matrix5d& information, const Vector5d& eta, const Vector5d& mu,
+                        const Vector5d& std) {
+  const Vector5d prior_information = std.array().square().inverse();
+  Matrix5d a = information;
+  a.diagonal() += prior_information;
+  const Vector5d b = eta + prior_information.cwiseProduct(mu);
+  const Eigen::LLT<Matrix5d> llt(a);
+  const double log_det_a = 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
+  const double log_det_prior = 2.0 * std.array().log().sum();
+  return -0.5 * log_det_prior - 0.5 * log_det_a + 0.5 * b.dot(llt.solve(b)) -
+         0.5 * mu.dot(prior_information.cwiseProduct(mu));
+}
+
+}  // namespace
+
+double ClassGeometryLogBayesFactor(const Matrix5d& covariance, const Vector5d& mean,
+                                   const ClassPrior& prior, const FusionOptions& options) {
+  const Eigen::LDLT<Matrix5d> ldlt(covariance);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || covariance.isZero()) return 0.0;
+  Vector5d mu, std;
+  mu << prior.location_mean_m, prior.size_mean_m;
+  std << prior.location_std_m, prior.size_std_m;
+  const Vector5d prior_information = std.array().square().inverse();
+  // The prior-free likelihood (4.43) in information form; a direction the
+  // detections leave unconstrained (rounding can make it slightly negative)
+  // has no information.
+  const Matrix5d posterior_information = ldlt.solve(Matrix5d::Identity());
+  Matrix5d information = posterior_information;
+  information.diagonal() -= prior_information;
+  information = 0.5 * (information + information.transpose());
+  const Eigen::SelfAdjointEigenSolver<Matrix5d> eigen(information);
+  information = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() *
+                eigen.eigenvectors().transpose();
+  const Vector5d eta = posterior_information * mean - prior_information.cwiseProduct(mu);
+  Vector5d lookalike = std;
+  lookalike[2] = std::max(std[2], options.lookalike_base_std_m);
+  lookalike[3] = std::max(std[3], options.lookalike_size_std_m);
+  lookalike[4] = std::max(std[4], options.lookalike_size_std_m);
+  return LogPriorIntegral(information, eta, mu, std) -
+         LogPriorIntegral(information, eta, mu, lookalike);
+}
+
+double ExistenceWeight(const Matrix5d& covariance, const Vector5d& mean, const ClassPrior& prior,
+                       const FusionOptions& options) {
+  const double p = NonSpuriousProbability(covariance, prior, options);
+  if (!options.spurious_model || !options.class_geometry_evidence || p <= 0.0 || p >= 1.0) return p;
+  const double log_odds =
+      std::log(p) - std::log1p(-p) + ClassGeometryLogBayesFactor(covariance, mean, prior, options);
+  return 1.0 / (1.0 + std::exp(-log_odds));
+}
+
 FusionResult FuseSamples(const std::vector<EvaluationPtr>& samples,
                          const std::vector<ClassPrior>& classes,
                          const std::vector<int>& track_sizes, const FusionOptions& options) {
@@ -240,9 +301,9 @@ FusionResult FuseSamples(const std::vector<EvaluationPtr>& samples,
       a.mean_sum += v;
       a.second_sum += v * v.transpose();
       a.covariance_sum += object->covariance;
-      a.presence.push_back({static_cast<int>(n), NonSpuriousProbability(
-                                                     object->covariance,
-                                                     classes[state.classes[j]], options)});
+      a.presence.push_back(
+          {static_cast<int>(n),
+           ExistenceWeight(object->covariance, v, classes[state.classes[j]], options)});
       ++a.class_counts[state.classes[j]];
     }
   }

@@ -23,8 +23,8 @@
 #include <Eigen/Core>
 
 #include "association/association_state.h"
-#include "slam/geometric_slam.h"
 #include "omap/omap.h"
+#include "slam/geometric_slam.h"
 
 namespace oslam {
 
@@ -32,7 +32,16 @@ struct FusionOptions {
   double spurious_t0_m2 = 0.16;   // t0 = (0.4 m)^2
   double spurious_tau_m2 = 0.04;  // tau = (0.2 m)^2
   bool spurious_model = true;     // false: P(xi) = 1 (setup 2, Fig. 6.9)
-  double min_existence = 0.0;     // identities below this pi are left out of the map
+  // Beyond the thesis (docs/method.md §7.2, class geometry evidence): the
+  // odds of P(xi) times the Bayes factor of the object's prior-free geometry
+  // under its class's priors (size; location, with any support prior)
+  // against a look-alike's, whose diameter and height have this spread
+  // about the class's means and whose base height at least
+  // lookalike_base_std_m. false: the thesis' P(xi).
+  bool class_geometry_evidence = true;
+  double lookalike_size_std_m = 1.0;
+  double lookalike_base_std_m = 2.0;  // the thesis' Gamma_z (§13 #7)
+  double min_existence = 0.0;         // identities below this pi are left out of the map
 
   // Identity merging (docs/method.md §7.3); false = the thesis' Algorithm 3 as printed.
   bool merge_identities = true;
@@ -57,6 +66,22 @@ double PriorFreeLocationVariance(const Eigen::Matrix<double, 5, 5>& covariance,
 
 double NonSpuriousProbability(const Eigen::Matrix<double, 5, 5>& covariance,
                               const ClassPrior& prior, const FusionOptions& options);
+
+// log of the Bayes factor (docs/method.md §7.2, class geometry evidence) of
+// an object's geometry under its class's priors against a look-alike's: the
+// prior-free Gaussian likelihood of theta = (l, g) (posterior `covariance`
+// and `mean` with the class prior's information removed, as (4.43)),
+// integrated against each prior. 0 when the covariance is not positive
+// definite.
+double ClassGeometryLogBayesFactor(const Eigen::Matrix<double, 5, 5>& covariance,
+                                   const Eigen::Matrix<double, 5, 1>& mean, const ClassPrior& prior,
+                                   const FusionOptions& options);
+
+// P(xi) of the object: NonSpuriousProbability, its odds multiplied by the
+// class geometry Bayes factor when options.class_geometry_evidence.
+double ExistenceWeight(const Eigen::Matrix<double, 5, 5>& covariance,
+                       const Eigen::Matrix<double, 5, 1>& mean, const ClassPrior& prior,
+                       const FusionOptions& options);
 
 struct FusedIdentity {
   std::vector<int> tracks;  // the identity (with merged identities: the union of their tracks)

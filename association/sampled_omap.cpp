@@ -14,21 +14,27 @@ Json Number(double v) {
   return std::isfinite(v) ? Json(v) : Json(nullptr);
 }
 
-Json MoveJson(const std::array<MoveStatistics, 3>& stats) {
+// Per move type: `timing` picks the run-time members (evaluation time, time
+// per proposal) or all the others.
+Json MoveJson(const std::array<MoveStatistics, 3>& stats, bool timing) {
   Json moves = Json::object();
   for (int m = 0; m < 3; ++m) {
     const MoveStatistics& s = stats[m];
-    moves[MoveName(static_cast<MoveType>(m))] = {
-        {"proposed", s.proposed},
-        {"accepted", s.accepted},
-        {"self_transitions", s.self_transitions},
-        {"cache_hits", s.cache_hits},
-        {"screened_out", s.screened_out},
-        {"acceptance_rate", Number(s.proposed ? double(s.accepted) / s.proposed : NAN)},
-        {"evaluation_time_s", Number(s.time_s)},
-        {"solves", s.solves()},
-        // per proposal other than a self-transition (screened, cached or solved)
-        {"time_per_proposal_s", Number(s.evaluated() > 0 ? s.time_s / s.evaluated() : NAN)}};
+    const std::string name = MoveName(static_cast<MoveType>(m));
+    if (timing) {
+      moves[name] = {
+          {"evaluation_time_s", Number(s.time_s)},
+          // per proposal other than a self-transition (screened, cached or solved)
+          {"time_per_proposal_s", Number(s.evaluated() > 0 ? s.time_s / s.evaluated() : NAN)}};
+      continue;
+    }
+    moves[name] = {{"proposed", s.proposed},
+                   {"accepted", s.accepted},
+                   {"self_transitions", s.self_transitions},
+                   {"cache_hits", s.cache_hits},
+                   {"screened_out", s.screened_out},
+                   {"acceptance_rate", Number(s.proposed ? double(s.accepted) / s.proposed : NAN)},
+                   {"solves", s.solves()}};
   }
   return moves;
 }
@@ -37,28 +43,36 @@ OMapReport SamplerReport(const SamplerSummary& s) {
   Json trace = Json::array(), hill_trace = Json::array();
   for (double v : s.cold_trace) trace.push_back(Number(v));
   for (double v : s.hill_climb_trace) hill_trace.push_back(Number(v));
+  const Json report = {{"hill_climb_moves", MoveJson(s.hill_climb, false)},
+                       {"sampling_moves", MoveJson(s.sampling, false)},
+                       {"swaps_proposed", s.swaps_proposed},
+                       {"swaps_accepted", s.swaps_accepted},
+                       {"initial_log_target", Number(s.initial_log_target)},
+                       {"hill_climbed_log_target", Number(s.hill_climbed_log_target)},
+                       {"effective_sample_size", Number(s.effective_sample_size)},
+                       {"num_solves", s.num_solves},
+                       {"num_cache_hits", s.num_cache_hits},
+                       {"hill_climb_steps", s.hill_climb_steps},
+                       {"hill_climb_log_target", hill_trace},
+                       {"cold_chain_log_target", trace}};
+  return {"sampler", report.dump()};
+}
+
+// The sampler's run times, and the speculative solves its parallel chains
+// undid (which depend on the thread scheduling).
+OMapReport SamplerTiming(const SamplerSummary& s) {
   long proposals = 0;
   for (const auto* phase : {&s.hill_climb, &s.sampling})
     for (const MoveStatistics& m : *phase) proposals += m.proposed;
   const double seconds = s.hill_climb_time_s + s.sampling_time_s;
-  const Json report = {
-      {"hill_climb_moves", MoveJson(s.hill_climb)},
-      {"sampling_moves", MoveJson(s.sampling)},
-      {"swaps_proposed", s.swaps_proposed},
-      {"swaps_accepted", s.swaps_accepted},
-      {"initial_log_target", Number(s.initial_log_target)},
-      {"hill_climbed_log_target", Number(s.hill_climbed_log_target)},
-      {"effective_sample_size", Number(s.effective_sample_size)},
-      {"num_solves", s.num_solves},
-      {"num_cache_hits", s.num_cache_hits},
-      {"speculative_solves_undone", s.speculative_solves_undone},
-      {"hill_climb_steps", s.hill_climb_steps},
+  const Json timing = {
       {"hill_climb_time_s", Number(s.hill_climb_time_s)},
       {"sampling_time_s", Number(s.sampling_time_s)},
       {"cold_chain_proposals_per_second", Number(seconds > 0 ? proposals / seconds : NAN)},
-      {"hill_climb_log_target", hill_trace},
-      {"cold_chain_log_target", trace}};
-  return {"sampler", report.dump()};
+      {"speculative_solves_undone", s.speculative_solves_undone},
+      {"hill_climb_moves", MoveJson(s.hill_climb, true)},
+      {"sampling_moves", MoveJson(s.sampling, true)}};
+  return {"sampler", timing.dump()};
 }
 
 }  // namespace
@@ -78,7 +92,11 @@ OMap ToOMap(const FusionResult& fused, const OMapSource& source, const SamplerSu
   }
   map.source = source;
   map.reports.clear();
-  if (summary) map.reports.push_back(SamplerReport(*summary));
+  map.timing.clear();
+  if (summary) {
+    map.reports.push_back(SamplerReport(*summary));
+    map.timing.push_back(SamplerTiming(*summary));
+  }
   return map;
 }
 

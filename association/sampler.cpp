@@ -12,9 +12,22 @@
 
 #include "core/error.h"
 #include "core/text.h"
+#include "slam/geometric_slam.h"
 
 namespace oslam {
 namespace {
+
+// Why the start state (every track its own object) has no valid target:
+// the solver's reason when there was a solve.
+std::string WhyInvalid(const StateEvaluation* start, size_t objects) {
+  std::string why = "the start state (" + std::to_string(objects) +
+                    " tracks, each its own object) could not be evaluated";
+  if (!start || !start->solution) return why;
+  const GeometricSlamResult& solution = *start->solution;
+  if (!solution.summary.IsUsable())
+    return why + ": the solver failed (" + solution.summary.message + ")";
+  return why + ": its evidence is not finite (the solved system is not positive definite)";
+}
 
 bool ValidProbabilities(const MoveProbabilities& p) {
   return p.merge >= 0 && p.split >= 0 && p.switch_class >= 0 &&
@@ -495,7 +508,7 @@ EvaluationPtr Sampler::HillClimb(const AssociationState& start_state, StateEvalu
   AssociationState start = start_state;
   start.Canonicalize();
   EvaluationPtr current = evaluator->Refine(start, nullptr);
-  if (!current || !current->valid) throw Error("the start state could not be evaluated");
+  if (!current || !current->valid) throw Error(WhyInvalid(current.get(), start.blocks.size()));
   summary->initial_log_target = current->log_target;
   int last_accepted = 0, step = 0;
   auto go_on = [&] {

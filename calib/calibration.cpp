@@ -19,6 +19,7 @@
 #include "calib/hyperbolic_camera.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/image_file.h"
 
 namespace oslam {
 
@@ -766,9 +767,7 @@ void WriteViewReportImage(const cv::Mat& image, const CalibrationView& view,
               3, cv::LINE_AA);
   cv::putText(canvas, text, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.6,
               cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
-  WriteAtomically(path, [&](const std::string& temp_path) {
-    if (!cv::imwrite(temp_path, canvas)) throw Error::InFile(path, "cannot write image");
-  });
+  WriteImage(path, canvas);
 }
 
 }  // namespace oslam

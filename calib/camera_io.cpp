@@ -29,8 +29,9 @@ std::vector<std::string> CameraModelNames() {
 std::unique_ptr<CameraModel> LoadCamera(const std::string& path) {
   YamlFile file(path);
   const cv::FileNode root = file.root();
-  file.RequireOnlyKeys(root, "", {"model", "image_width", "image_height", "blind_radius_px",
-                                  "rim_radius_px", "flip_image_angle", "intrinsics"});
+  file.RequireOnlyKeys(root, "",
+                       {"model", "image_width", "image_height", "blind_radius_px", "rim_radius_px",
+                        "flip_image_angle", "intrinsics"});
   const std::string model_name = file.String(root, "model");
   std::unique_ptr<CameraModel> camera;
   try {
@@ -39,8 +40,7 @@ std::unique_ptr<CameraModel> LoadCamera(const std::string& path) {
     throw Error::InFile(path, error.what());
   }
   camera->set_image_size(file.Int(root, "image_width"), file.Int(root, "image_height"));
-  camera->set_annulus(
-      {file.Double(root, "blind_radius_px"), file.Double(root, "rim_radius_px")});
+  camera->set_annulus({file.Double(root, "blind_radius_px"), file.Double(root, "rim_radius_px")});
 
   const cv::FileNode intrinsics_node = file.Map(root, "intrinsics");
   const std::vector<std::string> names = camera->IntrinsicNames();
@@ -62,24 +62,27 @@ std::unique_ptr<CameraModel> LoadCamera(const std::string& path) {
 
 void SaveCamera(const CameraModel& camera, const std::string& path) {
   std::string why;
-  if (!camera.Validate(&why)) throw Error::InFile(path, "refusing to save an invalid camera: " + why);
-  WriteAtomically(path, [&](const std::string& temp_path) {
-    cv::FileStorage fs(temp_path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
-    if (!fs.isOpened()) throw Error::InFile(path, "cannot open for writing");
-    fs << "model" << camera.ModelName();
-    fs << "image_width" << camera.image_width();
-    fs << "image_height" << camera.image_height();
-    fs << "blind_radius_px" << camera.annulus().blind_radius_px;
-    fs << "rim_radius_px" << camera.annulus().rim_radius_px;
-    if (const auto* hyperbolic = dynamic_cast<const HyperbolicCamera*>(&camera))
-      fs << "flip_image_angle" << (hyperbolic->parameters().flip_image_angle ? 1 : 0);
-    fs << "intrinsics" << "{";
-    const std::vector<std::string> names = camera.IntrinsicNames();
-    const Eigen::VectorXd values = camera.Intrinsics();
-    for (size_t i = 0; i < names.size(); ++i) fs << names[i] << values[i];
-    fs << "}";
-    fs.release();
-  });
+  if (!camera.Validate(&why))
+    throw Error::InFile(path, "refusing to save an invalid camera: " + why);
+  // Formatted in memory, so the only write is WriteFileAtomically's, checked
+  // (cv::FileStorage does not report a failed write to a file).
+  cv::FileStorage fs(
+      ".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+  if (!fs.isOpened()) throw Error::InFile(path, "cannot format the YAML");
+  fs << "model" << camera.ModelName();
+  fs << "image_width" << camera.image_width();
+  fs << "image_height" << camera.image_height();
+  fs << "blind_radius_px" << camera.annulus().blind_radius_px;
+  fs << "rim_radius_px" << camera.annulus().rim_radius_px;
+  if (const auto* hyperbolic = dynamic_cast<const HyperbolicCamera*>(&camera))
+    fs << "flip_image_angle" << (hyperbolic->parameters().flip_image_angle ? 1 : 0);
+  fs << "intrinsics"
+     << "{";
+  const std::vector<std::string> names = camera.IntrinsicNames();
+  const Eigen::VectorXd values = camera.Intrinsics();
+  for (size_t i = 0; i < names.size(); ++i) fs << names[i] << values[i];
+  fs << "}";
+  WriteFileAtomically(path, fs.releaseAndGetString());
 }
 
 }  // namespace oslam

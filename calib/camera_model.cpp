@@ -1,8 +1,10 @@
 #include "calib/camera_model.h"
 
 #include <cmath>
+#include <string>
 
 #include "core/angles.h"
+#include "core/bounds.h"
 
 namespace oslam {
 
@@ -12,12 +14,35 @@ bool CameraModel::Validate(std::string* why) const {
     return false;
   };
   if (image_width_ <= 0 || image_height_ <= 0) return fail("image size must be positive");
+  // Per-pixel tables (polar coordinates, masks) are made at this size.
+  if (image_width_ > bounds::kImageSidePx || image_height_ > bounds::kImageSidePx ||
+      static_cast<long>(image_width_) * image_height_ > bounds::kImagePixels)
+    return fail("image size " + std::to_string(image_width_) + "x" + std::to_string(image_height_) +
+                " is beyond the image bounds (at most " + std::to_string(bounds::kImageSidePx) +
+                " per side and " + std::to_string(bounds::kImagePixels / 1000000) +
+                " million pixels; docs/formats.md, Bounds)");
   if (!std::isfinite(annulus_.blind_radius_px) || !std::isfinite(annulus_.rim_radius_px) ||
       annulus_.blind_radius_px < 0 || annulus_.rim_radius_px <= annulus_.blind_radius_px) {
     return fail("mirror annulus needs 0 <= blind_radius_px < rim_radius_px");
   }
+  if (annulus_.rim_radius_px > bounds::kImageRadiusPx)
+    return fail("rim_radius_px: " +
+                bounds::OutsideMessage(annulus_.rim_radius_px, 0, bounds::kImageRadiusPx, "px"));
   if (!Intrinsics().allFinite()) return fail("intrinsics contain NaN or infinity");
   return true;
+}
+
+bool CameraModel::CheckIntrinsic(const std::string& name, double value, double low, double high,
+                                 const std::string& unit, std::string* why) {
+  if (bounds::Within(value, low, high)) return true;
+  if (why) *why = name + ": " + bounds::OutsideMessage(value, low, high, unit);
+  return false;
+}
+
+bool CameraModel::CheckPrincipalPoint(double x_px, double y_px, std::string* why) const {
+  // Within the image, give or take one image size (a decentred mirror).
+  return CheckIntrinsic("principal point x", x_px, -image_width_, 2.0 * image_width_, "px", why) &&
+         CheckIntrinsic("principal point y", y_px, -image_height_, 2.0 * image_height_, "px", why);
 }
 
 bool CameraModel::ProjectToPolar(const Eigen::Vector3d& point_robot, PolarPoint* polar,
@@ -55,7 +80,7 @@ Eigen::Matrix2d CameraModel::PolarJacobianWrtPixel(const Eigen::Vector2d& pixel)
   const double radius_sq = offset.squaredNorm();
   const double radius = std::sqrt(radius_sq);
   Eigen::Matrix2d jacobian;
-  if (radius == 0.0) return Eigen::Matrix2d::Zero();  // the angle is undefined at the centre
+  if (radius == 0.0) return Eigen::Matrix2d::Zero();     // the angle is undefined at the centre
   jacobian << offset.x() / radius, offset.y() / radius,  //
       -offset.y() / radius_sq, offset.x() / radius_sq;
   return jacobian;

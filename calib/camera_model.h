@@ -103,6 +103,14 @@ class CameraModel {
   // Inside the image and inside the mirror annulus.
   bool IsInAnnulus(const Eigen::Vector2d& pixel) const;
 
+ protected:
+  // For the models' Validate: true when `value` lies in [low, high] (the
+  // bounds of docs/formats.md), else false with `why` naming the parameter.
+  static bool CheckIntrinsic(const std::string& name, double value, double low, double high,
+                             const std::string& unit, std::string* why);
+  // The principal point within the image, give or take one image size.
+  bool CheckPrincipalPoint(double x_px, double y_px, std::string* why) const;
+
  private:
   int image_width_ = 0;
   int image_height_ = 0;

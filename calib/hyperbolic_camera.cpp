@@ -3,9 +3,18 @@
 #include <cmath>
 
 #include "core/angles.h"
+#include "core/bounds.h"
 #include "core/error.h"
 
 namespace oslam {
+namespace {
+
+constexpr double kMaxMirrorAxisM = 1.0;
+constexpr double kMinMirrorShape = 1e-3, kMaxMirrorShape = 10.0;  // b / a
+constexpr double kMaxHeightM = 100.0;
+constexpr double kMaxFocalPx = 1e7;
+
+}  // namespace
 
 HyperbolicCamera::HyperbolicCamera(const HyperbolicMirrorParameters& parameters, int image_width,
                                    int image_height, const MirrorAnnulus& annulus)
@@ -41,7 +50,9 @@ HyperbolicCamera HyperbolicCamera::Preset(const std::string& name) {
   throw Error("unknown camera preset '" + name + "' (known: lpa, cogniron)");
 }
 
-std::vector<std::string> HyperbolicCamera::PresetNames() { return {"lpa", "cogniron"}; }
+std::vector<std::string> HyperbolicCamera::PresetNames() {
+  return {"lpa", "cogniron"};
+}
 
 std::unique_ptr<CameraModel> HyperbolicCamera::Clone() const {
   return std::make_unique<HyperbolicCamera>(*this);
@@ -83,7 +94,19 @@ bool HyperbolicCamera::Validate(std::string* why) const {
   if (parameters_.mirror_b_m <= 0) return fail("mirror_b_m must be positive");
   if (parameters_.focal_px <= 0) return fail("focal_px must be positive");
   if (parameters_.focus_height_m <= 0) return fail("focus_height_m must be above the floor (> 0)");
-  return true;
+  const HyperbolicMirrorParameters& p = parameters_;
+  // A mirror is centimetres to decimetres across; its shape b/a between
+  // 1:1000 (nearly a cone) and 10:1 (the horizon images 5 focal lengths out,
+  // beyond any image).
+  return CheckIntrinsic("mirror_a_m", p.mirror_a_m, 0, kMaxMirrorAxisM, "m", why) &&
+         CheckIntrinsic("mirror_b_m", p.mirror_b_m, 0, kMaxMirrorAxisM, "m", why) &&
+         CheckIntrinsic("mirror_b_m / mirror_a_m", p.mirror_b_m / p.mirror_a_m, kMinMirrorShape,
+                        kMaxMirrorShape, "", why) &&
+         CheckIntrinsic("focus_height_m", p.focus_height_m, 0, kMaxHeightM, "m", why) &&
+         CheckIntrinsic("focal_px", p.focal_px, 0, kMaxFocalPx, "px", why) &&
+         CheckIntrinsic("angle_offset_rad", p.angle_offset_rad, -bounds::kAngleRad,
+                        bounds::kAngleRad, "rad", why) &&
+         CheckPrincipalPoint(p.center_x_px, p.center_y_px, why);
 }
 
 double HyperbolicCamera::Eccentricity() const {
@@ -169,7 +192,8 @@ bool HyperbolicCamera::ProjectToPixel(const Eigen::Vector3d& point_robot, Eigen:
                                       d_radius_d_range * point_robot.y() / range,
                                       d_radius_d_height);
     const Eigen::RowVector3d d_angle =
-        AngleSign() * Eigen::RowVector3d(-point_robot.y() / range_sq, point_robot.x() / range_sq, 0);
+        AngleSign() *
+        Eigen::RowVector3d(-point_robot.y() / range_sq, point_robot.x() / range_sq, 0);
     *jacobian = radial * d_radius + radius * tangential * d_angle;
   }
   return true;

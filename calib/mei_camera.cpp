@@ -6,11 +6,17 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
+#include "core/bounds.h"
 #include "core/error.h"
 
 namespace oslam {
 
 namespace {
+
+constexpr double kMaxXi = 3.0;
+constexpr double kMaxFocalPx = 1e7;
+constexpr double kMaxDistortion = 1e3;  // |k1|, |k2|, |p1|, |p2|
+constexpr double kMaxHeightM = 100.0;
 
 // Distortion of a normalised-plane point and its 2x2 Jacobian.
 Eigen::Vector2d Distort(const MeiParameters& p, const Eigen::Vector2d& m,
@@ -100,7 +106,24 @@ bool MeiCamera::Validate(std::string* why) const {
   if (parameters_.fx_px <= 0 || parameters_.fy_px <= 0)
     return fail("fx_px and fy_px must be positive");
   if (parameters_.focus_height_m <= 0) return fail("focus_height_m must be above the floor (> 0)");
-  return true;
+  const MeiParameters& p = parameters_;
+  const double angle = bounds::kAngleRad;
+  // xi: 0 a pinhole, (0, 1) a hyperbolic, 1 a parabolic mirror, above 1
+  // fisheye-like lenses; beyond 3 the model sees less than a hemisphere's
+  // third and is no catadioptric camera.
+  return CheckIntrinsic("xi", p.xi, 0, kMaxXi, "", why) &&
+         CheckIntrinsic("fx_px", p.fx_px, 0, kMaxFocalPx, "px", why) &&
+         CheckIntrinsic("fy_px", p.fy_px, 0, kMaxFocalPx, "px", why) &&
+         CheckIntrinsic("skew_px", p.skew, -kMaxFocalPx, kMaxFocalPx, "px", why) &&
+         CheckIntrinsic("k1", p.k1, -kMaxDistortion, kMaxDistortion, "", why) &&
+         CheckIntrinsic("k2", p.k2, -kMaxDistortion, kMaxDistortion, "", why) &&
+         CheckIntrinsic("p1", p.p1, -kMaxDistortion, kMaxDistortion, "", why) &&
+         CheckIntrinsic("p2", p.p2, -kMaxDistortion, kMaxDistortion, "", why) &&
+         CheckIntrinsic("focus_height_m", p.focus_height_m, 0, kMaxHeightM, "m", why) &&
+         CheckIntrinsic("mount_roll_rad", p.mount_roll_rad, -angle, angle, "rad", why) &&
+         CheckIntrinsic("mount_pitch_rad", p.mount_pitch_rad, -angle, angle, "rad", why) &&
+         CheckIntrinsic("mount_yaw_rad", p.mount_yaw_rad, -angle, angle, "rad", why) &&
+         CheckPrincipalPoint(p.cx_px, p.cy_px, why);
 }
 
 Eigen::Matrix3d MeiCamera::RobotFromMirrorRotation() const {

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <csignal>
@@ -13,6 +14,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "core/bounds.h"
 #include "core/error.h"
 
 namespace oslam {
@@ -174,11 +176,47 @@ void WriteTextFileAtomically(const std::string& path, const std::string& content
   WriteFileAtomically(path, contents);
 }
 
+void CheckOutputSubfolder(const std::string& root, const std::string& name) {
+  const fs::path folder = fs::path(root) / name;
+  std::error_code ec;
+  if (fs::is_symlink(folder, ec)) {
+    const fs::path target = fs::weakly_canonical(folder, ec);
+    const fs::path inside = fs::weakly_canonical(root, ec);
+    const auto mismatch = std::mismatch(inside.begin(), inside.end(), target.begin(), target.end());
+    if (mismatch.first != inside.end() || target == inside)
+      throw Error::InFile(folder.string(), "a symlink to " + target.string() +
+                                               ", out of the output folder; remove it or "
+                                               "choose another output folder");
+  }
+}
+
+std::string PrepareOutputFolder(const std::string& root, const std::string& name) {
+  CheckOutputSubfolder(root, name);
+  const fs::path folder = fs::path(root) / name;
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (!fs::is_directory(folder)) throw Error::InFile(folder.string(), "cannot create the folder");
+  return folder.string();
+}
+
+void CheckInputFile(const std::string& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || !fs::exists(status)) throw Error::InFile(path, "file not found");
+  if (!fs::is_regular_file(status)) throw Error::InFile(path, "not a regular file");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (!ec && size > static_cast<std::uintmax_t>(bounds::kFileBytes))
+    throw Error::InFile(path, "larger than " + std::to_string(bounds::kFileBytes >> 20) +
+                                  " MiB (docs/formats.md, Bounds)");
+}
+
 std::string ReadTextFile(const std::string& path) {
+  CheckInputFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error::InFile(path, std::string("cannot open: ") + std::strerror(errno));
   std::ostringstream contents;
   contents << in.rdbuf();
+  if (in.bad()) throw Error::InFile(path, "read failed");
   return contents.str();
 }
 

@@ -45,7 +45,22 @@ void SyncFileSystem(const std::string& folder);
 // Writes `contents` to `path` as WriteFileAtomically does.
 void WriteTextFileAtomically(const std::string& path, const std::string& contents);
 
-// Reads a whole text file; throws oslam::Error naming the file on failure.
+// Throws oslam::Error naming `root`/`name` when it is a symlink leading out
+// of the output folder `root`: the files written there would land elsewhere.
+void CheckOutputSubfolder(const std::string& root, const std::string& name);
+
+// Creates `root`/`name`, a folder for output inside the output folder
+// `root` (both created when missing), after CheckOutputSubfolder; returns
+// its path.
+std::string PrepareOutputFolder(const std::string& root, const std::string& name);
+
+// Throws oslam::Error naming `path` unless it is a regular file within the
+// input size bound (core/bounds.h): a FIFO or a device given as an input
+// would block or never end.
+void CheckInputFile(const std::string& path);
+
+// Reads a whole text file (CheckInputFile first); throws oslam::Error naming
+// the file on failure.
 std::string ReadTextFile(const std::string& path);
 
 }  // namespace oslam

@@ -1,10 +1,12 @@
 #include "core/csv.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
 
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/error.h"
 #include "core/text.h"
 
@@ -25,6 +27,11 @@ std::vector<std::string> SplitFields(const std::string& line) {
   while (std::getline(stream, field, ',')) fields.push_back(Trim(field));
   if (!line.empty() && line.back() == ',') fields.push_back("");
   return fields;
+}
+
+// A field as quoted in a message: short, so the message stays readable.
+std::string Shown(const std::string& text) {
+  return text.size() <= 40 ? text : text.substr(0, 37) + "...";
 }
 
 }  // namespace
@@ -80,7 +87,7 @@ double CsvTable::Double(size_t row, int column) const {
   const double value = std::strtod(text.c_str(), &end);
   if (text.empty() || end != text.c_str() + text.size()) {
     throw Error::AtLine(path_, lines_[row],
-                        "column '" + header_[column] + "': '" + text + "' is not a number");
+                        "column '" + header_[column] + "': '" + Shown(text) + "' is not a number");
   }
   if (!std::isfinite(value)) {
     throw Error::AtLine(path_, lines_[row],
@@ -92,11 +99,37 @@ double CsvTable::Double(size_t row, int column) const {
 long CsvTable::Integer(size_t row, int column) const {
   const std::string& text = rows_[row][column];
   char* end = nullptr;
+  errno = 0;
   const long value = std::strtol(text.c_str(), &end, 10);
   if (text.empty() || end != text.c_str() + text.size()) {
-    throw Error::AtLine(path_, lines_[row],
-                        "column '" + header_[column] + "': '" + text + "' is not an integer");
+    throw Error::AtLine(
+        path_, lines_[row],
+        "column '" + header_[column] + "': '" + Shown(text) + "' is not an integer");
   }
+  if (errno == ERANGE)
+    throw Error::AtLine(path_, lines_[row],
+                        "column '" + header_[column] + "': '" + Shown(text) + "' is too large");
+  return value;
+}
+
+double CsvTable::Double(size_t row, int column, double low, double high,
+                        const std::string& unit) const {
+  const double value = Double(row, column);
+  if (!bounds::Within(value, low, high))
+    throw Error::AtLine(
+        path_, lines_[row],
+        "column '" + header_[column] + "': " + bounds::OutsideMessage(value, low, high, unit));
+  return value;
+}
+
+long CsvTable::Integer(size_t row, int column, long low, long high) const {
+  const long value = Integer(row, column);
+  if (value < low || value > high)
+    throw Error::AtLine(
+        path_, lines_[row],
+        "column '" + header_[column] + "': " +
+            bounds::OutsideMessage(static_cast<double>(value), static_cast<double>(low),
+                                   static_cast<double>(high)));
   return value;
 }
 

@@ -28,7 +28,13 @@ class CsvTable {
   // A finite double; throws "FILE:LINE: column NAME: 'abc' is not a number" /
   // "... is NaN or infinite".
   double Double(size_t row, int column) const;
+  // As Double, and within [low, high] (core/bounds.h): "FILE:LINE: column
+  // NAME: 1e+30 is outside [-100000, 100000] m (...)".
+  double Double(size_t row, int column, double low, double high,
+                const std::string& unit = "") const;
   long Integer(size_t row, int column) const;
+  // As Integer, and within [low, high].
+  long Integer(size_t row, int column, long low, long high) const;
 
  private:
   int ColumnIndexOrMinusOne(const std::string& name) const;

@@ -5,15 +5,17 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/csv.h"
 #include "core/error.h"
+#include "core/image_file.h"
 #include "core/yaml.h"
 
 namespace oslam {
@@ -21,11 +23,37 @@ namespace fs = std::filesystem;
 
 // ---------------------------------------------------------------- classes
 
+const char* ObjectShapeName(ObjectShape shape) {
+  switch (shape) {
+    case ObjectShape::kBox:
+      return "box";
+    case ObjectShape::kSphere:
+      return "sphere";
+    case ObjectShape::kPanel:
+      return "panel";
+    case ObjectShape::kCylinder:
+      break;
+  }
+  return "cylinder";
+}
+
+std::optional<ObjectShape> ParseObjectShape(const std::string& name) {
+  for (const ObjectShape shape :
+       {ObjectShape::kCylinder, ObjectShape::kBox, ObjectShape::kSphere, ObjectShape::kPanel})
+    if (name == ObjectShapeName(shape)) return shape;
+  return std::nullopt;
+}
+
 namespace {
 
-const std::vector<std::string> kClassKeys = {"name",           "display_rgb",   "diameter_mean_m",
-                                             "diameter_std_m", "height_mean_m", "height_std_m",
-                                             "colour",         "image_shape"};
+// A colour box wider than this many standard deviations holds every colour.
+constexpr double kMaxSigmas = 100.0;
+// Radial length over arc width of an object's image: far beyond any object.
+constexpr double kMaxElongation = 1000.0;
+
+const std::vector<std::string> kClassKeys = {
+    "name",          "display_rgb",  "shape",  "diameter_mean_m", "diameter_std_m",
+    "height_mean_m", "height_std_m", "colour", "image_shape"};
 
 ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std::string& prefix) {
   if (!node.isMap()) file.Fail(prefix, "each class must be a mapping");
@@ -39,12 +67,20 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
     if (rgb[c] < 0 || rgb[c] > 255) file.Fail(key + "display_rgb", "entries must be 0..255");
     object_class.display_rgb[c] = static_cast<int>(std::lround(rgb[c]));
   }
+  if (!node["shape"].empty() && !node["shape"].isNone()) {
+    const std::optional<ObjectShape> shape = ParseObjectShape(file.String(node, "shape", key));
+    if (!shape) file.Fail(key + "shape", "must be one of cylinder, box, sphere, panel");
+    object_class.shape = *shape;
+  }
   object_class.diameter_mean_m = file.Double(node, "diameter_mean_m", key);
   object_class.diameter_std_m = file.Double(node, "diameter_std_m", key);
   object_class.height_mean_m = file.Double(node, "height_mean_m", key);
   object_class.height_std_m = file.Double(node, "height_std_m", key);
   for (const char* field : {"diameter_mean_m", "diameter_std_m", "height_mean_m", "height_std_m"}) {
-    if (!(file.Double(node, field, key) > 0)) file.Fail(key + field, "must be positive");
+    const double value = file.Double(node, field, key);
+    if (!(value > 0)) file.Fail(key + field, "must be positive");
+    const bool is_std = std::string(field).find("_std_") != std::string::npos;
+    file.Within(value, key + field, is_std ? bounds::kMinStdM : 0, bounds::kObjectSizeM, "m");
   }
   const cv::FileNode colour = node["colour"];
   if (!colour.empty() && !colour.isNone()) {
@@ -56,10 +92,13 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
     const std::vector<double> stddev = file.Doubles(colour, "yuv_std", 3, colour_key);
     std::copy(mean.begin(), mean.end(), box.yuv_mean.begin());
     std::copy(stddev.begin(), stddev.end(), box.yuv_std.begin());
+    for (double m : mean) file.Within(m, colour_key + "yuv_mean", 0, 255);
     for (double s : stddev)
       if (s < 0) file.Fail(colour_key + "yuv_std", "must be non-negative");
+    for (double s : stddev) file.Within(s, colour_key + "yuv_std", 0, 255);
     box.k_sigma = file.OptionalDouble(colour, "k_sigma", 3.0, colour_key);
     if (!(box.k_sigma > 0)) file.Fail(colour_key + "k_sigma", "must be positive");
+    file.Within(box.k_sigma, colour_key + "k_sigma", 0, kMaxSigmas);
     object_class.colour = box;
   }
   const cv::FileNode shape = node["image_shape"];
@@ -72,6 +111,8 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
     model.elongation_std = file.Double(shape, "elongation_std", shape_key);
     if (!(model.elongation_mean > 0)) file.Fail(shape_key + "elongation_mean", "must be positive");
     if (!(model.elongation_std > 0)) file.Fail(shape_key + "elongation_std", "must be positive");
+    file.Within(model.elongation_mean, shape_key + "elongation_mean", 0, kMaxElongation);
+    file.Within(model.elongation_std, shape_key + "elongation_std", 0, kMaxElongation);
     object_class.image_shape = model;
   }
   return object_class;
@@ -128,44 +169,45 @@ std::optional<ConfusionMatrix> ReadConfusion(const std::string& path) {
 
 void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& path,
                   const std::optional<ConfusionMatrix>& confusion) {
-  WriteAtomically(path, [&](const std::string& temp_path) {
-    cv::FileStorage fs(temp_path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
-    if (!fs.isOpened()) throw Error::InFile(path, "cannot open for writing");
-    fs << "classes"
-       << "[";
-    for (const ObjectClass& c : classes) {
-      fs << "{";
-      fs << "name" << c.name;
-      fs << "display_rgb" << std::vector<int>(c.display_rgb.begin(), c.display_rgb.end());
-      fs << "diameter_mean_m" << c.diameter_mean_m << "diameter_std_m" << c.diameter_std_m;
-      fs << "height_mean_m" << c.height_mean_m << "height_std_m" << c.height_std_m;
-      if (c.colour) {
-        fs << "colour"
-           << "{";
-        fs << "yuv_mean"
-           << std::vector<double>(c.colour->yuv_mean.begin(), c.colour->yuv_mean.end());
-        fs << "yuv_std" << std::vector<double>(c.colour->yuv_std.begin(), c.colour->yuv_std.end());
-        fs << "k_sigma" << c.colour->k_sigma;
-        fs << "}";
-      }
-      if (c.image_shape) {
-        fs << "image_shape"
-           << "{";
-        fs << "elongation_mean" << c.image_shape->elongation_mean;
-        fs << "elongation_std" << c.image_shape->elongation_std;
-        fs << "}";
-      }
+  // Formatted in memory, so the only write is WriteFileAtomically's, checked
+  // (cv::FileStorage does not report a failed write to a file).
+  cv::FileStorage fs(
+      ".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+  if (!fs.isOpened()) throw Error::InFile(path, "cannot format the YAML");
+  fs << "classes"
+     << "[";
+  for (const ObjectClass& c : classes) {
+    fs << "{";
+    fs << "name" << c.name;
+    fs << "display_rgb" << std::vector<int>(c.display_rgb.begin(), c.display_rgb.end());
+    if (c.shape != ObjectShape::kCylinder) fs << "shape" << ObjectShapeName(c.shape);
+    fs << "diameter_mean_m" << c.diameter_mean_m << "diameter_std_m" << c.diameter_std_m;
+    fs << "height_mean_m" << c.height_mean_m << "height_std_m" << c.height_std_m;
+    if (c.colour) {
+      fs << "colour"
+         << "{";
+      fs << "yuv_mean" << std::vector<double>(c.colour->yuv_mean.begin(), c.colour->yuv_mean.end());
+      fs << "yuv_std" << std::vector<double>(c.colour->yuv_std.begin(), c.colour->yuv_std.end());
+      fs << "k_sigma" << c.colour->k_sigma;
       fs << "}";
     }
-    fs << "]";
-    if (confusion) {
-      fs << "confusion"
-         << "[";
-      for (const std::vector<double>& row : *confusion) fs << row;
-      fs << "]";
+    if (c.image_shape) {
+      fs << "image_shape"
+         << "{";
+      fs << "elongation_mean" << c.image_shape->elongation_mean;
+      fs << "elongation_std" << c.image_shape->elongation_std;
+      fs << "}";
     }
-    fs.release();
-  });
+    fs << "}";
+  }
+  fs << "]";
+  if (confusion) {
+    fs << "confusion"
+       << "[";
+    for (const std::vector<double>& row : *confusion) fs << row;
+    fs << "]";
+  }
+  WriteFileAtomically(path, fs.releaseAndGetString());
 }
 
 int FindClass(const std::vector<ObjectClass>& classes, const std::string& name) {
@@ -178,7 +220,12 @@ int FindClass(const std::vector<ObjectClass>& classes, const std::string& name) 
 
 namespace {
 
+constexpr double kCoordinate = bounds::kCoordinateM, kAngle = bounds::kAngleRad;
+
 void CheckFrameColumn(const CsvTable& table) {
+  if (static_cast<long>(table.num_rows()) > bounds::kFrames)
+    throw Error::InFile(table.path(), "more than " + std::to_string(bounds::kFrames) +
+                                          " rows (docs/formats.md, Bounds)");
   const int frame_column = table.ColumnIndex("frame");
   for (size_t row = 0; row < table.num_rows(); ++row) {
     const long frame = table.Integer(row, frame_column);
@@ -206,8 +253,9 @@ Odometry ReadOdometry(const std::string& path, long expected_rows) {
     const int x = table.ColumnIndex("x_m"), y = table.ColumnIndex("y_m"),
               theta = table.ColumnIndex("theta_rad");
     for (size_t row = 0; row < table.num_rows(); ++row) {
-      odometry.poses.push_back(
-          {table.Double(row, x), table.Double(row, y), WrapAngle(table.Double(row, theta))});
+      odometry.poses.push_back({table.Double(row, x, -kCoordinate, kCoordinate, "m"),
+                                table.Double(row, y, -kCoordinate, kCoordinate, "m"),
+                                WrapAngle(table.Double(row, theta, -kAngle, kAngle, "rad"))});
       odometry.increments.push_back(
           row == 0 ? OdometryIncrement{}
                    : IncrementBetween(odometry.poses[row - 1], odometry.poses[row]));
@@ -217,9 +265,14 @@ Odometry ReadOdometry(const std::string& path, long expected_rows) {
     const int distance = table.ColumnIndex("distance_m"), turn = table.ColumnIndex("turn_rad");
     Pose2 pose;
     for (size_t row = 0; row < table.num_rows(); ++row) {
-      OdometryIncrement increment{table.Double(row, distance), table.Double(row, turn)};
+      OdometryIncrement increment{table.Double(row, distance, -kCoordinate, kCoordinate, "m"),
+                                  table.Double(row, turn, -kAngle, kAngle, "rad")};
       if (row == 0) increment = {};  // nothing happens before the first frame
       pose = ApplyIncrement(pose, increment);
+      // Each increment is bounded, their sum need not be.
+      if (!(std::abs(pose.x) <= kCoordinate && std::abs(pose.y) <= kCoordinate))
+        throw Error::AtLine(path, table.line_of_row(row),
+                            bounds::ReachMessage(pose.x, pose.y, "frame " + std::to_string(row)));
       odometry.increments.push_back(increment);
       odometry.poses.push_back(pose);
     }
@@ -287,6 +340,9 @@ FrameSource::FrameSource(const std::string& run_dir) {
       if (entry.is_regular_file() && IsImageFile(entry.path()))
         image_paths_.push_back(entry.path().string());
     std::sort(image_paths_.begin(), image_paths_.end());
+    if (static_cast<long>(image_paths_.size()) > bounds::kFrames)
+      throw Error::InFile(frames_dir.string(), "more than " + std::to_string(bounds::kFrames) +
+                                                   " frames (docs/formats.md, Bounds)");
     if (image_paths_.empty())
       throw Error::InFile(frames_dir.string(), "no image files (png, jpg, bmp, tif)");
     count_ = image_paths_.size();
@@ -300,6 +356,16 @@ FrameSource::FrameSource(const std::string& run_dir) {
   if (!capture.isOpened()) throw Error::InFile(video_path_, "OpenCV cannot open this video");
   const double frames = capture.get(cv::CAP_PROP_FRAME_COUNT);
   if (!(frames > 0)) throw Error::InFile(video_path_, "video has no frames");
+  if (frames > bounds::kFrames)
+    throw Error::InFile(
+        video_path_, "declares " + bounds::OutsideMessage(frames, 1, bounds::kFrames) + " frames");
+  const double width = capture.get(cv::CAP_PROP_FRAME_WIDTH),
+               height = capture.get(cv::CAP_PROP_FRAME_HEIGHT);
+  if (!(width <= bounds::kImageSidePx && height <= bounds::kImageSidePx &&
+        width * height <= bounds::kImagePixels))
+    throw Error::InFile(
+        video_path_, "declares frames of " + std::to_string(width) + "x" + std::to_string(height) +
+                         " pixels, beyond the image bounds (docs/formats.md, Bounds)");
   count_ = static_cast<size_t>(frames);
 }
 
@@ -320,8 +386,7 @@ cv::Mat FrameSource::Read(size_t index) const {
     const auto it = cache.frames.find(path);
     if (it != cache.frames.end()) return it->second;
   }
-  cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
-  if (image.empty()) throw Error::InFile(path, "cannot read image (corrupt or not an image)");
+  cv::Mat image = ReadImage(path);
   const size_t bytes = image.total() * image.elemSize();
   const std::lock_guard<std::mutex> lock(cache.mutex);
   if (cache.used_bytes + bytes <= cache.limit_bytes && cache.frames.emplace(path, image).second)
@@ -344,7 +409,9 @@ std::vector<Pose2> ReadTrajectory(const std::string& path) {
             theta = table.ColumnIndex("theta_rad");
   std::vector<Pose2> poses;
   for (size_t row = 0; row < table.num_rows(); ++row)
-    poses.push_back({table.Double(row, x), table.Double(row, y), table.Double(row, theta)});
+    poses.push_back({table.Double(row, x, -kCoordinate, kCoordinate, "m"),
+                     table.Double(row, y, -kCoordinate, kCoordinate, "m"),
+                     table.Double(row, theta, -kAngle, kAngle, "rad")});
   return poses;
 }
 
@@ -359,15 +426,18 @@ std::vector<GroundTruthObject> ReadObjects(const std::string& path) {
   std::vector<GroundTruthObject> objects;
   for (size_t row = 0; row < table.num_rows(); ++row) {
     GroundTruthObject object;
-    object.id = static_cast<int>(table.Integer(row, id));
+    object.id = static_cast<int>(table.Integer(row, id, -bounds::kId, bounds::kId));
     object.class_name = table.Text(row, cls);
     object.shape = table.Text(row, shape);
-    object.base_world = {table.Double(row, x), table.Double(row, y), table.Double(row, z)};
-    object.diameter_m = table.Double(row, diameter);
-    object.height_m = table.Double(row, height);
-    object.length_m = table.Double(row, length);
-    object.width_m = table.Double(row, width);
-    object.yaw_rad = table.Double(row, yaw);
+    object.base_world = {table.Double(row, x, -kCoordinate, kCoordinate, "m"),
+                         table.Double(row, y, -kCoordinate, kCoordinate, "m"),
+                         table.Double(row, z, -kCoordinate, kCoordinate, "m")};
+    const double kSize = bounds::kObjectSizeM;
+    object.diameter_m = table.Double(row, diameter, 0, kSize, "m");
+    object.height_m = table.Double(row, height, 0, kSize, "m");
+    object.length_m = table.Double(row, length, 0, kSize, "m");
+    object.width_m = table.Double(row, width, 0, kSize, "m");
+    object.yaw_rad = table.Double(row, yaw, -kAngle, kAngle, "rad");
     objects.push_back(object);
   }
   return objects;
@@ -376,14 +446,14 @@ std::vector<GroundTruthObject> ReadObjects(const std::string& path) {
 std::vector<GroundTruthSighting> ReadSightings(const std::string& path) {
   const CsvTable table = CsvTable::Read(path);
   const int frame = table.ColumnIndex("frame"), object = table.ColumnIndex("object_id"),
-            ur = table.ColumnIndex("u_r_px"), uphi = table.ColumnIndex("u_phi_rad"),
-            sr = table.ColumnIndex("s_r_px"), sphi = table.ColumnIndex("s_phi_rad"),
             visible = table.ColumnIndex("visible_fraction");
   std::vector<GroundTruthSighting> sightings;
   for (size_t row = 0; row < table.num_rows(); ++row) {
-    sightings.push_back({table.Integer(row, frame), static_cast<int>(table.Integer(row, object)),
-                         table.Double(row, ur), table.Double(row, uphi), table.Double(row, sr),
-                         table.Double(row, sphi), table.Double(row, visible)});
+    const BoundingSlice slice = SliceAtRow(table, row);
+    sightings.push_back({table.Integer(row, frame, 0, bounds::kFrames - 1),
+                         static_cast<int>(table.Integer(row, object, -bounds::kId, bounds::kId)),
+                         slice.u_r_px, slice.u_phi_rad, slice.s_r_px, slice.s_phi_rad,
+                         table.Double(row, visible, 0, 1)});
   }
   return sightings;
 }
@@ -397,10 +467,10 @@ std::optional<GroundTruth> ReadGroundTruth(const std::string& run_dir) {
   truth.trajectory = ReadTrajectory((dir / "trajectory.csv").string());
   truth.objects = ReadObjects((dir / "objects.csv").string());
   truth.sightings = ReadSightings((dir / "sightings.csv").string());
+  std::set<int> ids;
+  for (const GroundTruthObject& object : truth.objects) ids.insert(object.id);
   for (const GroundTruthSighting& sighting : truth.sightings) {
-    const bool known = std::any_of(truth.objects.begin(), truth.objects.end(),
-                                   [&](const auto& o) { return o.id == sighting.object_id; });
-    if (!known)
+    if (ids.count(sighting.object_id) == 0)
       throw Error::InFile(
           (dir / "sightings.csv").string(),
           "object_id " + std::to_string(sighting.object_id) + " not in objects.csv");
@@ -431,6 +501,14 @@ void WriteGroundTruth(const GroundTruth& truth, const std::string& run_dir) {
               << CsvNumber(s.s_phi_rad) << ',' << CsvNumber(s.visible_fraction) << '\n';
   }
   WriteTextFileAtomically((dir / "sightings.csv").string(), sightings.str());
+}
+
+BoundingSlice SliceAtRow(const CsvTable& table, size_t row) {
+  const double radius = bounds::kImageRadiusPx;
+  return {table.Double(row, table.ColumnIndex("u_r_px"), 0, radius, "px"),
+          table.Double(row, table.ColumnIndex("u_phi_rad"), -kAngle, kAngle, "rad"),
+          table.Double(row, table.ColumnIndex("s_r_px"), 0, radius, "px"),
+          table.Double(row, table.ColumnIndex("s_phi_rad"), 0, 2 * kPi, "rad")};
 }
 
 RunFolderPaths RunFolderPaths::Of(const std::string& run_dir) {

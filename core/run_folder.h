@@ -10,6 +10,8 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "core/bounding_slice.h"
+#include "core/csv.h"
 #include "core/motion_model.h"
 #include "core/pose2.h"
 
@@ -34,9 +36,20 @@ struct ImageShapeModel {
   double elongation_std = 0.1;
 };
 
+// The volume a class is drawn as in the exported files (docs/export.md). The
+// method itself models every object as an upright cylinder (docs/method.md
+// §2); the shape changes the drawing only.
+enum class ObjectShape { kCylinder, kBox, kSphere, kPanel };
+
+// "cylinder", "box", "sphere", "panel".
+const char* ObjectShapeName(ObjectShape shape);
+// The shape of that name; nullopt for any other text.
+std::optional<ObjectShape> ParseObjectShape(const std::string& name);
+
 struct ObjectClass {
   std::string name;
   std::array<int, 3> display_rgb{128, 128, 128};
+  ObjectShape shape = ObjectShape::kCylinder;  // optional `shape:` in classes.yaml
   // Size prior (thesis Tables 6.1/6.2): mean and std of diameter and height.
   double diameter_mean_m = 0.0;
   double diameter_std_m = 0.0;
@@ -138,6 +151,13 @@ struct GroundTruth {
 // folder is absent.
 std::optional<GroundTruth> ReadGroundTruth(const std::string& run_dir);
 void WriteGroundTruth(const GroundTruth& truth, const std::string& run_dir);
+
+// ---- bounding slices in CSV files ----
+
+// The slice in columns u_r_px, u_phi_rad, s_r_px, s_phi_rad of `row`, each
+// within its bound (docs/formats.md, Bounds): radii in [0, 2 x the largest
+// image side], widths in [0, 2 pi]. Throws "FILE:LINE: ..." otherwise.
+BoundingSlice SliceAtRow(const CsvTable& table, size_t row);
 
 // ---- the whole folder ----
 

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/error.h"
 
 namespace oslam {
@@ -36,7 +37,8 @@ YamlFile::YamlFile(const std::string& path) : path_(path) {
     lines_added = 2;
   }
   try {
-    storage_.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+    storage_.open(text,
+                  cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     throw Error::InFile(path, DescribeSyntaxError(e, lines_added));
   } catch (const std::exception& e) {
@@ -50,6 +52,13 @@ YamlFile::YamlFile(const std::string& path) : path_(path) {
 
 void YamlFile::Fail(const std::string& key_path, const std::string& what) const {
   throw Error::InFile(path_, key_path + ": " + what);
+}
+
+double YamlFile::Within(double value, const std::string& key_path, double low, double high,
+                        const std::string& unit) const {
+  if (!bounds::Within(value, low, high))
+    Fail(key_path, bounds::OutsideMessage(value, low, high, unit));
+  return value;
 }
 
 double YamlFile::NumberOf(const cv::FileNode& value, const std::string& key_path) const {
@@ -97,8 +106,7 @@ std::string YamlFile::String(const cv::FileNode& node, const std::string& key,
 }
 
 std::string YamlFile::OptionalString(const cv::FileNode& node, const std::string& key,
-                                     const std::string& fallback,
-                                     const std::string& prefix) const {
+                                     const std::string& fallback, const std::string& prefix) const {
   const cv::FileNode value = node[key];
   if (value.empty() || value.isNone()) return fallback;
   return String(node, key, prefix);
@@ -108,12 +116,13 @@ std::vector<double> YamlFile::Doubles(const cv::FileNode& node, const std::strin
                                       const std::string& prefix) const {
   const cv::FileNode value = Seq(node, key, prefix);
   if (size >= 0 && static_cast<int>(value.size()) != size) {
-    Fail(prefix + key, "expected " + std::to_string(size) + " numbers, found " +
-                           std::to_string(value.size()));
+    Fail(prefix + key,
+         "expected " + std::to_string(size) + " numbers, found " + std::to_string(value.size()));
   }
   std::vector<double> numbers;
   for (size_t i = 0; i < value.size(); ++i)
-    numbers.push_back(NumberOf(value[static_cast<int>(i)], prefix + key + "[" + std::to_string(i) + "]"));
+    numbers.push_back(
+        NumberOf(value[static_cast<int>(i)], prefix + key + "[" + std::to_string(i) + "]"));
   return numbers;
 }
 

@@ -41,6 +41,11 @@ class YamlFile {
   void RequireOnlyKeys(const cv::FileNode& node, const std::string& prefix,
                        const std::vector<std::string>& allowed) const;
 
+  // `value` when it lies in [low, high] (core/bounds.h); fails naming
+  // key_path otherwise.
+  double Within(double value, const std::string& key_path, double low, double high,
+                const std::string& unit = "") const;
+
   [[noreturn]] void Fail(const std::string& key_path, const std::string& what) const;
 
  private:

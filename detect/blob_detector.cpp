@@ -8,6 +8,7 @@
 
 #include "core/angles.h"
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/csv.h"
 #include "core/error.h"
 
@@ -30,12 +31,23 @@ bool BlobDetectorOptions::Validate(std::string* why) const {
     if (why) *why = "look_alike_coverage must be in (0, 1]";
     return false;
   }
-  return colour.Validate(why);
+  if (!(max_view_distance > 0)) {
+    if (why) *why = "max_view_distance must be positive (inf = off)";
+    return false;
+  }
+  if (!(fragment_gap_px >= 0) || std::isinf(fragment_gap_px)) {
+    if (why) *why = "fragment_gap_px must be >= 0";
+    return false;
+  }
+  return colour.Validate(why) && view_checks.Validate(why);
 }
 
 BlobDetector::BlobDetector(const CameraModel& camera, const std::vector<ObjectClass>& classes,
                            const BlobDetectorOptions& options)
-    : classes_(classes), options_(options), classifier_(classes, options.colour) {
+    : classes_(classes),
+      options_(options),
+      camera_(camera.Clone()),
+      classifier_(classes, options.colour) {
   std::string why;
   if (!options.Validate(&why)) throw Error("blob detector: " + why);
   const int width = camera.image_width(), height = camera.image_height();
@@ -88,6 +100,7 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
     }
   }
   if (options_.separate_look_alikes) SeparateLookAlikes(&detections);
+  if (std::isfinite(options_.max_view_distance)) VerifyViews(&detections);
   if (std::isfinite(options_.max_shape_distance)) {
     const double max_squared = options_.max_shape_distance * options_.max_shape_distance;
     detections.erase(std::remove_if(detections.begin(), detections.end(),
@@ -101,15 +114,97 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
   return detections;
 }
 
-double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice) {
+double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice,
+                            double pixel_std_px) {
   const double elongation = SliceElongation(slice);
   const double arc_width_px = SliceArcWidth(slice);
-  const double quantisation =
-      elongation * std::sqrt(1.0 / std::max(1.0, slice.s_r_px * slice.s_r_px) +
-                             1.0 / std::max(1.0, arc_width_px * arc_width_px));
+  const double quantisation = elongation * pixel_std_px *
+                              std::sqrt(1.0 / std::max(1.0, slice.s_r_px * slice.s_r_px) +
+                                        1.0 / std::max(1.0, arc_width_px * arc_width_px));
   const double variance = model.elongation_std * model.elongation_std + quantisation * quantisation;
   const double error = elongation - model.elongation_mean;
   return error * error / variance;
+}
+
+double ViewSquaredDistance(const CameraModel& camera, const ObjectClass& object_class,
+                           const BoundingSlice& slice, const ViewCheckOptions& options) {
+  const MirrorAnnulus& annulus = camera.annulus();
+  const bool cut = slice.u_r_px <= annulus.blind_radius_px + options.edge_margin_px ||
+                   (annulus.rim_radius_px > 0 &&
+                    slice.u_r_px + slice.s_r_px >= annulus.rim_radius_px - options.edge_margin_px);
+  double distance2 = SupportedSizeSquaredDistance(camera, object_class, slice, 0.0, options);
+  if (object_class.image_shape && !cut)
+    distance2 += ShapeSquaredDistance(*object_class.image_shape, slice, options.pixel_std_px);
+  return distance2;
+}
+
+namespace {
+
+// The smallest slice holding both: radial extents joined, and the shorter
+// of the two arcs that span both angular extents.
+BoundingSlice UnionSlice(const BoundingSlice& a, const BoundingSlice& b) {
+  const double r_min = std::min(a.u_r_px, b.u_r_px);
+  const double r_max = std::max(a.u_r_px + a.s_r_px, b.u_r_px + b.s_r_px);
+  const double offset = WrapAngle(b.u_phi_rad - a.u_phi_rad);  // b's middle from a's
+  const double begin = std::min(-0.5 * a.s_phi_rad, offset - 0.5 * b.s_phi_rad);
+  const double end = std::max(0.5 * a.s_phi_rad, offset + 0.5 * b.s_phi_rad);
+  return SliceFromExtents(r_min, r_max, a.u_phi_rad + begin, a.u_phi_rad + end);
+}
+
+// The gap in pixels between two slices: radially, and as arc length at the
+// middle radius of the two; negative where they overlap.
+bool WithinGap(const BoundingSlice& a, const BoundingSlice& b, double gap_px) {
+  const double radial_gap =
+      std::max(a.u_r_px, b.u_r_px) - std::min(a.u_r_px + a.s_r_px, b.u_r_px + b.s_r_px);
+  const double middle = 0.5 * (a.u_r_px + 0.5 * a.s_r_px + b.u_r_px + 0.5 * b.s_r_px);
+  const double angular_gap =
+      std::abs(WrapAngle(a.u_phi_rad - b.u_phi_rad)) - 0.5 * (a.s_phi_rad + b.s_phi_rad);
+  return radial_gap <= gap_px && angular_gap * middle <= gap_px;
+}
+
+}  // namespace
+
+void BlobDetector::VerifyViews(std::vector<Detection>* detections) const {
+  const double max2 = options_.max_view_distance * options_.max_view_distance;
+  std::vector<Detection> kept;
+  kept.reserve(detections->size());
+  for (Detection& d : *detections) {
+    d.view_distance2 =
+        ViewSquaredDistance(*camera_, classes_[d.class_index], d.slice, options_.view_checks);
+    if (d.view_distance2 <= max2) kept.push_back(d);
+  }
+  // Groups of same-class blobs within the gap of each other (transitively).
+  const size_t n = kept.size();
+  std::vector<size_t> root(n);
+  for (size_t i = 0; i < n; ++i) root[i] = i;
+  auto find = [&](size_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j)
+      if (kept[i].class_index == kept[j].class_index &&
+          WithinGap(kept[i].slice, kept[j].slice, options_.fragment_gap_px))
+        root[find(j)] = find(i);
+  std::vector<BoundingSlice> group_slice(n);
+  std::vector<double> worst_member(n, 0.0);
+  std::vector<int> members(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t g = find(i);
+    group_slice[g] = members[g] == 0 ? kept[i].slice : UnionSlice(group_slice[g], kept[i].slice);
+    worst_member[g] = std::max(worst_member[g], kept[i].view_distance2);
+    ++members[g];
+  }
+  std::vector<char> fragments(n, 0);
+  for (size_t g = 0; g < n; ++g) {
+    if (members[g] < 2) continue;
+    const double together = ViewSquaredDistance(*camera_, classes_[kept[g].class_index],
+                                                group_slice[g], options_.view_checks);
+    fragments[g] = together > max2 && together > worst_member[g];
+  }
+  detections->clear();
+  for (size_t i = 0; i < n; ++i)
+    if (!fragments[find(i)]) detections->push_back(kept[i]);
 }
 
 void BlobDetector::SeparateLookAlikes(std::vector<Detection>* detections) const {
@@ -192,22 +287,22 @@ void WriteDetections(const std::vector<Detection>& detections, const std::string
 std::vector<Detection> ReadDetections(const std::string& path,
                                       const std::vector<ObjectClass>& classes) {
   const CsvTable table = CsvTable::Read(path);
-  const int frame = table.ColumnIndex("frame"), cls = table.ColumnIndex("class"),
-            ur = table.ColumnIndex("u_r_px"), uphi = table.ColumnIndex("u_phi_rad"),
-            sr = table.ColumnIndex("s_r_px"), sphi = table.ColumnIndex("s_phi_rad");
+  const int frame = table.ColumnIndex("frame"), cls = table.ColumnIndex("class");
+  for (const char* column : {"u_r_px", "u_phi_rad", "s_r_px", "s_phi_rad"})
+    table.ColumnIndex(column);  // a missing column is an error even without rows
   std::vector<Detection> detections;
   for (size_t row = 0; row < table.num_rows(); ++row) {
     Detection d;
-    d.frame = table.Integer(row, frame);
+    d.frame = table.Integer(row, frame, 0, bounds::kFrames - 1);
     d.class_name = table.Text(row, cls);
     d.class_index = FindClass(classes, d.class_name);
     if (d.class_index < 0)
       throw Error::AtLine(path, table.line_of_row(row), "unknown class '" + d.class_name + "'");
-    d.slice = {table.Double(row, ur), table.Double(row, uphi), table.Double(row, sr),
-               table.Double(row, sphi)};
+    d.slice = SliceAtRow(table, row);
     if (table.HasColumn("area_px"))
-      d.area_px = static_cast<int>(table.Integer(row, table.ColumnIndex("area_px")));
-    if (table.HasColumn("score")) d.score = table.Double(row, table.ColumnIndex("score"));
+      d.area_px = static_cast<int>(
+          table.Integer(row, table.ColumnIndex("area_px"), 0, bounds::kImagePixels));
+    if (table.HasColumn("score")) d.score = table.Double(row, table.ColumnIndex("score"), 0, 1);
     detections.push_back(d);
   }
   return detections;

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "core/bounding_slice.h"
 #include "core/run_folder.h"
 #include "detect/colour_classifier.h"
+#include "detect/view_checks.h"
 
 namespace oslam {
 
@@ -33,6 +35,9 @@ struct Detection {
   // Bit c set when class c's colour box also holds at least half of this
   // blob's pixels: a look-alike colour (BlobDetectorOptions::separate_look_alikes).
   uint32_t look_alike_classes = 0;
+  // How far the view is from what an object of its class would look like
+  // where it stands (ViewSquaredDistance; 0 when the detector did not check).
+  double view_distance2 = 0.0;
 };
 
 struct BlobDetectorOptions {
@@ -51,12 +56,34 @@ struct BlobDetectorOptions {
   // standard deviations (ShapeSquaredDistance) from its class's image shape
   // model: a thin pole or a door is no ball. inf = off.
   double max_shape_distance = std::numeric_limits<double>::infinity();
+  // Verification (docs/method.md §10.5): drop a detection whose view
+  // distance, image shape plus the size it would have standing on the floor
+  // against its class's models (ViewSquaredDistance), exceeds this many
+  // standard deviations; then, of a group of same-class blobs closer than
+  // fragment_gap_px to each other in one frame, drop every member when the
+  // group together fails the check (the pieces of a larger thing that an
+  // occluder cut apart: a chair behind a person's legs is no set of
+  // bottles). inf = off (the thesis' detector).
+  double max_view_distance = 3.0;
+  double fragment_gap_px = 15.0;
+  ViewCheckOptions view_checks;
   bool Validate(std::string* why) const;
 };
 
 // (elongation − mean)² / variance of a slice under a class's image shape
-// model; the variance adds one pixel of quantisation on each extent.
-double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice);
+// model; the variance adds `pixel_std_px` of error on each extent (one pixel
+// of quantisation when comparing two blobs of the same pixels; the detector's
+// slice error, ViewCheckOptions::pixel_std_px, when comparing with the model).
+double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice,
+                            double pixel_std_px = 1.0);
+
+// The view distance of a detection's slice under its class: the shape
+// distance (when the class has an image shape model and the slice is not cut
+// by the blind disc or the mirror rim, whose cut changes the shape) plus
+// SupportedSizeSquaredDistance with the base on the floor. A chi-square of up
+// to 3 degrees of freedom for an object of the class.
+double ViewSquaredDistance(const CameraModel& camera, const ObjectClass& object_class,
+                           const BoundingSlice& slice, const ViewCheckOptions& options);
 
 class BlobDetector {
  public:
@@ -78,9 +105,13 @@ class BlobDetector {
   // Drops each detection that a look-alike detection of another class covers
   // and explains better (lower colour plus shape distance).
   void SeparateLookAlikes(std::vector<Detection>* detections) const;
+  // BlobDetectorOptions::max_view_distance: the check of each detection,
+  // then of groups of fragments.
+  void VerifyViews(std::vector<Detection>* detections) const;
 
   std::vector<ObjectClass> classes_;
   BlobDetectorOptions options_;
+  std::shared_ptr<const CameraModel> camera_;
   ColourClassifier classifier_;
   cv::Mat mask_;       // CV_8U, 255 inside the annulus
   cv::Mat radius_px_;  // CV_32F polar radius of each pixel centre

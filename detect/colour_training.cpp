@@ -10,8 +10,10 @@
 #include "calib/camera_io.h"
 #include "core/angles.h"
 #include "core/bounding_slice.h"
+#include "core/bounds.h"
 #include "core/csv.h"
 #include "core/error.h"
+#include "core/image_file.h"
 #include "core/yaml.h"
 #include "detect/colour_classifier.h"
 
@@ -42,6 +44,7 @@ std::vector<ColourExample> ReadColourExamples(const std::string& path,
     if (has_roi == has_mask) file.Fail(key, "give exactly one of roi and mask");
     if (has_roi) {
       const std::vector<double> roi = file.Doubles(node, "roi", 4, key + ".");
+      for (double value : roi) file.Within(value, key + ".roi", 0, bounds::kImageSidePx, "px");
       example.roi = cv::Rect(static_cast<int>(roi[0]), static_cast<int>(roi[1]),
                              static_cast<int>(roi[2]), static_cast<int>(roi[3]));
       if (example.roi.width <= 0 || example.roi.height <= 0)
@@ -234,8 +237,7 @@ std::vector<ObjectClass> LearnImageShapesFromExamples(const std::vector<ObjectCl
     if (class_index < 0) continue;
     cv::Mat mask = example.mask;
     if (mask.empty()) {
-      mask = cv::imread(example.mask_path, cv::IMREAD_GRAYSCALE);
-      if (mask.empty()) throw Error::InFile(example.mask_path, "cannot read mask image");
+      mask = ReadImage(example.mask_path, ImageColour::kGray);
     }
     if (mask.cols != camera.image_width() || mask.rows != camera.image_height())
       throw Error::InFile(example.mask_path.empty() ? example.image_path : example.mask_path,
@@ -262,8 +264,7 @@ std::vector<ObjectClass> TrainColourModels(const std::vector<ObjectClass>& class
     std::vector<cv::Mat> images, masks;
     for (const ColourExample& example : examples) {
       if (example.class_name != classes[c].name) continue;
-      cv::Mat image = cv::imread(example.image_path, cv::IMREAD_COLOR);
-      if (image.empty()) throw Error::InFile(example.image_path, "cannot read image");
+      cv::Mat image = ReadImage(example.image_path);
       cv::Mat mask;
       if (!example.mask.empty()) {
         mask = example.mask;
@@ -273,8 +274,7 @@ std::vector<ObjectClass> TrainColourModels(const std::vector<ObjectClass>& class
         mask = cv::Mat::zeros(image.size(), CV_8UC1);
         mask(example.roi).setTo(255);
       } else {
-        mask = cv::imread(example.mask_path, cv::IMREAD_GRAYSCALE);
-        if (mask.empty()) throw Error::InFile(example.mask_path, "cannot read mask image");
+        mask = ReadImage(example.mask_path, ImageColour::kGray);
         if (mask.size() != image.size())
           throw Error::InFile(example.mask_path, "mask size differs from its image");
       }

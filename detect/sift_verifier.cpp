@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/image_file.h"
 #include "core/yaml.h"
 
 namespace oslam {
@@ -78,7 +79,8 @@ SiftVerifier::SiftVerifier(const std::vector<std::vector<cv::Mat>>& templates,
       Template t;
       sift_->detectAndCompute(Normalised(image), cv::noArray(), t.keypoints, t.descriptors);
       // A template without features can never verify anything; keep it out.
-      if (t.keypoints.size() >= static_cast<size_t>(options.min_inliers)) templates_[c].push_back(t);
+      if (t.keypoints.size() >= static_cast<size_t>(options.min_inliers))
+        templates_[c].push_back(t);
     }
   }
 }
@@ -115,8 +117,8 @@ VerificationResult SiftVerifier::Verify(const cv::Mat& frame, const CameraModel&
     result.good_matches = std::max(result.good_matches, static_cast<int>(from.size()));
     if (from.size() < 3) continue;
     std::vector<uchar> inlier_mask;
-    const cv::Mat affine = cv::estimateAffine2D(from, to, inlier_mask, cv::RANSAC,
-                                                options_.ransac_threshold_px);
+    const cv::Mat affine =
+        cv::estimateAffine2D(from, to, inlier_mask, cv::RANSAC, options_.ransac_threshold_px);
     if (affine.empty()) continue;
     result.inliers = std::max(result.inliers, cv::countNonZero(inlier_mask));
   }
@@ -147,8 +149,12 @@ std::vector<std::vector<cv::Mat>> ReadSiftTemplates(const std::string& path,
     const int class_index = FindClass(classes, name);
     if (class_index < 0) file.Fail(key + "class", "unknown class '" + name + "'");
     const std::string image_path = (base / file.String(node, "image", key)).string();
-    const cv::Mat image = cv::imread(image_path, cv::IMREAD_COLOR);
-    if (image.empty()) file.Fail(key + "image", "cannot read image " + image_path);
+    cv::Mat image;
+    try {
+      image = ReadImage(image_path);
+    } catch (const Error& e) {
+      file.Fail(key + "image", e.what());
+    }
     templates[class_index].push_back(image);
   }
   return templates;

@@ -1,17 +1,26 @@
 #include "export/export_files.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <exception>
+#include <functional>
 #include <mutex>
 #include <sstream>
+#include <thread>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "calib/camera_io.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "export/figures.h"
 #include "export/gltf_writer.h"
 #include "export/overlay.h"
 #include "export/ply_writer.h"
+#include "export/tum_writer.h"
 
 namespace oslam {
 
@@ -56,39 +65,82 @@ void CreateOutputFolder(const fs::path& out) {
 
 void WriteModels(const ExportScene& scene, const ExportOptions& options, const fs::path& out,
                  bool ascii_ply, bool quiet) {
-  Progress progress("models", 4, "files", quiet);
-  WriteGltf(scene, options, (out / "map.glb").string());
-  progress.Update(1);
-  WriteGltf(scene, options, (out / "map.gltf").string());
-  progress.Update(2);
+  std::string why;
+  if (!options.Validate(&why)) throw Error("export: " + why);
+  const DisplayScene display = BuildDisplayScene(scene, options);
   const PlyEncoding encoding = ascii_ply ? PlyEncoding::kAscii : PlyEncoding::kBinary;
-  WritePlyMesh(scene, options, (out / "map.ply").string(), encoding);
-  progress.Update(3);
-  if (!SceneTrajectories(scene).empty())
-    WritePlyTrajectories(scene, (out / "trajectory.ply").string(), encoding);
-  progress.Update(4);
-  progress.Done("map.glb, map.gltf, map.ply, trajectory.ply");
+  std::vector<std::pair<std::string, std::string>> files = {
+      {"map.glb", GltfBytes(display, options, true)},
+      {"map.gltf", GltfBytes(display, options, false)},
+      {"map.ply", PlyMeshBytes(display, encoding)}};
+  if (std::string trajectories = PlyTrajectoryBytes(display, scene, encoding);
+      !trajectories.empty())
+    files.emplace_back("trajectory.ply", std::move(trajectories));
+  // TUM files for evo (docs/export.md).
+  if (!scene.map.trajectory.empty())
+    files.emplace_back("trajectory_estimated.txt", TumTrajectory(scene.map.trajectory));
+  if (!scene.odometry.empty())
+    files.emplace_back("trajectory_odometry.txt", TumTrajectory(scene.odometry));
+  if (!scene.ground_truth.empty())
+    files.emplace_back("trajectory_truth.txt", TumTrajectory(scene.ground_truth));
+  Progress progress("models", files.size(), "files", quiet);
+  std::string names;
+  for (size_t i = 0; i < files.size(); ++i) {
+    WriteFileAtomically((out / files[i].first).string(), files[i].second);
+    names += (i ? ", " : "") + files[i].first;
+    progress.Update(i + 1);
+  }
+  progress.Done(names);
+}
+
+std::vector<std::string> WriteFigureFiles(const Figure& figure, const fs::path& out,
+                                          const std::string& stem) {
+  std::vector<std::string> written;
+  for (const auto& [extension, bytes] :
+       {std::pair<std::string, std::string>{".png", EncodePng(figure.image)},
+        {".svg", figure.svg},
+        {".csv", figure.csv}}) {
+    WriteFileAtomically((out / (stem + extension)).string(), bytes);
+    written.push_back(stem + extension);
+  }
+  return written;
 }
 
 std::vector<std::string> WriteFigures(const ExportScene& scene, const FigureOptions& options,
                                       const fs::path& out, bool quiet) {
   Progress progress("figures", 3, "figures", quiet);
-  std::vector<std::string> written = {"birdseye.png", "perspective.png"};
-  WritePng(RenderBirdsEye(scene, options), (out / written[0]).string());
+  std::vector<std::string> written;
+  // A figure that cannot be drawn is an error about the file it was drawn for.
+  auto write = [&](const std::string& stem, const std::function<Figure()>& draw) {
+    Figure figure;
+    try {
+      figure = draw();
+    } catch (const Error& e) {
+      throw Error::InFile((out / (stem + ".png")).string(), e.what());
+    }
+    for (std::string& name : WriteFigureFiles(figure, out, stem)) written.push_back(name);
+  };
+  write("birdseye", [&] { return BirdsEyeFigure(scene, options); });
   progress.Update(1);
-  WritePng(RenderPerspective(scene, options), (out / written[1]).string());
+  // Without an EGL driver there is no off-screen OpenGL: the other files are
+  // still worth having.
+  try {
+    WritePng(RenderPerspective(scene, options), (out / "perspective.png").string());
+    written.push_back("perspective.png");
+  } catch (const Error& e) {
+    std::fprintf(stderr, "warning: perspective.png not written: %s\n", e.what());
+  }
   progress.Update(2);
   std::string note;
   if (scene.ground_truth.empty()) {
-    note = " (no ground truth: trajectories.png skipped)";
+    note = " (no ground truth: no trajectory error plot)";
   } else {
     FigureOptions plot = options;
     plot.height_px = std::max(200, options.height_px / 2);
-    written.push_back("trajectories.png");
-    WritePng(PlotTrajectoryErrors(scene, plot), (out / written[2]).string());
+    write("trajectories", [&] { return TrajectoryErrorFigure(scene, plot); });
   }
   progress.Update(3);
-  progress.Done("birdseye.png, perspective.png, trajectories.png" + note);
+  progress.Done(std::to_string(written.size()) + " files" + note);
   return written;
 }
 
@@ -112,27 +164,90 @@ OverlayInput PrepareOverlays(const ExportScene& scene, const std::string& run_di
   return input;
 }
 
+std::optional<OverlayFormat> ParseOverlayFormat(const std::string& text) {
+  if (text == "jpg" || text == "jpeg") return OverlayFormat::kJpeg;
+  if (text == "png") return OverlayFormat::kPng;
+  return std::nullopt;
+}
+
+std::vector<unsigned char> EncodeOverlay(const cv::Mat& image, OverlayFormat format) {
+  std::vector<unsigned char> bytes;
+  const bool encoded = format == OverlayFormat::kJpeg
+                           ? cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, 92})
+                           : cv::imencode(".png", image, bytes);
+  if (!encoded) bytes.clear();
+  return bytes;
+}
+
 void WriteOverlays(const ExportScene& scene, const OverlayInput& input, double min_existence,
-                   const fs::path& overlays_dir, bool quiet, int threads) {
+                   const fs::path& overlays_dir, bool quiet, int threads, OverlayFormat format) {
   CreateOutputFolder(overlays_dir);
   Progress progress("overlays", input.chosen.size(), "frames", quiet);
   std::mutex progress_mutex;
   size_t done = 0;
-  // Every frame is independent: read (or taken from the frame cache), drawn
-  // and written by whichever thread takes it.
+  const char* extension = format == OverlayFormat::kJpeg ? "jpg" : "png";
+  // Every frame is independent: read (or taken from the frame cache), drawn,
+  // encoded in memory and written by whichever thread takes it.
   ParallelFor(0, input.chosen.size(), threads, [&](size_t i) {
     const long frame = input.chosen[i];
     char name[32];
-    std::snprintf(name, sizeof(name), "%06ld.png", frame);
+    std::snprintf(name, sizeof(name), "%06ld.%s", frame, extension);
     const cv::Mat image = DrawOverlay(input.frames->Read(frame), frame, *input.camera, scene,
                                       input.detections, min_existence);
-    WritePng(image, (overlays_dir / name).string(), FileSync::kDeferred);
+    const std::string path = (overlays_dir / name).string();
+    const std::vector<unsigned char> bytes = EncodeOverlay(image, format);
+    if (bytes.empty()) throw Error::InFile(path, "cannot encode the overlay");
+    WriteFileAtomically(path,
+                        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                        FileSync::kDeferred);
     const std::lock_guard<std::mutex> lock(progress_mutex);
     progress.Update(++done);
   });
   SyncFileSystem(overlays_dir.string());
   progress.Done(std::to_string(input.chosen.size()) + " overlays" +
                 (input.detections.empty() ? " (no detections.csv: map only)" : ""));
+}
+
+void WriteExportFiles(const ExportScene& scene, const ExportOptions& models, bool ascii_ply,
+                      const FigureOptions& figures, const OverlayInput* overlays,
+                      OverlayFormat overlay_format, const fs::path& out, bool quiet, int threads) {
+  if (overlays == nullptr) {
+    WriteModels(scene, models, out, ascii_ply, quiet);
+    WriteFigures(scene, figures, out, quiet);
+    return;
+  }
+  // The models and figures on a thread of their own, quietly (two progress
+  // lines updated at once would garble a terminal); their summary follows
+  // the overlays'.
+  std::exception_ptr failure;
+  std::string summary;
+  std::thread side([&] {
+    try {
+      const auto start = std::chrono::steady_clock::now();
+      WriteModels(scene, models, out, ascii_ply, /*quiet=*/true);
+      const std::vector<std::string> written = WriteFigures(scene, figures, out, /*quiet=*/true);
+      char line[160];
+      std::snprintf(
+          line, sizeof(line),
+          "[models, figures] %zu figure files and the 3D models in %.2f s, beside "
+          "the overlays\n",
+          written.size(),
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      summary = line;
+    } catch (...) {
+      failure = std::current_exception();
+    }
+  });
+  try {
+    WriteOverlays(scene, *overlays, models.min_existence, out / "overlays", quiet, threads,
+                  overlay_format);
+  } catch (...) {
+    side.join();
+    throw;
+  }
+  side.join();
+  if (failure) std::rethrow_exception(failure);
+  if (!quiet) std::fputs(summary.c_str(), stderr);
 }
 
 }  // namespace oslam

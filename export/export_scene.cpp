@@ -14,6 +14,10 @@ bool ExportOptions::Validate(std::string* why) const {
     *why = "a cylinder needs at least 3 segments";
     return false;
   }
+  if (camera_every < 0) {
+    *why = "the camera pose interval must be >= 0 (0 = none)";
+    return false;
+  }
   return true;
 }
 

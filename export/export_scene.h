@@ -28,8 +28,9 @@ struct ExportScene {
 
 struct ExportOptions {
   double min_existence = 0.0;  // objects with pi below this are left out
-  bool floor_grid = true;      // glTF: 1 m grid lines on the floor (context only, docs/method.md §2)
-  int cylinder_segments = 32;  // facets around a cylinder
+  bool floor_grid = true;      // glTF: a grid on the floor plane (context only, docs/method.md §2)
+  int cylinder_segments = 32;  // facets around the round shapes (cylinder, sphere)
+  int camera_every = 0;        // glTF: a camera pyramid at every Nth estimated pose (0 = none)
   bool Validate(std::string* why) const;
 };
 

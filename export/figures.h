@@ -1,14 +1,21 @@
-// Figures of an O-Map as PNG-ready BGR images (OpenCV drawing only, so they
-// are deterministic and golden-testable):
-//  - bird's-eye view (thesis figs. 6.3b, 6.10): objects as discs in class
-//    colour with opacity pi, class labels, trajectories, metric grid, scale;
-//  - perspective view (figs. 6.3a, 6.7a): the cylinders on a floor grid, by a
-//    small painter's-algorithm rasteriser (Debian's VTK 9.1 renders only
-//    through an X display, see docs/export.md);
-//  - trajectory comparison (figs. 6.4a, 6.18a as errors): position error per
-//    frame of the estimate and of odometry against ground truth.
+// Figures of an O-Map for papers and reports, drawn with PLplot (cairo):
+// each as a PNG, the same drawing as SVG, and the plotted data as CSV.
+//  - bird's-eye view (thesis figs. 6.3b, 6.10): objects as discs of their
+//    diameter in class colour with opacity = pi, base points, labels that
+//    avoid each other, the trajectories; metric axes and a legend of every
+//    mark;
+//  - trajectory errors (figs. 6.4a, 6.18a as errors): horizontal position
+//    error per frame of the estimate and of odometry against ground truth;
+//  - any line plot (the sampler's trace in the report);
+//  - perspective view (figs. 6.3a, 6.7a): the 3D scene rendered off-screen by
+//    VTK (export/vtk_view.h); PNG only.
+// Text and line widths scale with the figure size.
 #pragma once
 
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
 #include <opencv2/core/mat.hpp>
 
 #include "core/atomic_file.h"
@@ -28,10 +35,40 @@ struct FigureOptions {
   bool Validate(std::string* why) const;
 };
 
-cv::Mat RenderBirdsEye(const ExportScene& scene, const FigureOptions& options);
-cv::Mat RenderPerspective(const ExportScene& scene, const FigureOptions& options);
+struct Figure {
+  cv::Mat image;    // BGR 8-bit, width_px x height_px
+  std::string svg;  // the same drawing
+  std::string csv;  // the data drawn
+  // The plot's window in data units (x_min, x_max, y_min, y_max) and where
+  // it lies in the image (pixels, y down).
+  Eigen::Vector4d window = Eigen::Vector4d::Zero();
+  cv::Rect2d viewport_px;
+  cv::Point2d PixelOf(double x, double y) const;
+};
+
+Figure BirdsEyeFigure(const ExportScene& scene, const FigureOptions& options);
 // Throws oslam::Error when the scene has no ground truth to compare with.
-cv::Mat PlotTrajectoryErrors(const ExportScene& scene, const FigureOptions& options);
+Figure TrajectoryErrorFigure(const ExportScene& scene, const FigureOptions& options);
+
+struct PlotSeries {
+  std::string name;    // legend text
+  std::string column;  // CSV column
+  std::vector<double> x, y;
+  Rgb rgb{};
+  bool dashed = false;
+};
+
+// Lines on metric axes with a legend; the CSV has x and one column per
+// series (rows by x, empty where a series has no value).
+Figure LinePlotFigure(const std::string& title, const std::string& x_label,
+                      const std::string& y_label, const std::vector<PlotSeries>& series,
+                      const FigureOptions& options);
+
+cv::Mat RenderPerspective(const ExportScene& scene, const FigureOptions& options);
+
+// The PNG bytes of a BGR image; `fast`: a quicker, larger compression (the
+// overlays, many at a time). Throws oslam::Error on failure.
+std::string EncodePng(const cv::Mat& image, bool fast = false);
 
 // Writes a PNG atomically (core/atomic_file.h); throws oslam::Error naming
 // the file on failure.

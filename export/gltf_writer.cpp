@@ -2,12 +2,12 @@
 
 #include <cmath>
 #include <cstring>
+#include <sstream>
 
 #include <tiny_gltf.h>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "export/cylinder_mesh.h"
 
 namespace oslam {
 namespace {
@@ -73,23 +73,24 @@ class BufferBuilder {
   tinygltf::Model* model_;
 };
 
-Eigen::Vector3f ToYUp(const Eigen::Vector3d& p) {
-  return ZUpToYUp(p).cast<float>();
+Eigen::Vector3f ToYUp(const Eigen::Vector3f& p) {
+  return ZUpToYUp(p.cast<double>()).cast<float>();
 }
 
-// Objects always blend (alpha = pi, docs/method.md §2), even at pi = 1, so every object
-// material behaves the same in a viewer; lines are opaque.
+// Objects always blend (alpha = pi, docs/method.md §2), even at pi = 1, so
+// every object material behaves the same in a viewer. Closed meshes are
+// single-sided: with back faces culled a transparent object shows only its
+// near side, whatever order a viewer draws its triangles in.
 int AddMaterial(tinygltf::Model* model, const std::string& name, const Rgb& rgb, double alpha,
-                bool blend) {
+                bool blend, bool double_sided, double roughness = 0.8) {
   tinygltf::Material material;
   material.name = name;
   material.pbrMetallicRoughness.baseColorFactor = {SrgbToLinear(rgb[0]), SrgbToLinear(rgb[1]),
                                                    SrgbToLinear(rgb[2]), alpha};
   material.pbrMetallicRoughness.metallicFactor = 0.0;
-  material.pbrMetallicRoughness.roughnessFactor = 0.8;
+  material.pbrMetallicRoughness.roughnessFactor = roughness;
   if (blend) material.alphaMode = "BLEND";
-  // Transparent objects are seen from inside too (opacity = pi, docs/method.md §2).
-  material.doubleSided = true;
+  material.doubleSided = double_sided;
   model->materials.push_back(material);
   return static_cast<int>(model->materials.size()) - 1;
 }
@@ -106,10 +107,12 @@ tinygltf::Value Number(double value) {
 }
 
 // What Blender shows as the object's custom properties.
-tinygltf::Value ObjectExtras(const OMapObject& object) {
+tinygltf::Value ObjectExtras(const DisplayObject& shown) {
+  const OMapObject& object = *shown.object;
   tinygltf::Value::Object extras;
   extras["id"] = tinygltf::Value(object.id);
   extras["class"] = tinygltf::Value(object.class_name);
+  extras["shape"] = tinygltf::Value(std::string(ObjectShapeName(shown.shape)));
   extras["existence_probability"] = Number(object.existence_probability);
   extras["diameter_m"] = Number(object.diameter_m);
   extras["height_m"] = Number(object.height_m);
@@ -133,71 +136,72 @@ tinygltf::Value ObjectExtras(const OMapObject& object) {
   return tinygltf::Value(extras);
 }
 
-void AddObject(tinygltf::Model* model, BufferBuilder* buffers, const OMapObject& object,
-               const Rgb& rgb, int segments) {
-  // Local mesh in Y-up around the node's origin, so Blender's object origin
-  // sits at the base point.
-  TriangleMesh mesh = CylinderMesh(object.diameter_m, object.height_m, segments);
-  for (Eigen::Vector3f& p : mesh.positions) p = ToYUp(p.cast<double>());
-  for (Eigen::Vector3f& n : mesh.normals) n = ToYUp(n.cast<double>());
-
+// A node with one triangle mesh (positions, normals, indices) of `material`,
+// its vertices relative to `origin` (both Z up), placed at `origin`.
+int AddMeshNode(tinygltf::Model* model, BufferBuilder* buffers, const std::string& name,
+                const ShadedMesh& mesh, int material, const Eigen::Vector3f& origin) {
+  std::vector<Eigen::Vector3f> positions, normals;
+  positions.reserve(mesh.positions.size());
+  normals.reserve(mesh.normals.size());
+  for (const Eigen::Vector3f& p : mesh.positions) positions.push_back(ToYUp(p));
+  for (const Eigen::Vector3f& n : mesh.normals) normals.push_back(ToYUp(n));
   tinygltf::Primitive primitive;
-  primitive.attributes["POSITION"] = buffers->AddVec3(mesh.positions, true);
-  primitive.attributes["NORMAL"] = buffers->AddVec3(mesh.normals, false);
+  primitive.attributes["POSITION"] = buffers->AddVec3(positions, true);
+  primitive.attributes["NORMAL"] = buffers->AddVec3(normals, false);
   primitive.indices = buffers->AddIndices(mesh.indices);
   primitive.mode = TINYGLTF_MODE_TRIANGLES;
-  primitive.material =
-      AddMaterial(model, ObjectLabel(object), rgb, object.existence_probability, true);
+  primitive.material = material;
   tinygltf::Mesh gltf_mesh;
-  gltf_mesh.name = ObjectLabel(object);
+  gltf_mesh.name = name;
   gltf_mesh.primitives.push_back(primitive);
   model->meshes.push_back(gltf_mesh);
 
   tinygltf::Node node;
-  node.name = ObjectLabel(object);
-  node.mesh = static_cast<int>(model->meshes.size()) - 1;
-  const Eigen::Vector3f base = ToYUp(object.base_world);
-  node.translation = {base.x(), base.y(), base.z()};
-  node.extras = ObjectExtras(object);
-  AddNode(model, node);
-}
-
-// Line primitives (strip or separate segments) as one node with one mesh.
-void AddLines(tinygltf::Model* model, BufferBuilder* buffers, const std::string& name,
-              const std::vector<Eigen::Vector3f>& points, int mode, const Rgb& rgb) {
-  tinygltf::Primitive primitive;
-  primitive.attributes["POSITION"] = buffers->AddVec3(points, true);
-  primitive.mode = mode;
-  primitive.material = AddMaterial(model, name, rgb, 1.0, false);
-  tinygltf::Mesh mesh;
-  mesh.name = name;
-  mesh.primitives.push_back(primitive);
-  model->meshes.push_back(mesh);
-  tinygltf::Node node;
   node.name = name;
   node.mesh = static_cast<int>(model->meshes.size()) - 1;
-  AddNode(model, node);
+  if (!origin.isZero()) {
+    const Eigen::Vector3f translation = ToYUp(origin);
+    node.translation = {translation.x(), translation.y(), translation.z()};
+  }
+  return AddNode(model, node);
 }
 
-// Trajectories float 1 cm above the floor so they do not flicker against the grid.
-constexpr double kTrajectoryHeightM = 0.01;
-
-std::vector<Eigen::Vector3f> FloorGrid(const Eigen::Vector4d& extent) {
-  std::vector<Eigen::Vector3f> points;
-  const double x0 = std::floor(extent[0]), y0 = std::floor(extent[1]);
-  const double x1 = std::ceil(extent[2]), y1 = std::ceil(extent[3]);
-  for (double x = x0; x <= x1 + 1e-9; x += 1.0) {
-    points.push_back(ToYUp({x, y0, 0.0}));
-    points.push_back(ToYUp({x, y1, 0.0}));
+// A flat rectangle [x0, x1] x [y0, y1] at height z facing up, as a mesh.
+void AddRectangle(ShadedMesh* mesh, double x0, double y0, double x1, double y1, double z) {
+  const auto first = static_cast<uint32_t>(mesh->positions.size());
+  for (const auto& [x, y] : {std::pair{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}) {
+    mesh->positions.emplace_back(static_cast<float>(x), static_cast<float>(y),
+                                 static_cast<float>(z));
+    mesh->normals.push_back(Eigen::Vector3f::UnitZ());
   }
-  for (double y = y0; y <= y1 + 1e-9; y += 1.0) {
-    points.push_back(ToYUp({x0, y, 0.0}));
-    points.push_back(ToYUp({x1, y, 0.0}));
-  }
-  return points;
+  mesh->indices.insert(mesh->indices.end(),
+                       {first, first + 1, first + 2, first, first + 2, first + 3});
 }
 
-tinygltf::Model BuildModel(const ExportScene& scene, const ExportOptions& options) {
+// The floor plane at z = 0 and grid strips 2 mm above it: faces, not glTF
+// lines, which Blender imports as loose edges that never render.
+void AddFloor(tinygltf::Model* model, BufferBuilder* buffers, const DisplayScene& display,
+              bool grid) {
+  const Eigen::Vector4d& f = display.floor;
+  ShadedMesh plane;
+  AddRectangle(&plane, f[0], f[1], f[2], f[3], 0.0);
+  AddMeshNode(model, buffers, "floor", plane,
+              AddMaterial(model, "floor", {235, 235, 230}, 1.0, false, true, 1.0),
+              Eigen::Vector3f::Zero());
+  if (!grid) return;
+  const double step = display.grid_step_m, half_width = 0.4 * display.tube_radius_m;
+  constexpr double kGridHeightM = 0.002;
+  ShadedMesh strips;
+  for (double x = std::ceil(f[0] / step) * step; x <= f[2] + 1e-9; x += step)
+    AddRectangle(&strips, x - half_width, f[1], x + half_width, f[3], kGridHeightM);
+  for (double y = std::ceil(f[1] / step) * step; y <= f[3] + 1e-9; y += step)
+    AddRectangle(&strips, f[0], y - half_width, f[2], y + half_width, kGridHeightM);
+  AddMeshNode(model, buffers, "floor grid", strips,
+              AddMaterial(model, "floor grid", {160, 160, 160}, 1.0, false, true, 1.0),
+              Eigen::Vector3f::Zero());
+}
+
+tinygltf::Model BuildModel(const DisplayScene& display, const ExportOptions& options) {
   tinygltf::Model model;
   model.asset.version = "2.0";
   model.asset.generator = "oslam export " OSLAM_VERSION;
@@ -206,24 +210,28 @@ tinygltf::Model BuildModel(const ExportScene& scene, const ExportOptions& option
   model.defaultScene = 0;
   BufferBuilder buffers(&model);
 
-  for (const OMapObject* object : ShownObjects(scene.map, options.min_existence))
-    AddObject(&model, &buffers, *object, ClassColour(scene.classes, object->class_name),
-              options.cylinder_segments);
-  for (const NamedTrajectory& trajectory : SceneTrajectories(scene)) {
-    if (trajectory.poses.size() < 2) continue;  // a strip needs two points
-    std::vector<Eigen::Vector3f> points;
-    for (const Pose2& pose : trajectory.poses)
-      points.push_back(ToYUp({pose.x, pose.y, kTrajectoryHeightM}));
-    AddLines(&model, &buffers, "trajectory " + trajectory.name, points, TINYGLTF_MODE_LINE_STRIP,
-             trajectory.rgb);
+  for (const DisplayObject& shown : display.objects) {
+    // Local mesh around the node's origin, so Blender's object origin sits at
+    // the base point.
+    const Eigen::Vector3f base = shown.object->base_world.cast<float>();
+    const int node =
+        AddMeshNode(&model, &buffers, shown.label, Shade(shown.local),
+                    AddMaterial(&model, shown.label, shown.rgb, shown.alpha, true, false), base);
+    model.nodes[node].extras = ObjectExtras(shown);
   }
-  if (options.floor_grid)
-    AddLines(&model, &buffers, "floor grid",
-             FloorGrid(FloorExtent(scene, options.min_existence, 0.5)), TINYGLTF_MODE_LINE,
-             {170, 170, 170});
+  for (const DisplayTrajectory& trajectory : display.trajectories) {
+    if (trajectory.tube.triangles.empty()) continue;
+    const std::string name = "trajectory " + trajectory.name;
+    AddMeshNode(&model, &buffers, name, Shade(trajectory.tube),
+                AddMaterial(&model, name, trajectory.rgb, 1.0, false, false, 0.5),
+                Eigen::Vector3f::Zero());
+  }
+  if (!display.cameras.triangles.empty())
+    AddMeshNode(&model, &buffers, "cameras", Shade(display.cameras),
+                AddMaterial(&model, "cameras", {90, 90, 100}, 1.0, false, false),
+                Eigen::Vector3f::Zero());
+  AddFloor(&model, &buffers, display, options.floor_grid);
   model.buffers[0].name = "oslam";
-  // An empty buffer is invalid glTF (byteLength >= 1): drop it for an empty scene.
-  if (model.buffers[0].data.empty()) model.buffers.clear();
   return model;
 }
 
@@ -234,17 +242,20 @@ double SrgbToLinear(int component) {
   return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
 }
 
+std::string GltfBytes(const DisplayScene& display, const ExportOptions& options, bool binary) {
+  const tinygltf::Model model = BuildModel(display, options);
+  std::ostringstream bytes;
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToStream(&model, bytes, /*prettyPrint=*/!binary, binary))
+    throw Error("cannot encode the glTF");
+  return bytes.str();
+}
+
 void WriteGltf(const ExportScene& scene, const ExportOptions& options, const std::string& path) {
   std::string why;
   if (!options.Validate(&why)) throw Error::InFile(path, why);
-  const tinygltf::Model model = BuildModel(scene, options);
   const bool binary = path.size() >= 4 && path.compare(path.size() - 4, 4, ".glb") == 0;
-  WriteAtomically(path, [&](const std::string& temp) {
-    tinygltf::TinyGLTF writer;
-    if (!writer.WriteGltfSceneToFile(&model, temp, /*embedImages=*/true, /*embedBuffers=*/true,
-                                     /*prettyPrint=*/!binary, binary))
-      throw Error::InFile(path, "cannot write glTF");
-  });
+  WriteFileAtomically(path, GltfBytes(BuildDisplayScene(scene, options), options, binary));
 }
 
 }  // namespace oslam

@@ -1,25 +1,34 @@
-// PLY export (PCL) for MeshLab and CloudCompare. Coordinates stay in the
-// map's own Z-up world frame (PLY has no convention, MeshLab none either).
+// PLY export for MeshLab and CloudCompare, written by oslam itself (PLY is a
+// simple format; a library would add header lines of its own and cannot
+// write edges). Coordinates stay in the map's own Z-up world frame (PLY has
+// no convention, MeshLab none either).
 #pragma once
 
 #include <string>
 
+#include "export/display_scene.h"
 #include "export/export_scene.h"
 
 namespace oslam {
 
 enum class PlyEncoding { kAscii, kBinary };
 
-// All shown objects as one triangle mesh (each a capped cylinder) with
-// per-vertex RGBA: the class display colour and alpha = round(255 pi).
-// Written atomically; throws oslam::Error naming the file on failure.
+// The shown objects, each one closed mesh with shared vertices in the shape
+// of its class (MeshLab: one component per object, no holes, watertight),
+// with per-vertex RGBA: the class display colour and alpha = round(255 pi).
+std::string PlyMeshBytes(const DisplayScene& display, PlyEncoding encoding);
+
+// The trajectories as vertices joined by edges (a polyline each), in frame
+// order, in their display colours (estimated black, odometry red, ground
+// truth green), at the heights of the glTF's tubes. Empty when there is no
+// trajectory.
+std::string PlyTrajectoryBytes(const DisplayScene& display, const ExportScene& scene,
+                               PlyEncoding encoding);
+
+// Write the above atomically; throw oslam::Error naming the file on failure
+// (WritePlyTrajectories also when the scene has no trajectory).
 void WritePlyMesh(const ExportScene& scene, const ExportOptions& options, const std::string& path,
                   PlyEncoding encoding);
-
-// The trajectories as one coloured point set, each in frame order and in its
-// display colour (estimated black, odometry red, ground truth green), 1 cm
-// above the floor. PCL's PLY writer has no edge element, so the points carry
-// the path; MeshLab shows them as a dotted line.
 void WritePlyTrajectories(const ExportScene& scene, const std::string& path, PlyEncoding encoding);
 
 }  // namespace oslam

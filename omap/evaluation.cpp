@@ -212,29 +212,35 @@ MapMetrics EvaluateMap(const OMap& map, const std::vector<Pose2>& odometry,
 }
 
 std::string MapMetrics::Table() const {
+  // Every name says what it measures: trajectory errors are horizontal (the
+  // poses are planar), object position errors are given in 3D and on the
+  // floor, because the base point's height is estimated too.
   std::ostringstream out;
   char line[256];
-  std::snprintf(line, sizeof(line), "%-10s %10s %14s %14s\n", "trajectory", "ATE m", "RPE trans m",
-                "RPE rot deg");
+  std::snprintf(line, sizeof(line), "%-10s %14s %18s %15s\n", "trajectory", "ATE m (x, y)",
+                "RPE step m (x, y)", "RPE yaw deg");
   out << line;
   for (const auto& [name, m] :
        {std::pair<const char*, const TrajectoryMetrics&>{"estimate", estimate},
         {"odometry", odometry}}) {
-    std::snprintf(line, sizeof(line), "%-10s %10.3f %14.4f %14.3f\n", name, m.ate_rmse_m,
+    std::snprintf(line, sizeof(line), "%-10s %14.3f %18.4f %15.3f\n", name, m.ate_rmse_m,
                   m.rpe_translation_rmse_m, RadToDeg(m.rpe_rotation_rmse_rad));
     out << line;
   }
   std::snprintf(line, sizeof(line),
-                "objects: %d of %d found, %d spurious; class accuracy %.3f; position error median "
-                "%.3f m; |diameter| error mean %.3f m, |height| %.3f m\n",
+                "objects: %d of %d true objects found, %d spurious; class accuracy %.3f\n"
+                "object base-point error: median %.3f m 3D, %.3f m horizontal; max %.3f m 3D, "
+                "%.3f m horizontal\nsize error: mean |diameter| %.3f m, mean |height| %.3f m\n",
                 true_objects_found, true_objects_total, spurious_objects, class_accuracy,
-                object_position_error_median_m, diameter_error_mean_m, height_error_mean_m);
+                object_position_error_median_m, object_horizontal_error_median_m,
+                object_position_error_max_m, object_horizontal_error_max_m, diameter_error_mean_m,
+                height_error_mean_m);
   out << line;
   for (const ObjectMatch& m : matches) {
     std::snprintf(line, sizeof(line),
-                  "  %-16s -> map %-4d %-16s position %.3f m  d %+.3f  h %+.3f\n",
+                  "  %-16s -> map %-4d %-16s 3D %.3f m  horizontal %.3f m  d %+.3f  h %+.3f\n",
                   m.true_class.c_str(), m.map_id, m.map_class.c_str(), m.position_error_m,
-                  m.diameter_error_m, m.height_error_m);
+                  m.horizontal_error_m, m.diameter_error_m, m.height_error_m);
     out << line;
   }
   return out.str();
@@ -248,7 +254,10 @@ std::string MapMetrics::Json() const {
   j["odometry_rpe_translation_rmse_m"] = odometry.rpe_translation_rmse_m;
   j["rpe_rotation_rmse_rad"] = estimate.rpe_rotation_rmse_rad;
   j["odometry_rpe_rotation_rmse_rad"] = odometry.rpe_rotation_rmse_rad;
-  j["object_position_error_median_m"] = object_position_error_median_m;
+  j["object_position_error_median_m"] = object_position_error_median_m;  // 3D
+  j["object_position_error_max_m"] = object_position_error_max_m;
+  j["object_horizontal_error_median_m"] = object_horizontal_error_median_m;  // x, y
+  j["object_horizontal_error_max_m"] = object_horizontal_error_max_m;
   j["diameter_error_mean_m"] = diameter_error_mean_m;
   j["height_error_mean_m"] = height_error_mean_m;
   j["class_accuracy"] = class_accuracy;
@@ -262,6 +271,7 @@ std::string MapMetrics::Json() const {
                             {"true_class", m.true_class},
                             {"map_class", m.map_class},
                             {"position_error_m", m.position_error_m},
+                            {"horizontal_error_m", m.horizontal_error_m},
                             {"diameter_error_m", m.diameter_error_m},
                             {"height_error_m", m.height_error_m}});
   }

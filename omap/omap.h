@@ -73,6 +73,12 @@ struct OMap {
   std::vector<Pose2> trajectory;     // estimated robot pose per frame, world frame
   std::optional<OMapSource> source;  // absent in hand-made maps
   std::vector<OMapReport> reports;   // in the order they are written
+  // What depends on the machine and the thread scheduling rather than on the
+  // input and the seed (run times, rates, speculative solves undone by the
+  // parallel chains): one member per report, under the same names. Left out
+  // of omap.json unless asked for (OMapToJson), so that the same input and
+  // seed give the same file.
+  std::vector<OMapReport> timing;
 };
 
 // The report called `name`, or null.

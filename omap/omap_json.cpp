@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/error.h"
 
 namespace oslam {
@@ -17,8 +18,13 @@ namespace {
 // reports come back in the order the file has them.
 using Json = nlohmann::ordered_json;
 
+constexpr double kCoordinate = bounds::kCoordinateM;
+// A covariance entry: variances up to the square of the coordinate bound.
+constexpr double kMaxCovariance = bounds::kCoordinateM * bounds::kCoordinateM;
+
 // The members every O-Map has; any other top-level member is a report.
-const char* const kCoreMembers[] = {"format", "version", "source", "objects", "trajectory"};
+const char* const kCoreMembers[] = {"format",  "version",    "source",
+                                    "objects", "trajectory", "timing"};
 
 bool IsCoreMember(const std::string& name) {
   return std::find(std::begin(kCoreMembers), std::end(kCoreMembers), name) !=
@@ -97,15 +103,26 @@ class Reader {
   double Number(const Json& node, const std::string& key, const std::string& where) const {
     return Value(Field(node, key, where), where + key);
   }
+  // A number within [low, high] (core/bounds.h).
+  double Within(const Json& value, const std::string& where, double low, double high,
+                const std::string& unit) const {
+    const double number = Value(value, where);
+    if (!bounds::Within(number, low, high))
+      Fail(where, bounds::OutsideMessage(number, low, high, unit));
+    return number;
+  }
+  double Coordinate(const Json& node, const std::string& key, const std::string& where) const {
+    return Within(Field(node, key, where), where + key, -kCoordinate, kCoordinate, "m");
+  }
   // A number with an integral value in [low, high].
   double IntegralValue(const Json& value, const std::string& where, double low, double high) const {
     const double number = Value(value, where);
     if (number != std::floor(number)) Fail(where, "must be a whole number");
-    if (number < low || number > high) Fail(where, "is out of range");
+    if (number < low || number > high) Fail(where, bounds::OutsideMessage(number, low, high));
     return number;
   }
-  int Int(const Json& value, const std::string& where, int low = INT_MIN) const {
-    return static_cast<int>(IntegralValue(value, where, low, INT_MAX));
+  int Int(const Json& value, const std::string& where, int low = -bounds::kId) const {
+    return static_cast<int>(IntegralValue(value, where, low, bounds::kId));
   }
   const Json& List(const Json& node, const std::string& key, const std::string& where) const {
     const Json& value = Field(node, key, where);
@@ -160,9 +177,13 @@ OMapObject ReadObject(const Reader& reader, const Json& node, const std::string&
   if (!base.is_array() || base.size() != 3)
     reader.Fail(where + "base_point_m", "must be [x, y, z]");
   for (int k = 0; k < 3; ++k)
-    object.base_world[k] = reader.Value(base[k], where + "base_point_m[" + std::to_string(k) + "]");
-  object.diameter_m = reader.Number(node, "diameter_m", where);
-  object.height_m = reader.Number(node, "height_m", where);
+    object.base_world[k] = reader.Within(base[k], where + "base_point_m[" + std::to_string(k) + "]",
+                                         -kCoordinate, kCoordinate, "m");
+  const double size = bounds::kObjectSizeM;
+  object.diameter_m =
+      reader.Within(reader.Field(node, "diameter_m", where), where + "diameter_m", 0, size, "m");
+  object.height_m =
+      reader.Within(reader.Field(node, "height_m", where), where + "height_m", 0, size, "m");
   object.existence_probability = reader.Number(node, "existence_probability", where);
   if (!(object.existence_probability >= 0.0 && object.existence_probability <= 1.0))
     reader.Fail(where + "existence_probability", "must be in [0, 1]");
@@ -179,7 +200,9 @@ OMapObject ReadObject(const Reader& reader, const Json& node, const std::string&
         if (entry.is_null())  // written for a non-finite entry
           object.covariance(r, c) = std::numeric_limits<double>::quiet_NaN();
         else if (entry.is_number())
-          object.covariance(r, c) = entry.get<double>();
+          object.covariance(r, c) = reader.Within(
+              entry, where + "covariance[" + std::to_string(r) + "][" + std::to_string(c) + "]",
+              -kMaxCovariance, kMaxCovariance, "");
         else
           bad();
       }
@@ -232,19 +255,26 @@ OMap ReadRoot(const Reader& reader, const Json& root) {
     const Json& trajectory = reader.List(root, "trajectory", "");
     for (size_t i = 0; i < trajectory.size(); ++i) {
       const std::string where = "trajectory[" + std::to_string(i) + "].";
-      map.trajectory.push_back({reader.Number(trajectory[i], "x_m", where),
-                                reader.Number(trajectory[i], "y_m", where),
-                                reader.Number(trajectory[i], "theta_rad", where)});
+      const double angle = bounds::kAngleRad;
+      map.trajectory.push_back({reader.Coordinate(trajectory[i], "x_m", where),
+                                reader.Coordinate(trajectory[i], "y_m", where),
+                                reader.Within(reader.Field(trajectory[i], "theta_rad", where),
+                                              where + "theta_rad", -angle, angle, "rad")});
     }
   }
   for (const auto& [name, value] : root.items())
     if (!IsCoreMember(name)) map.reports.push_back({name, value.dump()});
+  if (root.contains("timing")) {
+    const Json& timing = root["timing"];
+    if (!timing.is_object()) reader.Fail("timing", "must be an object");
+    for (const auto& [name, value] : timing.items()) map.timing.push_back({name, value.dump()});
+  }
   return map;
 }
 
 }  // namespace
 
-std::string OMapToJson(const OMap& map) {
+std::string OMapToJson(const OMap& map, OMapTiming timing) {
   Json root = {{"format", "oslam-omap"}, {"version", 1}};
   if (map.source) root["source"] = SourceToJson(*map.source);
   Json objects = Json::array();
@@ -266,13 +296,24 @@ std::string OMapToJson(const OMap& map) {
       throw Error("O-Map report '" + report.name + "': not valid JSON (" + e.what() + ")");
     }
   }
+  if (timing == OMapTiming::kInclude && !map.timing.empty()) {
+    Json members = Json::object();
+    for (const OMapReport& report : map.timing) {
+      try {
+        members[report.name] = Json::parse(report.json);
+      } catch (const Json::exception& e) {
+        throw Error("O-Map timing '" + report.name + "': not valid JSON (" + e.what() + ")");
+      }
+    }
+    root["timing"] = members;
+  }
   // Names and paths are not checked for UTF-8 elsewhere: replace bad bytes
   // rather than fail after the map was made.
   return root.dump(1, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
-void WriteOMap(const std::string& path, const OMap& map) {
-  WriteTextFileAtomically(path, OMapToJson(map));
+void WriteOMap(const std::string& path, const OMap& map, OMapTiming timing) {
+  WriteTextFileAtomically(path, OMapToJson(map, timing));
 }
 
 OMap ReadOMap(const std::string& path) {

@@ -11,6 +11,7 @@
 #include "calib/mei_camera.h"
 #include "calib/rim_detection.h"
 #include "core/error.h"
+#include "core/image_file.h"
 #include "core/text.h"
 
 namespace oslam {
@@ -50,8 +51,7 @@ Views DetectCorners(const std::string& images_dir, const BoardPattern& pattern, 
   Views result;
   const auto start = std::chrono::steady_clock::now();
   for (const auto& path : ListImages(images_dir)) {
-    cv::Mat image = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
-    if (image.empty()) throw Error::InFile(path.string(), "cannot read image");
+    cv::Mat image = ReadImage(path.string(), ImageColour::kGray);
     if (result.width == 0) {
       result.width = image.cols;
       result.height = image.rows;

@@ -12,6 +12,7 @@
 #include "calib/camera_io.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/image_file.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "core/run_folder.h"
@@ -36,9 +37,7 @@ void SaveDebugImage(const cv::Mat& frame, const std::vector<Detection>& detectio
     cv::putText(image, d.class_name, cv::Point(cvRound(base.x()) + 4, cvRound(base.y()) - 4),
                 cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   }
-  WriteAtomically(path, [&](const std::string& temp) {
-    if (!cv::imwrite(temp, image)) throw Error::InFile(path, "cannot write image");
-  });
+  WriteImage(path, image);
 }
 
 // One frame's outcome, computed on a worker thread.

@@ -13,8 +13,13 @@ std::optional<MapMetrics> RunEvalStage(const OMap& map, const std::string& run_d
   if (!options.Validate(&why)) throw Error("eval: " + why);
   const std::optional<GroundTruth> truth = ReadGroundTruth(run_dir);
   if (!truth) return std::nullopt;
-  const Odometry odometry = ReadOdometry(RunFolderPaths::Of(run_dir).odometry,
-                                         static_cast<long>(truth->trajectory.size()));
+  const RunFolderPaths paths = RunFolderPaths::Of(run_dir);
+  const Odometry odometry = ReadOdometry(paths.odometry);
+  // Either file may be the short one: name both.
+  if (odometry.poses.size() != truth->trajectory.size())
+    throw Error::InFile(paths.ground_truth + "/trajectory.csv",
+                        "has " + std::to_string(truth->trajectory.size()) + " rows but " +
+                            paths.odometry + " has " + std::to_string(odometry.poses.size()));
   const MapMetrics metrics = EvaluateMap(map, odometry.poses, *truth, options.metrics);
   if (!output_json.empty()) WriteTextFileAtomically(output_json, metrics.Json());
   return metrics;

@@ -2,6 +2,7 @@
 
 #include <optional>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "export/export_files.h"
 
@@ -11,6 +12,7 @@ ExportOptions ExportStageOptions::Models() const {
   ExportOptions models;
   models.min_existence = min_existence;
   models.floor_grid = floor_grid;
+  models.camera_every = camera_every;
   return models;
 }
 
@@ -27,6 +29,10 @@ bool ExportStageOptions::Validate(std::string* why) const {
     if (why) *why = "the overlay threads must be >= 0 (0 = one per core)";
     return false;
   }
+  if (!ParseOverlayFormat(overlay_format)) {
+    if (why) *why = "the overlay format must be jpg or png, not '" + overlay_format + "'";
+    return false;
+  }
   return true;
 }
 
@@ -41,15 +47,15 @@ void RunExportStage(const OMap& map, const ExportStageInput& input,
   scene.map = map;
   if (!input.run_dir.empty()) ReadRunContext(input.run_dir, &scene);
   std::optional<OverlayInput> overlays;
-  if (options.overlays)
+  if (options.overlays) {
     overlays = PrepareOverlays(scene, input.run_dir, options.overlay_frames, input.detections_path);
+    CheckOutputSubfolder(out.string(), "overlays");
+  }
   CreateOutputFolder(out);
 
-  WriteModels(scene, options.Models(), out, options.ascii_ply, output.quiet);
-  WriteFigures(scene, options.Figures(), out, output.quiet);
-  if (overlays)
-    WriteOverlays(scene, *overlays, options.min_existence, out / "overlays", output.quiet,
-                  options.threads);
+  WriteExportFiles(scene, options.Models(), options.ascii_ply, options.Figures(),
+                   overlays ? &*overlays : nullptr, *ParseOverlayFormat(options.overlay_format),
+                   out, output.quiet, options.threads);
   output.Print("wrote " + out.string());
 }
 

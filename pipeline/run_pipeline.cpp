@@ -3,9 +3,8 @@
 #include <chrono>
 #include <ctime>
 #include <filesystem>
-#include <sstream>
+#include <functional>
 
-#include <nlohmann/json.hpp>
 
 #include "calib/camera_io.h"
 #include "core/atomic_file.h"
@@ -13,48 +12,13 @@
 #include "core/run_folder.h"
 #include "core/text.h"
 #include "omap/omap_json.h"
+#include "pipeline/run_report.h"
+#include "pipeline/run_status.h"
 
 namespace oslam {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string Fixed(double value, int digits) {
-  return Format("%.*f", digits, value);
-}
-
-std::string Report(const std::string& run_dir, const std::string& out_dir,
-                   const RunPipelineOptions& options, const RunPipelineResult& result,
-                   const nlohmann::json& omap_json) {
-  std::ostringstream md;
-  md << "# oslam run\n\nInput: `" << run_dir << "`; method: " << SlamMethodName(options.slam.method)
-     << ", seed " << options.slam.sampler.seed << ". Configuration: `config.yaml`.\n\n";
-  md << "![bird's-eye view](birdseye.png) ![perspective view](perspective.png)\n\n";
-  if (fs::exists(fs::path(out_dir) / "trajectories.png"))
-    md << "![trajectory error](trajectories.png)\n\n";
-  md << "3D map: `map.glb` (Blender: File > Import > glTF 2.0), `map.ply` (MeshLab).\n\n";
-
-  md << "## Timings\n\n| stage | seconds | CPU seconds |\n|---|---|---|\n";
-  for (const StageTime& t : result.times)
-    md << "| " << t.name << " | " << Fixed(t.seconds, 2) << " | " << Fixed(t.cpu_seconds, 2)
-       << " |\n";
-  const StageTime total = result.Total();
-  md << "| total | " << Fixed(total.seconds, 2) << " | " << Fixed(total.cpu_seconds, 2) << " |\n\n";
-
-  md << "## Objects\n\n| id | class | existence | x m | y m | z m | diameter m | height m | "
-        "detections |\n|---|---|---|---|---|---|---|---|---|\n";
-  for (const OMapObject& o : result.map.objects) {
-    md << "| " << o.id << " | " << o.class_name << " | " << Fixed(o.existence_probability, 2)
-       << " | " << Fixed(o.base_world.x(), 2) << " | " << Fixed(o.base_world.y(), 2) << " | "
-       << Fixed(o.base_world.z(), 2) << " | " << Fixed(o.diameter_m, 2) << " | "
-       << Fixed(o.height_m, 2) << " | " << o.num_detections << " |\n";
-  }
-  if (omap_json.contains("sampler"))
-    md << "\n## Sampler convergence\n\n```json\n" << omap_json["sampler"].dump(1) << "\n```\n";
-  if (result.metrics)
-    md << "\n## Against ground truth\n\n```\n" << result.metrics->Table() << "```\n";
-  return md.str();
-}
 
 // Runs `body` as stage `index` of 3 and records its wall and CPU time.
 template <typename Body>
@@ -96,17 +60,14 @@ void CheckRunInputs(const std::string& run_dir) {
                         "no class has a colour model (run 'oslam train-colors' first)");
 }
 
-RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out_dir,
-                              const RunPipelineOptions& options,
-                              const RunPipelineCallbacks& callbacks) {
-  std::string why;
-  if (!options.Validate(&why)) throw Error("configuration: " + why);
-  CheckRunInputs(run_dir);
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec) throw Error::InFile(out_dir, "cannot create the output folder: " + ec.message());
-  if (callbacks.ready) callbacks.ready();
+namespace {
 
+// The stages, each run or (with --resume) reused, then the evaluation and
+// the report; `status` follows them.
+RunPipelineResult RunStagesOf(const std::string& run_dir, const std::string& out_dir,
+                              const RunPipelineOptions& options,
+                              const RunPipelineCallbacks& callbacks,
+                              const std::function<bool(const char*)>& reused, RunStatus* status) {
   // The export stage's overlays reuse the frames the detect stage decoded
   // (1 GiB holds about 1100 frames of 640x480; beyond it frames are decoded
   // again).
@@ -116,27 +77,115 @@ RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out
   result.detections_path = (out / "detections.csv").string();
   result.omap_path = (out / "omap.json").string();
   const StageOutput& output = callbacks.output;
-  TimeStage("detect", 1, callbacks, &result, [&] {
-    result.detect = RunDetectStage(run_dir, result.detections_path, options.detect, output);
-  });
-  TimeStage("o-slam", 2, callbacks, &result, [&] {
-    const SlamStageInput input{run_dir, result.detections_path, &result.detect.detections};
-    result.slam = RunSlamStage(input, result.omap_path, options.slam, output);
-  });
+  // Runs `body` as stage `name`, or takes it from the previous run.
+  const auto stage = [&](const char* name, int index, const std::function<void()>& body,
+                         const std::function<void()>& reuse) {
+    if (reused(name)) {
+      if (reuse) reuse();
+      result.times.push_back({std::string(name) + " (reused)", 0, 0});
+      status->Mark(name, "reused");
+      return;
+    }
+    status->Mark(name, "running");
+    TimeStage(name, index, callbacks, &result, body);
+    status->Mark(name, "complete");
+  };
+  stage(
+      "detect", 1,
+      [&] {
+        result.detect = RunDetectStage(run_dir, result.detections_path, options.detect, output);
+      },
+      [&] {
+        result.detect.detections = ReadDetections(result.detections_path,
+                                                  ReadClasses(RunFolderPaths::Of(run_dir).classes));
+      });
+  stage(
+      "o-slam", 2,
+      [&] {
+        const SlamStageInput input{run_dir, result.detections_path, &result.detect.detections};
+        result.slam = RunSlamStage(input, result.omap_path, options.slam, output);
+      },
+      nullptr);
+  result.map = ReadOMap(result.omap_path);
   // The overlays show this run's detections (the run folder may have none).
-  TimeStage("export", 3, callbacks, &result, [&] {
-    result.map = ReadOMap(result.omap_path);
-    RunExportStage(result.map, {run_dir, result.detections_path}, out, options.export_, output);
-  });
+  stage(
+      "export", 3,
+      [&] {
+        RunExportStage(result.map, {run_dir, result.detections_path}, out, options.export_, output);
+      },
+      nullptr);
 
   const std::string eval_path = (out / "eval.json").string();
+  status->Mark("eval", "running");
   result.metrics = RunEvalStage(result.map, run_dir, eval_path, options.eval);
   if (result.metrics) result.eval_path = eval_path;
-  // The raw JSON also carries the sampler's report.
-  const nlohmann::json omap_json = nlohmann::json::parse(ReadTextFile(result.omap_path));
+  status->Mark("eval", "complete");
+  status->Mark("report", "running");
+  const std::string trace = options.slam.method == SlamMethod::kOSlam
+                                ? WriteSamplerTrace(result.slam.sampler.summary, out_dir)
+                                : "";
   result.report_path = (out / "report.md").string();
-  WriteTextFileAtomically(result.report_path, Report(run_dir, out_dir, options, result, omap_json));
+  WriteTextFileAtomically(result.report_path, RunReport(run_dir, options, result, trace));
+  status->Mark("report", "complete");
   return result;
+}
+
+std::vector<RunStage> RunStages(const std::string& run_dir, const RunPipelineOptions& options) {
+  const bool truth = fs::is_directory(fs::path(run_dir) / "ground_truth");
+  std::vector<std::string> exported = {
+      "map.glb",      "map.gltf",     "map.ply",      "trajectory.ply", "trajectory_estimated.txt",
+      "birdseye.png", "birdseye.svg", "birdseye.csv", "perspective.png"};
+  if (fs::exists(RunFolderPaths::Of(run_dir).odometry)) exported.push_back("trajectory_odometry.txt");
+  if (truth)
+    for (const char* file :
+         {"trajectory_truth.txt", "trajectories.png", "trajectories.svg", "trajectories.csv"})
+      exported.push_back(file);
+  if (options.export_.overlays) exported.push_back("overlays/");
+  return {{"configuration", {"config.yaml"}},
+          {"detect", {"detections.csv"}},
+          {"o-slam", {"omap.json"}},
+          {"export", exported},
+          {"eval", truth ? std::vector<std::string>{"eval.json"} : std::vector<std::string>{}},
+          {"report", {"report.md", "sampler_trace.png", "sampler_trace.svg", "sampler_trace.csv"}}};
+}
+
+}  // namespace
+
+RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out_dir,
+                              const RunPipelineOptions& options,
+                              const RunPipelineCallbacks& callbacks) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("configuration: " + why);
+  CheckRunInputs(run_dir);
+  if (options.export_.overlays) CheckOutputSubfolder(out_dir, "overlays");
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw Error::InFile(out_dir, "cannot create the output folder: " + ec.message());
+
+  // run.json marks the folder from here on: running, then complete or
+  // failed. A re-run first removes what it will write (--resume: all but
+  // the stages it reuses).
+  const std::vector<RunStage> stages = RunStages(run_dir, options);
+  const std::string fingerprint = RunFingerprint(run_dir, options.settings);
+  const std::vector<std::string> reused = options.resume
+                                              ? RunStatus::Reusable(out_dir, fingerprint, stages)
+                                              : std::vector<std::string>();
+  const auto is_reused = [&](const char* stage) {
+    return std::find(reused.begin(), reused.end(), stage) != reused.end();
+  };
+  RunStatus status(out_dir, run_dir, fingerprint, stages);
+  status.Start(reused);
+  try {
+    if (callbacks.ready) callbacks.ready();
+    status.Mark("configuration", "complete");
+    RunPipelineResult result =
+        RunStagesOf(run_dir, out_dir, options, callbacks, is_reused, &status);
+    status.Complete();
+    return result;
+  } catch (const std::exception& e) {
+    status.Fail(e.what());
+    throw;
+  }
 }
 
 }  // namespace oslam

@@ -28,6 +28,13 @@ struct RunPipelineOptions {
   ExportStageOptions export_;  // `export` is a keyword
   EvalStageOptions eval;
 
+  // Reuse the stages that the last run into the same output folder
+  // completed with the same `settings` on the same inputs (run.json);
+  // without it, or when nothing matches, every stage runs afresh.
+  bool resume = false;
+  // The configuration's text (config.yaml), part of run.json's fingerprint.
+  std::string settings;
+
   // Every stage's options, checked before anything runs.
   bool Validate(std::string* why) const;
 };
@@ -68,8 +75,11 @@ struct RunPipelineCallbacks {
 void CheckRunInputs(const std::string& run_dir);
 
 // Writes into `out_dir` (created): detections.csv, omap.json, the export's
-// files, eval.json (with ground truth) and report.md. Throws oslam::Error
-// (invalid options, bad input: before anything is written).
+// files, eval.json (with ground truth) and report.md, and run.json, the
+// folder's status (pipeline/run_status.h): running from the start, then
+// complete, or failed with the error. A re-run first removes the files it
+// writes, so no older result is left beside the new ones. Throws
+// oslam::Error (invalid options, bad input: before anything is written).
 RunPipelineResult RunPipeline(const std::string& run_dir, const std::string& out_dir,
                               const RunPipelineOptions& options,
                               const RunPipelineCallbacks& callbacks = {});

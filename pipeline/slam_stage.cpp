@@ -24,6 +24,7 @@ struct LoadedInput {
   std::optional<ConfusionMatrix> confusion;
   TrackSet tracks;
   std::vector<Pose2> odometry;
+  std::string detections_path;  // for messages: where the detections came from
 };
 
 LoadedInput Load(const SlamStageInput& input, const SlamStageOptions& options) {
@@ -50,6 +51,7 @@ LoadedInput Load(const SlamStageInput& input, const SlamStageOptions& options) {
   loaded.odometry = odometry.poses;
   const std::string detections_path =
       input.detections_path.empty() ? input.run_dir + "/detections.csv" : input.detections_path;
+  loaded.detections_path = detections_path;
   const std::vector<Detection> read =
       input.detections ? std::vector<Detection>() : ReadDetections(detections_path, classes);
   const long frames = static_cast<long>(odometry.increments.size());
@@ -161,8 +163,14 @@ SlamStageResult RunSlamStage(const SlamStageInput& input, const std::string& out
   if (!options.Validate(&why)) throw Error("o-slam: " + why);
   const SamplerOptions sampler_options = options.EffectiveSampler();
   const LoadedInput loaded = Load(input, options);
-  if (loaded.tracks.tracks.empty())
-    throw Error("no tracks: no detections survived pre-association");
+  if (loaded.tracks.tracks.empty()) {
+    const TrackSummary& s = loaded.tracks.summary;
+    throw Error::InFile(
+        loaded.detections_path,
+        Format("no detection survived pre-association (%d detections, %d of them "
+               "in tracks shorter than %d frames)",
+               s.num_detections, s.num_dropped_detections, options.tracks.min_length));
+  }
   // The class decisions each track counts for (class_likelihood_per_detection).
   std::vector<int> track_class, track_size, track_detections;
   for (const Track& t : loaded.tracks.tracks) {
@@ -190,32 +198,44 @@ SlamStageResult RunSlamStage(const SlamStageInput& input, const std::string& out
   const AssociationState start = SeparateTracksState(track_class);
   const auto clock = std::chrono::steady_clock::now();
   const bool baseline = options.method == SlamMethod::kNearestNeighbour;
-  if (baseline) {
-    SlamEvaluator evaluator(loaded.data, model, options.target);
-    const EvaluationPtr separate = evaluator.Refine(start, nullptr);
-    const EvaluationPtr solved =
-        evaluator.Refine(NearestNeighbourAssociation(*separate, options.baseline), separate.get());
-    result.sampler.samples = {solved};
-    result.source.association = Format("nearest neighbour (gated, %g m)", options.baseline.gate_m);
-  } else {
-    auto factory = [&] {
-      return std::make_unique<SlamEvaluator>(loaded.data, model, options.target);
-    };
-    const size_t hill = static_cast<size_t>(sampler_options.hill_climb_steps);
-    Progress progress("o-slam", hill + sampler_options.num_iterations, "steps", output.quiet);
-    Sampler sampler(model, factory, sampler_options);
-    result.sampler = sampler.Run(start, [&](const char* stage, size_t done, size_t) {
-      progress.Update(std::string(stage) == "MC3" ? hill + done : done);
-    });
-    progress.Done();
-    result.source.association = sampler_options.num_chains > 1 ? "o-slam (MC3)" : "o-slam (MH)";
-    result.source.seed = sampler_options.seed;
+  // The solver's failures come from the detections (with the odometry and
+  // the camera): name them.
+  try {
+    if (baseline) {
+      SlamEvaluator evaluator(loaded.data, model, options.target);
+      const EvaluationPtr separate = evaluator.Refine(start, nullptr);
+      if (!separate || !separate->valid)
+        throw Error("the start state (every track its own object) could not be evaluated");
+      const EvaluationPtr solved = evaluator.Refine(
+          NearestNeighbourAssociation(*separate, options.baseline), separate.get());
+      result.sampler.samples = {solved};
+      result.source.association =
+          Format("nearest neighbour (gated, %g m)", options.baseline.gate_m);
+    } else {
+      auto factory = [&] {
+        return std::make_unique<SlamEvaluator>(loaded.data, model, options.target);
+      };
+      const size_t hill = static_cast<size_t>(sampler_options.hill_climb_steps);
+      Progress progress("o-slam", hill + sampler_options.num_iterations, "steps", output.quiet);
+      Sampler sampler(model, factory, sampler_options);
+      result.sampler = sampler.Run(start, [&](const char* stage, size_t done, size_t) {
+        progress.Update(std::string(stage) == "MC3" ? hill + done : done);
+      });
+      progress.Done();
+      result.source.association = sampler_options.num_chains > 1 ? "o-slam (MC3)" : "o-slam (MH)";
+      result.source.seed = sampler_options.seed;
+    }
+  } catch (const Error& e) {
+    throw Error::InFile(loaded.detections_path,
+                        std::string("O-SLAM failed on these detections: ") + e.what());
   }
   result.seconds = SecondsSince(clock);
   result.fused =
       FuseSamples(result.sampler.samples, loaded.data.classes, track_detections, options.fusion);
-  WriteOMap(output_json,
-            ToOMap(result.fused, result.source, baseline ? nullptr : &result.sampler.summary));
+  const OMap map =
+      ToOMap(result.fused, result.source, baseline ? nullptr : &result.sampler.summary);
+  WriteOMap(output_json, map);
+  result.timing = map.timing;
   if (output.quiet) return result;
   if (!baseline) ReportSampler(result.sampler, output);
   ReportMap(result, loaded.odometry, input.run_dir, output);

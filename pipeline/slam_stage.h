@@ -66,6 +66,8 @@ struct SlamStageResult {
   TrackSummary tracks;
   size_t num_tracks = 0;
   double seconds = 0;  // association and sampling
+  // The sampler's run times (OMap::timing), which omap.json leaves out.
+  std::vector<OMapReport> timing;
 };
 
 // Runs the stage and writes the O-Map to `output_json` (atomically). Throws

@@ -1,10 +1,12 @@
 #include "samples/robot_path.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 
 #include <Eigen/Cholesky>
 
+#include "core/bounds.h"
 #include "core/error.h"
 
 namespace oslam {
@@ -46,8 +48,14 @@ void Step(const PathSpec& spec, OdometryIncrement command, const OdometryNoise& 
   path->odometry_poses.push_back(ApplyIncrement(path->odometry_poses.back(), command));
 }
 
+// Full at max_frames (when > 0); a path longer than the frame bound is an
+// error, so that no scene drives forever.
 bool Full(const DrivenPath& path, long max_frames) {
-  return max_frames > 0 && static_cast<long>(path.true_poses.size()) >= max_frames;
+  const long frames = static_cast<long>(path.true_poses.size());
+  if (max_frames <= 0 && frames >= bounds::kFrames)
+    throw Error("path: more than " + std::to_string(bounds::kFrames) +
+                " frames (docs/formats.md, Bounds)");
+  return max_frames > 0 && frames >= max_frames;
 }
 
 void RunCommands(const PathSpec& spec, const OdometryNoise& noise, long max_frames,
@@ -59,7 +67,7 @@ void RunCommands(const PathSpec& spec, const OdometryNoise& noise, long max_fram
     if (letter == ' ' || letter == ',') continue;
     long count = 0;
     while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i])))
-      count = count * 10 + (text[i++] - '0');
+      count = std::min(count * 10 + (text[i++] - '0'), bounds::kFrames);
     if (count == 0) count = 1;
     OdometryIncrement command;
     if (letter == 'F') command.distance_m = spec.step_m;
@@ -93,8 +101,8 @@ void FollowWaypoints(const PathSpec& spec, const OdometryNoise& noise, long max_
   Eigen::Vector2d from(spec.start.x, spec.start.y);
   for (const Eigen::Vector2d& w : spec.waypoints) planned_m += (w - from).norm(), from = w;
   // Generous: a path needing 20x its planned steps plus turning is lost.
-  const long step_limit = 200 + static_cast<long>(20.0 * planned_m / spec.step_m) +
-                          40 * static_cast<long>(spec.waypoints.size());
+  const double steps = 200.0 + 20.0 * planned_m / spec.step_m + 40.0 * spec.waypoints.size();
+  const long step_limit = static_cast<long>(std::min(steps, double(bounds::kFrames)));
   size_t next = 0;
   while (next < spec.waypoints.size() && !Full(*path, max_frames)) {
     const Pose2& pose = path->true_poses.back();

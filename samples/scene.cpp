@@ -9,7 +9,9 @@
 
 #include "calib/camera_io.h"
 #include "calib/hyperbolic_camera.h"
+#include "core/bounds.h"
 #include "core/error.h"
+#include "core/image_file.h"
 #include "core/yaml.h"
 
 namespace oslam {
@@ -88,7 +90,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
+constexpr double kSize = bounds::kObjectSizeM, kCoordinate = bounds::kCoordinateM,
+                 kAngle = bounds::kAngleRad;
+// Squares of a checkerboard along each side: far more than any printed board.
+constexpr int kMaxBoardSquares = 1000;
+// The sensor blur's kernel grows with its sigma.
+constexpr double kMaxBlurPx = 100.0;
+// Light intensities and the ambient term, relative to a white surface.
+constexpr double kMaxIntensity = 1e6;
+
 // Parsing context: the file (for messages) and the folder relative paths start from.
+// Every number is checked against its physical bound (core/bounds.h): the
+// renderer's and the path's work grows with them.
 struct Reader {
   const YamlFile& file;
   fs::path folder;
@@ -97,22 +110,42 @@ struct Reader {
     const cv::FileNode value = node[key];
     return !value.empty() && !value.isNone();
   }
-  double Positive(const cv::FileNode& node, const std::string& key,
-                  const std::string& prefix) const {
+  double Positive(const cv::FileNode& node, const std::string& key, const std::string& prefix,
+                  double max = kSize) const {
     const double value = file.Double(node, key, prefix);
     if (!(value > 0)) file.Fail(prefix + key, "must be positive");
-    return value;
+    return file.Within(value, prefix + key, 0, max);
   }
   double NonNegative(const cv::FileNode& node, const std::string& key, double fallback,
-                     const std::string& prefix) const {
+                     const std::string& prefix, double max = kSize) const {
     const double value = file.OptionalDouble(node, key, fallback, prefix);
     if (value < 0) file.Fail(prefix + key, "must not be negative");
-    return value;
+    return file.Within(value, prefix + key, 0, max);
+  }
+  double Angle(const cv::FileNode& node, const std::string& key, const std::string& prefix) const {
+    return file.Within(file.OptionalDouble(node, key, 0.0, prefix), prefix + key, -kAngle, kAngle,
+                       "rad");
+  }
+  // `size` numbers, each a coordinate (metres) within the bounds.
+  std::vector<double> Coordinates(const cv::FileNode& node, const std::string& key, int size,
+                                  const std::string& prefix) const {
+    const std::vector<double> v = file.Doubles(node, key, size, prefix);
+    for (double value : v) file.Within(value, prefix + key, -kCoordinate, kCoordinate, "m");
+    return v;
   }
   Eigen::Vector2d Point2(const cv::FileNode& node, const std::string& key,
                          const std::string& prefix) const {
-    const std::vector<double> v = file.Doubles(node, key, 2, prefix);
+    const std::vector<double> v = Coordinates(node, key, 2, prefix);
     return {v[0], v[1]};
+  }
+  // An [x, y] entry of a list of points.
+  Eigen::Vector2d ListPoint(const cv::FileNode& point, const std::string& key) const {
+    if (!point.isSeq() || point.size() != 2 || !(point[0].isReal() || point[0].isInt()) ||
+        !(point[1].isReal() || point[1].isInt()))
+      file.Fail(key, "expected [x, y] in metres");
+    const Eigen::Vector2d p(static_cast<double>(point[0]), static_cast<double>(point[1]));
+    for (int k = 0; k < 2; ++k) file.Within(p[k], key, -kCoordinate, kCoordinate, "m");
+    return p;
   }
   Eigen::Vector3f Colour(const cv::FileNode& node, const std::string& key,
                          const std::string& prefix) const {
@@ -150,8 +183,12 @@ void ParseTexture(const Reader& r, const cv::FileNode& node, const std::string& 
   }
   const std::string name = r.file.String(node, "file", prefix);
   const std::string image_path = (r.folder / name).string();
-  cv::Mat bgr = cv::imread(image_path, cv::IMREAD_COLOR);
-  if (bgr.empty()) r.file.Fail(prefix + "file", "cannot read image '" + image_path + "'");
+  cv::Mat bgr;
+  try {
+    bgr = ReadImage(image_path);
+  } catch (const Error& e) {
+    r.file.Fail(prefix + "file", e.what());
+  }
   cv::Mat rgb;
   cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
   auto image = std::make_shared<cv::Mat>();
@@ -213,8 +250,10 @@ std::vector<ObjectClass> ParseClasses(const Reader& r, const cv::FileNode& root)
     for (int k = 0; k < 3; ++k) c.display_rgb[k] = static_cast<int>(std::lround(rgb[k]));
     c.diameter_mean_m = r.Positive(node, "diameter_mean_m", prefix);
     c.diameter_std_m = r.Positive(node, "diameter_std_m", prefix);
+    r.file.Within(c.diameter_std_m, prefix + "diameter_std_m", bounds::kMinStdM, kSize, "m");
     c.height_mean_m = r.Positive(node, "height_mean_m", prefix);
     c.height_std_m = r.Positive(node, "height_std_m", prefix);
+    r.file.Within(c.height_std_m, prefix + "height_std_m", bounds::kMinStdM, kSize, "m");
     classes.push_back(c);
   }
   return classes;
@@ -232,12 +271,7 @@ std::vector<WallSegment> ParseWalls(const Reader& r, const cv::FileNode& root) {
     const cv::FileNode points = r.file.Seq(node, "points_m", prefix);
     std::vector<Eigen::Vector2d> corners;
     for (int k = 0; k < static_cast<int>(points.size()); ++k) {
-      const std::string key = prefix + "points_m[" + std::to_string(k) + "]";
-      if (!points[k].isSeq() || points[k].size() != 2)
-        r.file.Fail(key, "expected [x, y] in metres");
-      if (!points[k][0].isReal() && !points[k][0].isInt()) r.file.Fail(key, "expected numbers");
-      if (!points[k][1].isReal() && !points[k][1].isInt()) r.file.Fail(key, "expected numbers");
-      corners.emplace_back(static_cast<double>(points[k][0]), static_cast<double>(points[k][1]));
+      corners.push_back(r.ListPoint(points[k], prefix + "points_m[" + std::to_string(k) + "]"));
     }
     if (corners.size() < 2) r.file.Fail(prefix + "points_m", "needs at least 2 points");
     const bool closed = r.file.OptionalInt(node, "closed", 0, prefix) != 0;
@@ -289,17 +323,19 @@ void ParseCheckerboard(const Reader& r, const cv::FileNode& node, const std::str
                        SceneObject* board) {
   for (const char* key : {"base_z_m", "texture"})
     if (r.Has(node, key)) r.file.Fail(prefix + key, "not used by shape checkerboard");
-  const std::vector<double> centre = r.file.Doubles(node, "position_m", 3, prefix);
+  const std::vector<double> centre = r.Coordinates(node, "position_m", 3, prefix);
   board->position = {centre[0], centre[1]};
   board->center_z_m = centre[2];
   board->board_cols = r.file.Int(node, "cols", prefix);
   board->board_rows = r.file.Int(node, "rows", prefix);
   if (board->board_cols < 3) r.file.Fail(prefix + "cols", "must be at least 3 squares");
   if (board->board_rows < 3) r.file.Fail(prefix + "rows", "must be at least 3 squares");
+  r.file.Within(board->board_cols, prefix + "cols", 3, kMaxBoardSquares);
+  r.file.Within(board->board_rows, prefix + "rows", 3, kMaxBoardSquares);
   board->square_m = r.Positive(node, "square_m", prefix);
   board->margin_m = r.NonNegative(node, "margin_m", board->square_m, prefix);
-  board->pitch_rad = r.file.OptionalDouble(node, "pitch_rad", 0.0, prefix);
-  board->roll_rad = r.file.OptionalDouble(node, "roll_rad", 0.0, prefix);
+  board->pitch_rad = r.Angle(node, "pitch_rad", prefix);
+  board->roll_rad = r.Angle(node, "roll_rad", prefix);
   board->material.albedo_rgb =
       r.Has(node, "colour") ? r.Colour(node, "colour", prefix) : Eigen::Vector3f(1.f, 1.f, 1.f);
   board->material.albedo2_rgb =
@@ -334,7 +370,7 @@ SceneObject ParseObject(const Reader& r, const cv::FileNode& node, const std::st
       if (r.Has(node, key))
         r.file.Fail(prefix + key, std::string("not used by shape ") + ShapeName(object.shape));
   }
-  object.yaw_rad = r.file.OptionalDouble(node, "yaw_rad", 0.0, prefix);
+  object.yaw_rad = r.Angle(node, "yaw_rad", prefix);
   if (object.shape == ShapeKind::kCheckerboard) {
     for (const std::string& key : size_keys)
       if (r.Has(node, key)) r.file.Fail(prefix + key, "not used by shape checkerboard");
@@ -342,7 +378,7 @@ SceneObject ParseObject(const Reader& r, const cv::FileNode& node, const std::st
     return object;
   }
   object.position = r.Point2(node, "position_m", prefix);
-  object.base_z_m = r.NonNegative(node, "base_z_m", 0.0, prefix);
+  object.base_z_m = r.NonNegative(node, "base_z_m", 0.0, prefix, kCoordinate);
   const std::vector<std::string> needed = SizeKeysOf(object.shape);
   for (const std::string& key : size_keys) {
     const bool wanted = std::find(needed.begin(), needed.end(), key) != needed.end();
@@ -367,7 +403,7 @@ Lighting ParseLighting(const Reader& r, const cv::FileNode& root) {
   if (!r.Has(root, "lighting")) return lighting;
   const cv::FileNode node = r.file.Map(root, "lighting");
   r.file.RequireOnlyKeys(node, "lighting.", {"ambient", "lights"});
-  lighting.ambient = r.NonNegative(node, "ambient", lighting.ambient, "lighting.");
+  lighting.ambient = r.NonNegative(node, "ambient", lighting.ambient, "lighting.", kMaxIntensity);
   if (!r.Has(node, "lights")) return lighting;
   const cv::FileNode list = r.file.Seq(node, "lights", "lighting.");
   for (int i = 0; i < static_cast<int>(list.size()); ++i) {
@@ -375,10 +411,10 @@ Lighting ParseLighting(const Reader& r, const cv::FileNode& root) {
     const cv::FileNode light_node = r.MapOrFail(list[i], prefix.substr(0, prefix.size() - 1));
     r.file.RequireOnlyKeys(light_node, prefix, {"position_m", "intensity", "range_m"});
     PointLight light;
-    const std::vector<double> p = r.file.Doubles(light_node, "position_m", 3, prefix);
+    const std::vector<double> p = r.Coordinates(light_node, "position_m", 3, prefix);
     light.position = {p[0], p[1], p[2]};
-    light.intensity = r.NonNegative(light_node, "intensity", 1.0, prefix);
-    light.range_m = r.NonNegative(light_node, "range_m", 0.0, prefix);
+    light.intensity = r.NonNegative(light_node, "intensity", 1.0, prefix, kMaxIntensity);
+    light.range_m = r.NonNegative(light_node, "range_m", 0.0, prefix, kCoordinate);
     lighting.lights.push_back(light);
   }
   return lighting;
@@ -390,7 +426,8 @@ SensorEffects ParseSensor(const Reader& r, const cv::FileNode& root) {
   const cv::FileNode node = r.file.Map(root, "sensor");
   r.file.RequireOnlyKeys(node, "sensor.", {"noise_std", "blur_sigma_px", "exposure_std", "gain"});
   sensor.noise_std = r.NonNegative(node, "noise_std", sensor.noise_std, "sensor.");
-  sensor.blur_sigma_px = r.NonNegative(node, "blur_sigma_px", sensor.blur_sigma_px, "sensor.");
+  sensor.blur_sigma_px =
+      r.NonNegative(node, "blur_sigma_px", sensor.blur_sigma_px, "sensor.", kMaxBlurPx);
   sensor.exposure_std = r.NonNegative(node, "exposure_std", sensor.exposure_std, "sensor.");
   sensor.gain = r.NonNegative(node, "gain", sensor.gain, "sensor.");
   return sensor;
@@ -398,8 +435,13 @@ SensorEffects ParseSensor(const Reader& r, const cv::FileNode& root) {
 
 // Command strings are checked here so a typo fails before any rendering.
 void CheckCommands(const Reader& r, const std::string& commands) {
+  long count = 0;  // the repeat count being read
   for (size_t i = 0; i < commands.size(); ++i) {
     const char c = commands[i];
+    count = c >= '0' && c <= '9' ? count * 10 + (c - '0') : 0;
+    if (count > bounds::kFrames)
+      r.file.Fail("path.commands", "a repeat count beyond " + std::to_string(bounds::kFrames) +
+                                       " frames (docs/formats.md, Bounds)");
     if (c == ' ' || c == ',' || (c >= '0' && c <= '9')) continue;
     if (c == 'F' || c == 'B' || c == 'L' || c == 'R') continue;
     r.file.Fail("path.commands",
@@ -415,11 +457,16 @@ PathSpec ParsePath(const Reader& r, const cv::FileNode& root) {
                           "turn_jitter_rad", "waypoints_m", "commands"});
   PathSpec spec;
   const std::vector<double> start = r.file.Doubles(node, "start_pose", 3, "path.");
+  for (int k = 0; k < 2; ++k)
+    r.file.Within(start[k], "path.start_pose", -kCoordinate, kCoordinate, "m");
+  r.file.Within(start[2], "path.start_pose", -kAngle, kAngle, "rad");
   spec.start = {start[0], start[1], WrapAngle(start[2])};
   if (r.Has(node, "step_m")) spec.step_m = r.Positive(node, "step_m", "path.");
-  if (r.Has(node, "turn_step_rad")) spec.turn_step_rad = r.Positive(node, "turn_step_rad", "path.");
+  if (r.Has(node, "turn_step_rad"))
+    spec.turn_step_rad = r.Positive(node, "turn_step_rad", "path.", kAngle);
   spec.step_jitter_m = r.NonNegative(node, "step_jitter_m", spec.step_jitter_m, "path.");
-  spec.turn_jitter_rad = r.NonNegative(node, "turn_jitter_rad", spec.turn_jitter_rad, "path.");
+  spec.turn_jitter_rad =
+      r.NonNegative(node, "turn_jitter_rad", spec.turn_jitter_rad, "path.", kAngle);
   if (r.Has(node, "waypoints_m") == r.Has(node, "commands"))
     r.file.Fail("path", "give exactly one of waypoints_m and commands");
   if (r.Has(node, "commands")) {
@@ -429,14 +476,7 @@ PathSpec ParsePath(const Reader& r, const cv::FileNode& root) {
   }
   const cv::FileNode points = r.file.Seq(node, "waypoints_m", "path.");
   for (int k = 0; k < static_cast<int>(points.size()); ++k) {
-    const std::string key = "path.waypoints_m[" + std::to_string(k) + "]";
-    if (!points[k].isSeq() || points[k].size() != 2 ||
-        !(points[k][0].isReal() || points[k][0].isInt()) ||
-        !(points[k][1].isReal() || points[k][1].isInt())) {
-      r.file.Fail(key, "expected [x, y] in metres");
-    }
-    spec.waypoints.emplace_back(static_cast<double>(points[k][0]),
-                                static_cast<double>(points[k][1]));
+    spec.waypoints.push_back(r.ListPoint(points[k], "path.waypoints_m[" + std::to_string(k) + "]"));
   }
   if (spec.waypoints.empty()) r.file.Fail("path.waypoints_m", "needs at least one waypoint");
   return spec;
@@ -497,6 +537,7 @@ Scene LoadScene(const std::string& path) {
   scene.seed = static_cast<std::uint64_t>(seed);
   scene.max_frames = file.OptionalInt(root, "frames", -1);
   if (r.Has(root, "frames") && scene.max_frames < 1) file.Fail("frames", "must be at least 1");
+  file.Within(static_cast<double>(scene.max_frames), "frames", -1, bounds::kFrames);
   scene.camera = ParseCamera(r, root, &scene.camera_description);
   scene.classes = ParseClasses(r, root);
   scene.walls = ParseWalls(r, root);
@@ -507,6 +548,16 @@ Scene LoadScene(const std::string& path) {
       const std::string prefix = "objects[" + std::to_string(i) + "].";
       r.MapOrFail(list[i], prefix.substr(0, prefix.size() - 1));
       scene.objects.push_back(ParseObject(r, list[i], prefix, scene.classes));
+    }
+  }
+  // A class is exported in the shape of its objects in the scene (the first
+  // one's; cylinder when the scene has none of the class).
+  for (ObjectClass& c : scene.classes) {
+    for (const SceneObject& object : scene.objects) {
+      if (object.class_name != c.name) continue;
+      if (const std::optional<ObjectShape> shape = ParseObjectShape(ShapeName(object.shape)))
+        c.shape = *shape;
+      break;
     }
   }
   scene.lighting = ParseLighting(r, root);

@@ -11,11 +11,12 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "calib/camera_io.h"
+#include "calib/observation_model.h"
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
+#include "core/image_file.h"
 #include "core/run_folder.h"
-#include "calib/observation_model.h"
 #include "samples/renderer.h"
 #include "samples/robot_path.h"
 #include "samples/texture.h"
@@ -46,11 +47,8 @@ std::string FramePath(const std::string& run_dir, long frame) {
 }
 
 void WriteFrame(const cv::Mat& image, const std::string& path) {
-  WriteAtomically(path, [&](const std::string& temp_path) {
-    // Fast compression: frames are large and noisy, level 1 is within a few % of 9.
-    if (!cv::imwrite(temp_path, image, {cv::IMWRITE_PNG_COMPRESSION, 1}))
-      throw Error::InFile(path, "cannot write PNG");
-  });
+  // Fast compression: frames are large and noisy, level 1 is within a few % of 9.
+  WriteImage(path, image, {cv::IMWRITE_PNG_COMPRESSION, 1});
 }
 
 // One row of ground_truth/visible_slices.csv: the pixel-measured slice of a

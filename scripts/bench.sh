@@ -24,7 +24,7 @@
 # skipped.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-ALL_GROUPS=(camera simulator detect solver ceres sampler landmark run victoria)
+ALL_GROUPS=(camera simulator detect solver ceres sampler landmark run export victoria)
 EXTRA_GROUPS=(victoria-raw)
 DATA_DIR="${OSLAM_DATA_DIR:-$OSLAM_ROOT/../shared/data}"
 # Where the compiled landmark benchmarks look (bench/victoria_park_data.h).
@@ -46,6 +46,7 @@ ceres         build/bench/ceres_bench                                libceres-de
 sampler       build/bench/sampler_bench                              -
 landmark      build/bench/landmark_bench, landmark_association_bench ../shared/data/victoria_park
 run           oslam run on lab and long_loop, oslam slam long runs   - (simulates the runs once)
+export        build/bench/export_bench on lab and long_loop          - (runs oslam run once)
 victoria      oslam map --landmarks (known, unknown association)     ../shared/data/victoria_park
 victoria-raw  oslam map on the raw drive (about 10 min; only when named)  ../shared/data/victoria_park
 EOF
@@ -422,6 +423,43 @@ stage_time() {  # REPORT STAGE -> "WALL (CPU C)"
   awk -F'|' -v stage="$2" '
     { gsub(/ /, "", $2) }
     $2 == stage { gsub(/ /, "", $3); gsub(/ /, "", $4); printf "%s s (CPU %s)", $3, $4; exit }' "$1"
+}
+
+# The parts of the export stage (docs/benchmarks.md, "Export") on the runs'
+# own O-Maps; CPU time, the steadier measure on a shared machine.
+group_export() {
+  section "Export (export_bench)"
+  echo "| part (CPU per call, ms) | \`lab\` | \`long_loop\` |"
+  echo "|---|---|---|"
+  local scene rows=()
+  for scene in lab long_loop; do
+    local run="$work_dir/$scene" out="$work_dir/${scene}_out"
+    if [[ ! -f "$out/omap.json" ]]; then
+      prepare_run "$scene" || return 0
+      "$OSLAM" run "$run" -o "$out" --seed 1 --quiet >"$out_dir/run_$scene.log" 2>&1 || {
+        tail -n 20 "$out_dir/run_$scene.log" >&2; return 0; }
+    fi
+    OSLAM_BENCH_RUN="$run" OSLAM_BENCH_OMAP="$out/omap.json" run_bench export_bench || return 0
+    mv "$out_dir/export_bench.json" "$out_dir/export_bench_$scene.json"
+  done
+  local name label
+  for name in BM_RenderView BM_Figures BM_Models BM_Overlay/0 BM_Overlay/1 BM_Overlay/2; do
+    case "$name" in
+      BM_RenderView) label="perspective view, 800×800 (process CPU)" ;;
+      BM_Figures) label="bird's-eye view and error plot" ;;
+      BM_Models) label="glTF (both) and PLY bytes" ;;
+      BM_Overlay/0) label="one overlay drawn" ;;
+      BM_Overlay/1) label="one overlay drawn and encoded as JPEG" ;;
+      BM_Overlay/2) label="one overlay drawn and encoded as PNG" ;;
+    esac
+    local cells=()
+    for scene in lab long_loop; do
+      local record
+      record=$(records_of "export_bench_$scene" "^$name" | head -n 1)
+      cells+=("$(fmt "$(to_unit "$(get "$record" cpu_time)" "$(get "$record" time_unit)" ms)" 2)")
+    done
+    printf '| %s | %s | %s |\n' "$label" "${cells[0]}" "${cells[1]}"
+  done
 }
 
 group_run() {

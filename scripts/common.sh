@@ -11,9 +11,14 @@ OSLAM_CMAKE_EXTRA=()  # extra cmake arguments for the first configure
 # Everything oslam builds against (Debian 12 names).
 OSLAM_PACKAGES=(
   g++ make cmake pkg-config
-  libeigen3-dev libopencv-dev libsuitesparse-dev
-  libtinygltf-dev libstb-dev nlohmann-json3-dev libpcl-dev libvtk9-dev
+  libeigen3-dev libopencv-dev libsuitesparse-dev libpng-dev libjpeg-dev
+  libtinygltf-dev libstb-dev nlohmann-json3-dev libvtk9-dev
   libgtest-dev libbenchmark-dev
+  # Off-screen rendering of the 3D views (perspective.png, oslam view
+  # --screenshot) without an X display: Mesa's EGL and its software renderer.
+  libegl-dev libegl-mesa0 libgl1-mesa-dri
+  # Figures (PNG through PLplot's memory cairo device, SVG).
+  libplplot-dev plplot-driver-cairo
   # CHOLMOD's supernodal kernels run on the system BLAS. Debian otherwise
   # picks ATLAS's generic build, which takes about twice as long per
   # LPA-scale factorisation. The threaded OpenBLAS, which the solver limits to one

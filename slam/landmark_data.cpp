@@ -12,6 +12,8 @@
 #include <Eigen/Cholesky>
 
 #include "core/angles.h"
+#include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/error.h"
 
 namespace oslam {
@@ -24,6 +26,7 @@ void ForEachRow(const std::string& path,
                 const std::function<void(int, const std::vector<std::string>&)>& row) {
   std::ifstream in(path);
   if (!in) throw Error::InFile(path, "cannot open the file");
+  CheckInputFile(path);
   std::string text;
   int line = 0;
   bool any = false;
@@ -52,6 +55,16 @@ double Number(const std::string& path, int line, const std::string& token, const
   return value;
 }
 
+// A number within the physical bounds (core/bounds.h).
+double Number(const std::string& path, int line, const std::string& token, const char* what,
+              double bound, const char* unit) {
+  const double value = Number(path, line, token, what);
+  if (!bounds::Within(value, -bound, bound))
+    throw Error::AtLine(
+        path, line, std::string(what) + ": " + bounds::OutsideMessage(value, -bound, bound, unit));
+  return value;
+}
+
 long Integer(const std::string& path, int line, const std::string& token, const char* what) {
   errno = 0;
   char* end = nullptr;
@@ -59,7 +72,21 @@ long Integer(const std::string& path, int line, const std::string& token, const 
   if (end == token.c_str() || *end != '\0' || errno == ERANGE)
     throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not an integer");
   if (value < 0) throw Error::AtLine(path, line, std::string(what) + " must be >= 0");
+  if (value > bounds::kId)
+    throw Error::AtLine(
+        path, line,
+        std::string(what) + ": " + bounds::OutsideMessage(double(value), 0, double(bounds::kId)));
   return value;
+}
+
+// The composed odometry must stay within the coordinate bound: far beyond
+// it every later number (figures, solver scaling) is meaningless.
+void CheckReach(const std::string& path, const std::vector<Pose2>& poses) {
+  for (size_t i = 0; i < poses.size(); ++i)
+    if (!(std::abs(poses[i].x) <= bounds::kCoordinateM &&
+          std::abs(poses[i].y) <= bounds::kCoordinateM))
+      throw Error::InFile(
+          path, bounds::ReachMessage(poses[i].x, poses[i].y, "pose " + std::to_string(i)));
 }
 
 void ExpectFields(const std::string& path, int line, const std::vector<std::string>& tokens,
@@ -159,7 +186,10 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
       double v[9];
       static const char* kNames[9] = {"dx",  "dy",  "dtheta", "c11", "c12",
                                       "c13", "c22", "c23",    "c33"};
-      for (int k = 0; k < 9; ++k) v[k] = Number(path, line, t[3 + k], kNames[k]);
+      for (int k = 0; k < 9; ++k)
+        v[k] = k < 2    ? Number(path, line, t[3 + k], kNames[k], bounds::kCoordinateM, "m")
+               : k == 2 ? Number(path, line, t[3 + k], kNames[k], bounds::kAngleRad, "rad")
+                        : Number(path, line, t[3 + k], kNames[k]);
       RelativePoseMeasurement edge;
       edge.delta = {v[0], v[1], v[2]};
       // load2D's automatic noise format: a diagonal at entries 1, 3, 4 is a
@@ -202,7 +232,8 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
       if (id > std::numeric_limits<int>::max())
         throw Error::AtLine(path, line, "landmark id " + t[2] + " is too large");
       s.landmark = static_cast<int>(id);
-      const double x = Number(path, line, t[3], "x"), y = Number(path, line, t[4], "y");
+      const double x = Number(path, line, t[3], "x", bounds::kCoordinateM, "m"),
+                   y = Number(path, line, t[4], "y", bounds::kCoordinateM, "m");
       const double c11 = Number(path, line, t[5], "c11"), c12 = Number(path, line, t[6], "c12"),
                    c22 = Number(path, line, t[7], "c22");
       if (!(c11 > 0 && c22 > 0 && c11 * c22 - c12 * c12 > 0))
@@ -260,6 +291,7 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
   }
   data.num_poses = static_cast<int>(data.pose_ids.size());
   data.dead_reckoning = DeadReckoning(data.num_poses, data.odometry);
+  CheckReach(path, data.dead_reckoning);
   return data;
 }
 
@@ -309,9 +341,11 @@ LandmarkDataset ReadVictoriaRaw(const std::string& measurements_path,
   ForEachRow(measurements_path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(measurements_path, line, t, 4, "time range bearing diameter");
     const double time = Number(measurements_path, line, t[0], "time");
-    const double range = Number(measurements_path, line, t[1], "range");
-    const double bearing = Number(measurements_path, line, t[2], "bearing");
-    const double diameter = Number(measurements_path, line, t[3], "diameter");
+    const double range = Number(measurements_path, line, t[1], "range", bounds::kCoordinateM, "m");
+    const double bearing =
+        Number(measurements_path, line, t[2], "bearing", bounds::kAngleRad, "rad");
+    const double diameter =
+        Number(measurements_path, line, t[3], "diameter", bounds::kObjectSizeM, "m");
     if (time < last_time)
       throw Error::AtLine(measurements_path, line, "time goes backwards (" + t[0] + " s)");
     if (range < 0) throw Error::AtLine(measurements_path, line, "negative range");
@@ -342,7 +376,7 @@ LandmarkDataset ReadVictoriaRaw(const std::string& measurements_path,
   ForEachRow(inputs_path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(inputs_path, line, t, 3, "time speed steering");
     const Input input{Number(inputs_path, line, t[0], "time"),
-                      Number(inputs_path, line, t[1], "speed"),
+                      Number(inputs_path, line, t[1], "speed", bounds::kSpeedMps, "m/s"),
                       Number(inputs_path, line, t[2], "steering")};
     if (!inputs.empty() && input.time < inputs.back().time)
       throw Error::AtLine(inputs_path, line, "time goes backwards (" + t[0] + " s)");
@@ -375,6 +409,7 @@ LandmarkDataset ReadVictoriaRaw(const std::string& measurements_path,
     data.odometry.push_back(edge);
   }
   data.dead_reckoning = DeadReckoning(data.num_poses, data.odometry);
+  CheckReach(inputs_path, data.dead_reckoning);
   return data;
 }
 
@@ -384,8 +419,9 @@ std::vector<GpsFix> ReadGps(const std::string& path) {
   std::vector<GpsFix> fixes;
   ForEachRow(path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(path, line, t, 3, "time x y");
-    GpsFix fix{Number(path, line, t[0], "time"), Number(path, line, t[1], "x"),
-               Number(path, line, t[2], "y")};
+    GpsFix fix{Number(path, line, t[0], "time"),
+               Number(path, line, t[1], "x", bounds::kCoordinateM, "m"),
+               Number(path, line, t[2], "y", bounds::kCoordinateM, "m")};
     if (!fixes.empty() && fix.time_s < fixes.back().time_s)
       throw Error::AtLine(path, line, "time goes backwards (" + t[0] + " s)");
     fixes.push_back(fix);

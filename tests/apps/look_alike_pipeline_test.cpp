@@ -40,7 +40,8 @@ TEST(LookAlikePipeline, ImageShapesLetOSlamMapTheSameColouredBallAndBucketRight)
                 run);
   ExpectSuccess("train-colors " + run + "/classes.yaml --from-ground-truth " + run);
 
-  ExpectSuccess("detect " + run + " --keep-look-alikes -o " + run + "/colour_only.csv");
+  ExpectSuccess("detect " + run + " --keep-look-alikes --max-view-distance inf -o " + run +
+                "/colour_only.csv");
   const auto [ball_colour_only, bucket_colour_only] = OwnClassShares(run, run + "/colour_only.csv");
   EXPECT_LT(ball_colour_only, 0.7);
   EXPECT_LT(bucket_colour_only, 0.7);

@@ -83,7 +83,9 @@ TEST(RunConfig, PrintedDefaultsKeepTheirOrderAndText) {
         "  nn_gate_m: 0.5  # method nn: nearest-neighbour association gate, m\nexport:\n"
         "  min_existence: 0.1  # leave out objects with a lower existence probability\n"
         "  overlays: 1  # 1: draw the map on every frame\n  overlay_frames: \"\"",
-        "  floor_grid: 1  # 1: a floor grid in the glTF\n  ascii_ply: 0",
+        "  overlay_format: \"jpg\"  #",
+        "  floor_grid: 1  # 1: a floor grid in the glTF\n  camera_every: 0  #",
+        "  ascii_ply: 0  #",
         "eval:\n  threshold: 0.5  # objects at or below this existence probability are not in "
         "the map\n  gate_m: 0.5  # largest base-point distance of a match, m\n"})
     EXPECT_NE(yaml.find(lines), std::string::npos) << lines << "\nin\n" << yaml;

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -32,8 +34,7 @@ EvaluationPtr Sample(const std::vector<TestObject>& objects) {
     const TestObject* source = nullptr;
     for (const TestObject& o : objects)
       if (o.tracks.front() == e->state.blocks[j].front() ||
-          std::find(o.tracks.begin(), o.tracks.end(), e->state.blocks[j].front()) !=
-              o.tracks.end())
+          std::find(o.tracks.begin(), o.tracks.end(), e->state.blocks[j].front()) != o.tracks.end())
         source = &o;
     MappedObject m;
     m.id = e->state.blocks[j].front();
@@ -147,12 +148,109 @@ TEST(OMapFusionTest, IdentityMergingIsClassAware) {
 TEST(OMapFusionTest, MergedExistenceCountsEachSampleOnceWithItsLargestXi) {
   // With the spurious model, a sample holding the object contributes the
   // P(xi) of the member it holds: pi stays <= S(0) ~ 0.982.
-  const FusionResult r =
-      FuseSamples(AlternatingSamples(10), Classes(), {3, 3, 3, 2}, FusionOptions{});
+  FusionOptions thesis_xi;  // P(xi) of the location uncertainty alone
+  thesis_xi.class_geometry_evidence = false;
+  const FusionResult r = FuseSamples(AlternatingSamples(10), Classes(), {3, 3, 3, 2}, thesis_xi);
   ASSERT_FALSE(r.map.objects.empty());
   EXPECT_EQ(r.identities[0].num_samples, 10);
   EXPECT_GT(r.map.objects[0].existence_probability, 0.97);
   EXPECT_LE(r.map.objects[0].existence_probability, 1.0 / (1.0 + std::exp(-4.0)) + 1e-9);
+}
+
+using Matrix5d = Eigen::Matrix<double, 5, 5>;
+using Vector5d = Eigen::Matrix<double, 5, 1>;
+
+// The green box of the size priors (thesis Table 6.4), with the thesis'
+// location prior.
+ClassPrior GreenBox() {
+  ClassPrior prior;
+  prior.name = "green box";
+  prior.size_mean_m = {0.6, 0.6};
+  prior.size_std_m = {0.3, 0.15};
+  return prior;
+}
+
+// The posterior (covariance, mean) of theta = (l, g) from a prior-free
+// Gaussian likelihood N(theta_data, information^-1) and the class prior.
+std::pair<Matrix5d, Vector5d> Posterior(const ClassPrior& prior, const Vector5d& information,
+                                        const Vector5d& theta_data) {
+  Vector5d mu, std;
+  mu << prior.location_mean_m, prior.size_mean_m;
+  std << prior.location_std_m, prior.size_std_m;
+  const Vector5d prior_information = std.array().square().inverse();
+  const Vector5d total = information + prior_information;
+  const Matrix5d covariance = total.cwiseInverse().asDiagonal();
+  const Vector5d mean =
+      covariance * (information.cwiseProduct(theta_data) + prior_information.cwiseProduct(mu));
+  return {covariance, mean};
+}
+
+double LogNormal(double x, double mean, double std) {
+  return -std::log(std) - 0.5 * std::pow((x - mean) / std, 2);
+}
+
+// With precise detections the Bayes factor is the ratio of the class's and
+// the look-alike's prior densities at the measured geometry (closed form).
+TEST(ClassGeometryEvidence, PreciseGeometryGivesTheRatioOfPriorDensities) {
+  const ClassPrior prior = GreenBox();
+  const FusionOptions options;
+  for (const auto& [d, h] : {std::pair{0.55, 0.6}, {0.05, 0.1}, {1.2, 0.3}}) {
+    SCOPED_TRACE(::testing::Message() << "d " << d << " h " << h);
+    Vector5d theta;
+    theta << 1.0, 2.0, 0.0, d, h;
+    const auto [covariance, mean] = Posterior(prior, Vector5d::Constant(1e8), theta);
+    const double expected =
+        LogNormal(d, 0.6, 0.3) - LogNormal(d, 0.6, options.lookalike_size_std_m) +
+        LogNormal(h, 0.6, 0.15) - LogNormal(h, 0.6, options.lookalike_size_std_m);
+    EXPECT_NEAR(ClassGeometryLogBayesFactor(covariance, mean, prior, options), expected, 1e-3);
+  }
+  // The look-alike: 5 cm wide and 10 cm tall is no green box.
+  Vector5d leg;
+  leg << 1.0, 2.0, 0.0, 0.05, 0.1;
+  const auto [covariance, mean] = Posterior(prior, Vector5d::Constant(1e4), leg);
+  EXPECT_LT(ClassGeometryLogBayesFactor(covariance, mean, prior, options), -3.0);
+  // A support prior (the base on the floor within 2 cm) makes a base 0.65 m
+  // above the floor decisive evidence against the class.
+  ClassPrior supported = prior;
+  supported.location_std_m.z() = 0.02;
+  Vector5d floating;
+  floating << 1.0, 2.0, 0.65, 0.6, 0.6;
+  const auto [c2, m2] = Posterior(supported, Vector5d::Constant(1e4), floating);
+  EXPECT_LT(ClassGeometryLogBayesFactor(c2, m2, supported, options), -100.0);
+}
+
+// Detections that say nothing about the size (or base height) leave the
+// odds as they are.
+TEST(ClassGeometryEvidence, UninformativeGeometryIsNoEvidence) {
+  const ClassPrior prior = GreenBox();
+  Vector5d information;
+  information << 1e4, 1e4, 0.0, 0.0, 0.0;
+  Vector5d theta;
+  theta << 1.0, 2.0, 0.0, 0.6, 0.6;
+  const auto [covariance, mean] = Posterior(prior, information, theta);
+  EXPECT_NEAR(ClassGeometryLogBayesFactor(covariance, mean, prior, FusionOptions{}), 0.0, 1e-6);
+}
+
+TEST(ClassGeometryEvidence, ExistenceWeightMultipliesTheOddsOfTheSpuriousModel) {
+  const ClassPrior prior = GreenBox();
+  Vector5d theta;
+  theta << 1.0, 2.0, 0.0, 0.3, 0.45;
+  const auto [covariance, mean] = Posterior(prior, Vector5d::Constant(100.0), theta);
+  FusionOptions options;
+  const double p = NonSpuriousProbability(covariance, prior, options);
+  ASSERT_GT(p, 0.5);
+  ASSERT_LT(p, 0.99);
+  const double log_bf = ClassGeometryLogBayesFactor(covariance, mean, prior, options);
+  const double w = ExistenceWeight(covariance, mean, prior, options);
+  EXPECT_NEAR(std::log(w / (1 - w)), std::log(p / (1 - p)) + log_bf, 1e-9);
+  options.class_geometry_evidence = false;
+  EXPECT_EQ(ExistenceWeight(covariance, mean, prior, options), p);
+  options.spurious_model = false;
+  EXPECT_EQ(ExistenceWeight(covariance, mean, prior, options), 1.0);
+  options = {};
+  options.lookalike_size_std_m = 0;
+  std::string why;
+  EXPECT_FALSE(options.Validate(&why));
 }
 
 TEST(OMapFusionTest, InvalidIdentityMergingOptionsAreRefused) {

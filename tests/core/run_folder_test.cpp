@@ -44,6 +44,7 @@ TEST(Classes, WriteThenReadRoundTrips) {
   ball.name = "pink ball";
   ball.colour = ColourBox{{150, 120, 170}, {8, 3, 4}, 3.0};
   ball.image_shape = ImageShapeModel{1.02, 0.04};
+  ball.shape = ObjectShape::kSphere;
   WriteClasses({GreenBox(), ball}, dir.Path("classes.yaml"));
   const std::vector<ObjectClass> read = ReadClasses(dir.Path("classes.yaml"));
   ASSERT_EQ(read.size(), 2u);
@@ -57,6 +58,8 @@ TEST(Classes, WriteThenReadRoundTrips) {
   ASSERT_TRUE(read[1].image_shape.has_value());
   EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_mean, 1.02);
   EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_std, 0.04);
+  EXPECT_EQ(read[0].shape, ObjectShape::kCylinder);
+  EXPECT_EQ(read[1].shape, ObjectShape::kSphere);
   EXPECT_EQ(FindClass(read, "pink ball"), 1);
   EXPECT_EQ(FindClass(read, "unicorn"), -1);
 }
@@ -75,8 +78,15 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
   EXPECT_EQ(ReadClasses(path).at(0).name, "door");
   EXPECT_EQ(error_for(good + "    size: 3\n"),
             path +
-                ": classes[0].size: unknown key (allowed: name, display_rgb, diameter_mean_m, "
-                "diameter_std_m, height_mean_m, height_std_m, colour, image_shape)");
+                ": classes[0].size: unknown key (allowed: name, display_rgb, shape, "
+                "diameter_mean_m, diameter_std_m, height_mean_m, height_std_m, colour, "
+                "image_shape)");
+  EXPECT_EQ(error_for(good + "    shape: cone\n"),
+            path + ": classes[0].shape: must be one of cylinder, box, sphere, panel");
+  std::ofstream(path) << good;
+  EXPECT_EQ(ReadClasses(path).at(0).shape, ObjectShape::kCylinder);  // the default
+  std::ofstream(path) << good << "    shape: panel\n";
+  EXPECT_EQ(ReadClasses(path).at(0).shape, ObjectShape::kPanel);
   EXPECT_EQ(error_for(good + good.substr(9)), path + ": classes[1].name: duplicate class 'door'");
   EXPECT_TRUE(Contains(error_for("classes: []\n"), "no classes listed"));
   std::string negative = good;
@@ -89,6 +99,11 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
             path + ": classes[0].image_shape.elongation_std: must be positive");
   EXPECT_TRUE(Contains(error_for(good + "    image_shape: {elongation_mean: 1.0}\n"),
                        "classes[0].image_shape.elongation_std"));
+  std::string huge = good;
+  huge.replace(huge.find("2.2"), 3, "2e9");
+  EXPECT_EQ(error_for(huge), path +
+                                 ": classes[0].height_mean_m: 2e+09 is outside [0, 100] m "
+                                 "(docs/formats.md, Bounds)");
 }
 
 TEST(Odometry, PosesAndIncrementsGiveTheSamePoses) {
@@ -137,6 +152,22 @@ TEST(Odometry, BadFilesAreReportedWithTheLine) {
   EXPECT_TRUE(Contains(error_for("frame,a,b\n0,1,2\n"), "needs columns x_m,y_m,theta_rad"));
   EXPECT_EQ(error_for(header + "0,0,0\n"),
             path + ":2: expected 4 fields as in the header, found 3");
+  // Physical bounds: a finite but absurd position, and increments that each
+  // stay in bounds but add up beyond them.
+  const std::string bound = " (docs/formats.md, Bounds)";
+  EXPECT_EQ(error_for(header + "0,0,0,0\n1,0,1e30,0\n"),
+            path + ":3: column 'y_m': 1e+30 is outside [-100000, 100000] m" + bound);
+  EXPECT_EQ(error_for(header + "0,0,0,1e9\n"),
+            path + ":2: column 'theta_rad': 1e+09 is outside [-100, 100] rad" + bound);
+  std::string far = "frame,distance_m,turn_rad\n0,0,0\n";
+  for (int i = 1; i <= 3; ++i) far += std::to_string(i) + ",60000,0\n";
+  EXPECT_EQ(error_for(far),
+            path +
+                ":4: the odometry reaches (120000, 0) m at frame 2, beyond the position bound "
+                "of +-100000 m" +
+                bound);
+  EXPECT_EQ(error_for(header + "0,0,0,0\n1,0,0,99999999999999999999\n"),
+            path + ":3: column 'theta_rad': 1e+20 is outside [-100, 100] rad" + bound);
 }
 
 TEST(Frames, ImagesAreSortedByNameAndBadImagesNamed) {
@@ -151,8 +182,9 @@ TEST(Frames, ImagesAreSortedByNameAndBadImagesNamed) {
   ASSERT_EQ(frames.size(), 3u);
   EXPECT_EQ(frames.Read(0).at<cv::Vec3b>(0, 0), cv::Vec3b(20, 40, 60));
   EXPECT_EQ(frames.Read(1).cols, 6);
-  EXPECT_EQ(ErrorOf([&] { frames.Read(2); }),
-            dir.Path("frames/000003.jpg") + ": cannot read image (corrupt or not an image)");
+  EXPECT_EQ(
+      ErrorOf([&] { frames.Read(2); }),
+      dir.Path("frames/000003.jpg") + ": not an image (expected PNG, JPEG, BMP, TIFF or PNM data)");
 }
 
 TEST(Frames, MissingOrEmptyFoldersAreReported) {

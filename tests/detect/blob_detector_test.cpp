@@ -167,8 +167,11 @@ TEST(BlobDetector, OfLookAlikeClassesOnTheSamePixelsKeepsTheBetterShapedOne) {
   const cv::Mat image = scene.Render();
   using Names = std::vector<std::string>;
 
+  // The separation alone, without the view checks (which judge each blob on its own).
+  BlobDetectorOptions separate;
+  separate.max_view_distance = std::numeric_limits<double>::infinity();
   const std::vector<Detection> separated =
-      BlobDetector(scene.camera, scene.classes).Detect(image, 0);
+      BlobDetector(scene.camera, scene.classes, separate).Detect(image, 0);
   EXPECT_EQ(ClassesOn(separated, scene.ball), Names{"orange ball"});
   EXPECT_EQ(ClassesOn(separated, scene.bucket), Names{"orange bucket"});
   // The blue blob overlaps the ball's slice but shares no pixels with it: kept, although
@@ -181,7 +184,7 @@ TEST(BlobDetector, OfLookAlikeClassesOnTheSamePixelsKeepsTheBetterShapedOne) {
       EXPECT_EQ(d.look_alike_classes, d.class_index == 0 ? 2u : 1u) << d.class_name;
   }
 
-  BlobDetectorOptions keep;
+  BlobDetectorOptions keep = separate;
   keep.separate_look_alikes = false;
   const std::vector<Detection> kept =
       BlobDetector(scene.camera, scene.classes, keep).Detect(image, 0);
@@ -191,7 +194,8 @@ TEST(BlobDetector, OfLookAlikeClassesOnTheSamePixelsKeepsTheBetterShapedOne) {
   // Without an image shape model a class is never dropped.
   std::vector<ObjectClass> no_shapes = scene.classes;
   no_shapes[1].image_shape.reset();
-  const std::vector<Detection> unchecked = BlobDetector(scene.camera, no_shapes).Detect(image, 0);
+  const std::vector<Detection> unchecked =
+      BlobDetector(scene.camera, no_shapes, separate).Detect(image, 0);
   EXPECT_EQ(ClassesOn(unchecked, scene.ball), (Names{"orange ball", "orange bucket"}));
 
   keep.look_alike_coverage = 0.0;

@@ -187,12 +187,13 @@ TEST(TrainColourModels, BadExamplesAreErrorsNamingTheirFile) {
   example.roi = cv::Rect(30, 0, 20, 5);
   EXPECT_EQ(error(example), image + ": ROI lies outside the image");
   example.image_path = dir.Path("not_an_image.png");
-  EXPECT_EQ(error(example), dir.Path("not_an_image.png") + ": cannot read image");
+  EXPECT_EQ(error(example), dir.Path("not_an_image.png") +
+                                ": not an image (expected PNG, JPEG, BMP, TIFF or PNM data)");
   example.image_path = image;
   example.mask_path = dir.Path("small_mask.png");
   EXPECT_EQ(error(example), dir.Path("small_mask.png") + ": mask size differs from its image");
   example.mask_path = dir.Path("no_mask.png");
-  EXPECT_EQ(error(example), dir.Path("no_mask.png") + ": cannot read mask image");
+  EXPECT_EQ(error(example), dir.Path("no_mask.png") + ": file not found");
   example.mask_path = dir.Path("empty_mask.png");
   EXPECT_EQ(error(example),
             "class 'green box': colour model needs at least 2 example pixels, got 0");

@@ -3,6 +3,7 @@
 // boxes cannot.
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -80,8 +81,9 @@ TEST_F(LookAlikes, LearntImageShapesSeparateASameColouredBallAndBucket) {
 
   const GroundTruth truth = *ReadGroundTruth(run);
   const FrameSource frames(run);
-  BlobDetectorOptions keep;
+  BlobDetectorOptions keep;  // colour only: no separation, no view checks
   keep.separate_look_alikes = false;
+  keep.max_view_distance = std::numeric_limits<double>::infinity();
   const std::array<LabelCounts, 2> colour_only =
       CountLabels(BlobDetector(*camera, classes, keep), frames, truth);
   const std::array<LabelCounts, 2> separated =

@@ -24,14 +24,16 @@ TEST(ExportCommand, WritesModelsAndFiguresThatReadBack) {
   std::string error, warning;
   ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, out + "/map.glb")) << error;
   // Pink ball (pi = 0.05) is below the default --min-existence 0.1; no run
-  // folder, so only the estimated trajectory; plus the floor grid.
+  // folder, so only the estimated trajectory; plus the floor and its grid.
   std::vector<std::string> names;
   for (const auto& node : model.nodes) names.push_back(node.name);
   EXPECT_EQ(names, (std::vector<std::string>{"green box 0", "yellow box 1", "trajectory estimated",
-                                             "floor grid"}));
+                                             "floor", "floor grid"}));
   ASSERT_TRUE(loader.LoadASCIIFromFile(&model, &error, &warning, out + "/map.gltf")) << error;
-  for (const char* name : {"map.ply", "trajectory.ply"})
+  for (const char* name : {"map.ply", "trajectory.ply", "trajectory_estimated.txt"})
     EXPECT_GT(std::filesystem::file_size(out + "/" + name), 100u) << name;
+  // No run folder: no odometry or ground truth to write.
+  EXPECT_FALSE(std::filesystem::exists(out + "/trajectory_truth.txt"));
   for (const char* name : {"birdseye.png", "perspective.png"}) {
     const cv::Mat image = cv::imread(out + "/" + name);
     EXPECT_EQ(image.cols, 200) << name;
@@ -50,7 +52,7 @@ TEST(ExportCommand, MinExistenceZeroKeepsEveryObject) {
   tinygltf::Model model;
   std::string error, warning;
   ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir.Path("map.glb")));
-  EXPECT_EQ(model.nodes.size(), 4u);  // three objects and the trajectory
+  EXPECT_EQ(model.nodes.size(), 5u);  // three objects, the trajectory and the floor
 }
 
 TEST(ExportCommand, UsageErrors) {

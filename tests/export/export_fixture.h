@@ -1,5 +1,6 @@
-// A small fixed O-Map scene for the export tests: three objects (one below
-// the default existence threshold), three classes, and estimated, odometry
+// A small fixed O-Map scene for the export tests: four objects, one of each
+// shape (the door below the default existence threshold), four classes, and
+// estimated, odometry
 // and ground-truth trajectories on a 1.2 m circle. Built in code so the
 // expected values are visible next to the checks.
 #pragma once
@@ -26,10 +27,12 @@ inline OMapObject FixtureObject(int id, const std::string& class_name, Eigen::Ve
   return object;
 }
 
-inline ObjectClass FixtureClass(const std::string& name, Rgb rgb) {
+inline ObjectClass FixtureClass(const std::string& name, Rgb rgb,
+                                ObjectShape shape = ObjectShape::kCylinder) {
   ObjectClass c;
   c.name = name;
   c.display_rgb = rgb;
+  c.shape = shape;
   return c;
 }
 
@@ -39,10 +42,12 @@ inline ExportScene FixtureScene() {
       FixtureObject(1, "green box", {1.0, 0.5, 0.0}, 0.6, 0.57, 1.0),
       FixtureObject(2, "pink ball", {-0.8, 1.2, 0.05}, 0.25, 0.25, 0.6),
       FixtureObject(3, "orange door", {0.3, -1.6, 0.0}, 1.0, 2.1, 0.05),
+      FixtureObject(4, "Magellan", {-0.6, -0.5, 0.0}, 0.5, 0.3, 0.85),
   };
-  scene.classes = {FixtureClass("green box", {40, 150, 60}),
-                   FixtureClass("pink ball", {240, 110, 170}),
-                   FixtureClass("orange door", {235, 115, 45})};
+  scene.classes = {FixtureClass("green box", {40, 150, 60}, ObjectShape::kBox),
+                   FixtureClass("pink ball", {240, 110, 170}, ObjectShape::kSphere),
+                   FixtureClass("orange door", {235, 115, 45}, ObjectShape::kPanel),
+                   FixtureClass("Magellan", {150, 40, 40})};
   constexpr int kPoses = 24;
   for (int i = 0; i < kPoses; ++i) {
     const double a = 2.0 * M_PI * i / kPoses;

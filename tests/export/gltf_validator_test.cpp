@@ -1,6 +1,7 @@
 // Every glTF the exporter writes passes the Khronos glTF validator (npm
 // package gltf-validator, installed at configure time by
-// install_gltf_validator.sh into the build tree) with zero errors. Skipped,
+// install_gltf_validator.sh into the build tree) with zero errors and zero
+// warnings. Skipped,
 // saying why, when node or the validator is not available.
 #include <cstdio>
 #include <filesystem>
@@ -50,18 +51,21 @@ void ExpectValid(const std::string& path) {
   const Report report = Validate(path);
   ASSERT_GE(report.errors, 0) << "validator did not report on " << path << ":\n" << report.text;
   EXPECT_EQ(report.errors, 0) << path << ":\n" << report.text;
+  EXPECT_EQ(report.warnings, 0) << path << ":\n" << report.text;
   std::printf("gltf-validator %s: %d errors, %d warnings, %d infos, %d hints\n",
               fs::path(path).filename().c_str(), report.errors, report.warnings, report.infos,
               report.hints);
 }
 
-// Both encodings of a scene, every object shown, with and without the grid.
+// Both encodings of a scene, every object shown, with and without the grid
+// (and with the camera pyramids along with the grid).
 void ExpectValidExports(const ExportScene& scene, const std::string& stem) {
   testing::TempDir dir;
   for (const bool grid : {true, false}) {
     ExportOptions options;
     options.min_existence = 0.0;
     options.floor_grid = grid;
+    options.camera_every = grid ? 5 : 0;
     for (const char* extension : {".glb", ".gltf"}) {
       const std::string path = dir.Path(stem + (grid ? "_grid" : "") + extension);
       WriteGltf(scene, options, path);

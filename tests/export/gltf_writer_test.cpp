@@ -2,6 +2,8 @@
 // (names, geometry in Y up, materials, extras) and structural validity.
 #include "export/gltf_writer.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 
@@ -9,7 +11,9 @@
 #include <tiny_gltf.h>
 #include <Eigen/Geometry>
 
+#include "export/display_scene.h"
 #include "export/export_fixture.h"
+#include "export/mesh_check.h"
 #include "test_util.h"
 
 namespace oslam {
@@ -67,76 +71,115 @@ std::string WriteFixture(const testing::TempDir& dir, const std::string& name,
 
 class GltfFormats : public ::testing::TestWithParam<std::string> {};
 
-TEST_P(GltfFormats, NodesAreTheShownObjectsTrajectoriesAndGrid) {
+TEST_P(GltfFormats, NodesAreTheShownObjectsTrajectoriesAndFloor) {
   testing::TempDir dir;
   const tinygltf::Model model = Load(WriteFixture(dir, "map" + GetParam()));
   std::vector<std::string> names;
   for (const tinygltf::Node& node : model.nodes) names.push_back(node.name);
   // The door (pi = 0.05) is below min_existence = 0.1 and left out.
-  EXPECT_EQ(names, (std::vector<std::string>{"green box 1", "pink ball 2", "trajectory estimated",
-                                             "trajectory odometry", "trajectory ground truth",
-                                             "floor grid"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"green box 1", "pink ball 2", "Magellan 4",
+                                             "trajectory estimated", "trajectory odometry",
+                                             "trajectory ground truth", "floor", "floor grid"}));
   ASSERT_EQ(model.scenes.size(), 1u);
   EXPECT_EQ(model.scenes[0].nodes.size(), model.nodes.size());
   EXPECT_EQ(model.asset.version, "2.0");
+  // Every node is a triangle mesh: nothing a viewer would import as loose
+  // lines or points.
+  for (const tinygltf::Mesh& mesh : model.meshes)
+    for (const tinygltf::Primitive& primitive : mesh.primitives)
+      EXPECT_EQ(primitive.mode, TINYGLTF_MODE_TRIANGLES) << mesh.name;
 }
 
-// The cylinder's bounding box in glTF's Y-up frame: x -> x, z -> y, y -> -z.
-TEST_P(GltfFormats, ObjectGeometryIsTheCylinderInYUp) {
+// Each shape's extent in glTF's Y-up frame (x -> x, z -> y, y -> -z): its
+// height from the base point up, and no wider than the diameter, which the
+// box's corners, the cylinder's and the sphere's equator reach.
+TEST_P(GltfFormats, ObjectsHaveTheirClassShapeAndSize) {
   testing::TempDir dir;
   const tinygltf::Model model = Load(WriteFixture(dir, "map" + GetParam()));
   const ExportScene scene = testing::FixtureScene();
-  for (int j = 0; j < 2; ++j) {
+  for (const int j : {0, 1, 3}) {
     const OMapObject& object = scene.map.objects[j];
     const tinygltf::Node* node = FindNode(model, ObjectLabel(object));
     ASSERT_NE(node, nullptr);
     const tinygltf::Primitive& primitive = model.meshes.at(node->mesh).primitives.at(0);
-    EXPECT_EQ(primitive.mode, TINYGLTF_MODE_TRIANGLES);
     const std::vector<Eigen::Vector3f> positions =
         ReadVec3(model, primitive.attributes.at("POSITION"));
     ASSERT_EQ(node->translation.size(), 3u);
-    const Eigen::Vector3f t(node->translation[0], node->translation[1], node->translation[2]);
-    Eigen::Vector3f low = Eigen::Vector3f::Constant(1e9f), high = -low;
-    for (const Eigen::Vector3f& p : positions) {
-      low = low.cwiseMin(p + t);
-      high = high.cwiseMax(p + t);
-    }
-    const double r = 0.5 * object.diameter_m;
     const Eigen::Vector3d& b = object.base_world;
-    const Eigen::Vector3f expected_low(b.x() - r, b.z(), -b.y() - r);
-    const Eigen::Vector3f expected_high(b.x() + r, b.z() + object.height_m, -b.y() + r);
-    EXPECT_LT((low - expected_low).norm(), 1e-5) << low.transpose();
-    EXPECT_LT((high - expected_high).norm(), 1e-5) << high.transpose();
+    EXPECT_NEAR(node->translation[0], b.x(), 1e-6);
+    EXPECT_NEAR(node->translation[1], b.z(), 1e-6);
+    EXPECT_NEAR(node->translation[2], -b.y(), 1e-6);
+    float low = 1e9f, high = -1e9f, widest = 0.f;
+    for (const Eigen::Vector3f& p : positions) {
+      low = std::min(low, p.y());
+      high = std::max(high, p.y());
+      widest = std::max(widest, std::hypot(p.x(), p.z()));
+    }
+    EXPECT_NEAR(low, 0.0, 1e-6) << object.class_name;
+    EXPECT_NEAR(high, object.height_m, 1e-5) << object.class_name;
+    EXPECT_NEAR(widest, 0.5 * object.diameter_m, 1e-5) << object.class_name;
+    size_t distinct = 0;
+    testing::WeldByPosition(positions, ReadIndices(model, primitive.indices), &distinct);
+    if (j == 0) {
+      EXPECT_EQ(distinct, 8u) << "a box has 8 corners";
+    }
+    EXPECT_EQ(node->extras.Get("shape").Get<std::string>(),
+              std::vector<std::string>({"box", "sphere", "", "cylinder"})[j]);
+  }
+}
+
+// Closed meshes: no see-through caps or gaps, whatever a viewer culls.
+TEST_P(GltfFormats, ObjectAndTrajectoryMeshesAreClosed) {
+  testing::TempDir dir;
+  const tinygltf::Model model = Load(WriteFixture(dir, "map" + GetParam()));
+  for (const char* name : {"green box 1", "pink ball 2", "Magellan 4", "trajectory estimated",
+                           "trajectory odometry", "trajectory ground truth"}) {
+    const tinygltf::Node* node = FindNode(model, name);
+    ASSERT_NE(node, nullptr) << name;
+    const tinygltf::Primitive& primitive = model.meshes.at(node->mesh).primitives.at(0);
+    size_t distinct = 0;
+    const auto triangles =
+        testing::WeldByPosition(ReadVec3(model, primitive.attributes.at("POSITION")),
+                                ReadIndices(model, primitive.indices), &distinct);
+    const testing::Topology topology = testing::AnalyzeTopology(distinct, triangles);
+    EXPECT_EQ(topology.components, 1) << name;
+    EXPECT_TRUE(topology.Watertight())
+        << name << ": " << topology.boundary_edges << " boundary edges";
+    EXPECT_EQ(topology.inconsistent_edges, 0) << name;
   }
 }
 
 TEST_P(GltfFormats, NormalsAreUnitAndPointOutwards) {
   testing::TempDir dir;
   const tinygltf::Model model = Load(WriteFixture(dir, "map" + GetParam()));
-  const tinygltf::Node* node = FindNode(model, "green box 1");
-  ASSERT_NE(node, nullptr);
-  const tinygltf::Primitive& primitive = model.meshes.at(node->mesh).primitives.at(0);
-  const auto positions = ReadVec3(model, primitive.attributes.at("POSITION"));
-  const auto normals = ReadVec3(model, primitive.attributes.at("NORMAL"));
-  ASSERT_EQ(normals.size(), positions.size());
-  const float half_height = 0.5f * 0.57f;  // local axis is +y, base at y = 0
-  for (size_t i = 0; i < normals.size(); ++i) {
-    EXPECT_NEAR(normals[i].norm(), 1.0f, 1e-5);
-    // Outwards: from the cylinder's centre towards the vertex.
-    const Eigen::Vector3f from_centre = positions[i] - Eigen::Vector3f(0, half_height, 0);
-    EXPECT_GT(normals[i].dot(from_centre), 0.0f) << i;
-  }
-  // Counter-clockwise winding seen from outside: each face normal agrees
-  // with its vertex normals (what viewers use for back-face culling).
-  const std::vector<uint32_t> indices = ReadIndices(model, primitive.indices);
-  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
-    const Eigen::Vector3f a = positions[indices[t]], b = positions[indices[t + 1]],
-                          c = positions[indices[t + 2]];
-    EXPECT_GT((b - a).cross(c - a).dot(normals[indices[t]]), 0.0f) << "triangle " << t / 3;
+  const ExportScene scene = testing::FixtureScene();
+  for (const int j : {0, 1, 3}) {
+    const OMapObject& object = scene.map.objects[j];
+    const tinygltf::Node* node = FindNode(model, ObjectLabel(object));
+    ASSERT_NE(node, nullptr);
+    const tinygltf::Primitive& primitive = model.meshes.at(node->mesh).primitives.at(0);
+    const auto positions = ReadVec3(model, primitive.attributes.at("POSITION"));
+    const auto normals = ReadVec3(model, primitive.attributes.at("NORMAL"));
+    ASSERT_EQ(normals.size(), positions.size());
+    // Local axis is +y, base at y = 0; every shape is convex around its centre.
+    const Eigen::Vector3f centre(0, 0.5f * static_cast<float>(object.height_m), 0);
+    for (size_t i = 0; i < normals.size(); ++i) {
+      EXPECT_NEAR(normals[i].norm(), 1.0f, 1e-5);
+      EXPECT_GT(normals[i].dot(positions[i] - centre), 0.0f) << object.class_name << " " << i;
+    }
+    // Counter-clockwise winding seen from outside: each face normal agrees
+    // with its vertex normals (what viewers use for back-face culling).
+    const std::vector<uint32_t> indices = ReadIndices(model, primitive.indices);
+    for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+      const Eigen::Vector3f a = positions[indices[t]], b = positions[indices[t + 1]],
+                            c = positions[indices[t + 2]];
+      EXPECT_GT((b - a).cross(c - a).dot(normals[indices[t]]), 0.0f)
+          << object.class_name << " triangle " << t / 3;
+    }
   }
 }
 
-TEST_P(GltfFormats, MaterialIsClassColourWithAlphaPi) {
+TEST_P(GltfFormats, MaterialIsClassColourWithAlphaPiAndSingleSided) {
   testing::TempDir dir;
   const tinygltf::Model model = Load(WriteFixture(dir, "map" + GetParam()));
   const tinygltf::Node* node = FindNode(model, "pink ball 2");
@@ -144,7 +187,8 @@ TEST_P(GltfFormats, MaterialIsClassColourWithAlphaPi) {
   const tinygltf::Material& material =
       model.materials.at(model.meshes.at(node->mesh).primitives.at(0).material);
   EXPECT_EQ(material.alphaMode, "BLEND");
-  EXPECT_TRUE(material.doubleSided);
+  // Closed meshes, back faces culled: no inner face shows through.
+  EXPECT_FALSE(material.doubleSided);
   const std::vector<double>& colour = material.pbrMetallicRoughness.baseColorFactor;
   ASSERT_EQ(colour.size(), 4u);
   EXPECT_NEAR(colour[0], SrgbToLinear(240), 1e-9);
@@ -170,18 +214,70 @@ TEST_P(GltfFormats, ExtrasCarryPiHistogramAndCovariance) {
   EXPECT_EQ(extras.Get("num_detections").GetNumberAsInt(), 20);
 }
 
-TEST_P(GltfFormats, TrajectoryIsALineStripOnTheFloor) {
+// A tube of the display radius around the ground-truth path, at its height,
+// in an opaque material named after it.
+TEST_P(GltfFormats, TrajectoryIsANamedTubeAlongThePath) {
   testing::TempDir dir;
   const tinygltf::Model model = Load(WriteFixture(dir, "map" + GetParam()));
   const tinygltf::Node* node = FindNode(model, "trajectory ground truth");
   ASSERT_NE(node, nullptr);
   const tinygltf::Primitive& primitive = model.meshes.at(node->mesh).primitives.at(0);
-  EXPECT_EQ(primitive.mode, TINYGLTF_MODE_LINE_STRIP);
-  const auto points = ReadVec3(model, primitive.attributes.at("POSITION"));
-  const std::vector<Pose2>& truth = testing::FixtureScene().ground_truth;
-  ASSERT_EQ(points.size(), truth.size());
-  for (size_t i = 0; i < truth.size(); ++i)
-    EXPECT_LT((points[i] - Eigen::Vector3f(truth[i].x, 0.01f, -truth[i].y)).norm(), 1e-6);
+  const tinygltf::Material& material = model.materials.at(primitive.material);
+  EXPECT_EQ(material.name, "trajectory ground truth");
+  EXPECT_EQ(material.alphaMode, "OPAQUE");
+  ExportOptions options;
+  options.min_existence = 0.1;
+  const ExportScene scene = testing::FixtureScene();
+  const DisplayScene display = BuildDisplayScene(scene, options);
+  const double r = display.tube_radius_m, z = display.trajectories[2].z_m;
+  const std::vector<Pose2>& truth = scene.ground_truth;
+  for (const Eigen::Vector3f& p : ReadVec3(model, primitive.attributes.at("POSITION"))) {
+    EXPECT_GE(p.y(), z - r - 1e-6);
+    EXPECT_LE(p.y(), z + r + 1e-6);
+    // Distance to the path on the floor (x, -z in glTF).
+    double nearest = 1e9;
+    for (size_t i = 0; i + 1 < truth.size(); ++i) {
+      const Eigen::Vector2d a(truth[i].x, truth[i].y), b(truth[i + 1].x, truth[i + 1].y);
+      const Eigen::Vector2d q(p.x(), -p.z());
+      const double t = std::clamp((q - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+      nearest = std::min(nearest, (q - (a + t * (b - a))).norm());
+    }
+    EXPECT_LE(nearest, 1.5 * r);
+  }
+}
+
+TEST_P(GltfFormats, FloorCoversTheMapAndCamerasAreOptional) {
+  testing::TempDir dir;
+  ExportOptions options;
+  options.min_existence = 0.1;
+  options.camera_every = 6;
+  const ExportScene scene = testing::FixtureScene();
+  WriteGltf(scene, options, dir.Path("map" + GetParam()));
+  const tinygltf::Model model = Load(dir.Path("map" + GetParam()));
+  const tinygltf::Node* floor = FindNode(model, "floor");
+  ASSERT_NE(floor, nullptr);
+  const Eigen::Vector4d extent = FloorExtent(scene, 0.1, 0.5);
+  const auto corners =
+      ReadVec3(model, model.meshes.at(floor->mesh).primitives.at(0).attributes.at("POSITION"));
+  float x_low = 1e9f, x_high = -1e9f;
+  for (const Eigen::Vector3f& p : corners) {
+    EXPECT_EQ(p.y(), 0.0f);
+    x_low = std::min(x_low, p.x());
+    x_high = std::max(x_high, p.x());
+  }
+  EXPECT_NEAR(x_low, extent[0], 1e-6);
+  EXPECT_NEAR(x_high, extent[2], 1e-6);
+  const tinygltf::Node* cameras = FindNode(model, "cameras");
+  ASSERT_NE(cameras, nullptr);
+  size_t distinct = 0;
+  const tinygltf::Primitive& primitive = model.meshes.at(cameras->mesh).primitives.at(0);
+  const auto triangles =
+      testing::WeldByPosition(ReadVec3(model, primitive.attributes.at("POSITION")),
+                              ReadIndices(model, primitive.indices), &distinct);
+  // 24 poses, every 6th: 4 pyramids of 5 corners.
+  EXPECT_EQ(testing::AnalyzeTopology(distinct, triangles).components, 4);
+  EXPECT_EQ(distinct, 20u);
+  EXPECT_EQ(FindNode(Load(WriteFixture(dir, "plain" + GetParam())), "cameras"), nullptr);
 }
 
 // What the Khronos validator checks first: every accessor fits its buffer
@@ -238,14 +334,14 @@ TEST(GltfWriter, GlbHasTheBinaryHeaderAndGltfIsSelfContainedJson) {
   EXPECT_NE(text.find("data:application/octet-stream;base64,"), std::string::npos);
 }
 
-TEST(GltfWriter, EmptyMapWithoutGridIsStillValid) {
+TEST(GltfWriter, EmptyMapWithoutGridIsTheFloorAlone) {
   testing::TempDir dir;
   ExportOptions options;
   options.floor_grid = false;
   WriteGltf(ExportScene{}, options, dir.Path("empty.glb"));
   const tinygltf::Model model = Load(dir.Path("empty.glb"));
-  EXPECT_TRUE(model.nodes.empty());
-  EXPECT_TRUE(model.buffers.empty());
+  ASSERT_EQ(model.nodes.size(), 1u);
+  EXPECT_EQ(model.nodes[0].name, "floor");
 }
 
 TEST(GltfWriter, UnwritablePathNamesTheFile) {

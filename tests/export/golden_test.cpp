@@ -1,9 +1,5 @@
 // Golden-image tests: fixed inputs rendered and compared with the PNGs in
-// tests/golden/. Tolerance: a pixel matches when every channel is within 2
-// grey levels of the golden; at least 99.5 % of the pixels must match (room
-// for anti-aliasing differences between OpenCV builds, none for a changed
-// drawing). Regenerate on purpose with tests/golden/regenerate.sh
-// (OSLAM_REGENERATE_GOLDEN=1), then look at the PNGs before committing.
+// tests/golden/ (tolerance and regeneration: tests/export/golden.h).
 #include <cstdlib>
 #include <filesystem>
 
@@ -16,75 +12,37 @@
 #include "core/error.h"
 #include "export/export_fixture.h"
 #include "export/figures.h"
+#include "export/golden.h"
 #include "export/overlay.h"
 
 namespace oslam {
 namespace {
 
-constexpr int kToleranceGreyLevels = 2;
-constexpr double kMinMatchingFraction = 0.995;
-
-std::string GoldenPath(const std::string& name) {
-  return std::string(OSLAM_SOURCE_DIR) + "/tests/golden/" + name;
-}
-
-bool Regenerating() {
-  const char* value = std::getenv("OSLAM_REGENERATE_GOLDEN");
-  return value && std::string(value) == "1";
-}
-
-// Share of pixels whose channels all lie within the tolerance; 0 when the
-// sizes or types differ.
-double MatchingFraction(const cv::Mat& image, const cv::Mat& golden) {
-  if (image.size() != golden.size() || image.type() != golden.type()) return 0.0;
-  cv::Mat difference;
-  cv::absdiff(image, golden, difference);
-  std::vector<cv::Mat> channels;
-  cv::split(difference, channels);
-  cv::Mat worst = channels[0];
-  for (const cv::Mat& c : channels) worst = cv::max(worst, c);
-  const int matching = cv::countNonZero(worst <= kToleranceGreyLevels);
-  return static_cast<double>(matching) / static_cast<double>(image.total());
-}
-
-void ExpectMatchesGolden(const cv::Mat& image, const std::string& name) {
-  const std::string path = GoldenPath(name);
-  if (Regenerating()) {
-    ASSERT_TRUE(cv::imwrite(path, image)) << path;
-    std::cout << "regenerated " << path << "\n";
-    return;
-  }
-  const cv::Mat golden = cv::imread(path, cv::IMREAD_COLOR);
-  ASSERT_FALSE(golden.empty()) << path << " missing: run tests/golden/regenerate.sh";
-  const double fraction = MatchingFraction(image, golden);
-  if (fraction < kMinMatchingFraction) {
-    const std::string actual =
-        (std::filesystem::temp_directory_path() / ("actual_" + name)).string();
-    cv::imwrite(actual, image);
-    ADD_FAILURE() << name << ": only " << 100.0 * fraction << " % of pixels within "
-                  << kToleranceGreyLevels << " grey levels (need " << 100.0 * kMinMatchingFraction
-                  << " %); rendered image saved as " << actual;
-  }
-}
+using testing::ExpectMatchesGolden;
+using testing::kMinMatchingFraction;
+using testing::MatchingFraction;
 
 FigureOptions SmallFigure() {
   FigureOptions options;
-  options.width_px = 320;
-  options.height_px = 240;
+  options.width_px = 480;
+  options.height_px = 400;
   options.min_existence = 0.1;
   return options;
 }
 
 TEST(Golden, BirdsEye) {
-  ExpectMatchesGolden(RenderBirdsEye(testing::FixtureScene(), SmallFigure()), "birdseye.png");
+  ExpectMatchesGolden(BirdsEyeFigure(testing::FixtureScene(), SmallFigure()).image, "birdseye.png");
 }
 
 TEST(Golden, Perspective) {
-  ExpectMatchesGolden(RenderPerspective(testing::FixtureScene(), SmallFigure()), "perspective.png");
+  FigureOptions options = SmallFigure();
+  options.width_px = 480;
+  options.height_px = 360;
+  ExpectMatchesGolden(RenderPerspective(testing::FixtureScene(), options), "perspective.png");
 }
 
 TEST(Golden, TrajectoryErrors) {
-  ExpectMatchesGolden(PlotTrajectoryErrors(testing::FixtureScene(), SmallFigure()),
+  ExpectMatchesGolden(TrajectoryErrorFigure(testing::FixtureScene(), SmallFigure()).image,
                       "trajectories.png");
 }
 
@@ -128,10 +86,10 @@ TEST(Golden, Overlay) {
 // changed is rejected.
 TEST(Golden, ComparisonRejectsAChangedFigure) {
   ExportScene scene = testing::FixtureScene();
-  const cv::Mat original = RenderBirdsEye(scene, SmallFigure());
+  const cv::Mat original = BirdsEyeFigure(scene, SmallFigure()).image;
   scene.map.objects[0].existence_probability = 0.3;
   scene.map.objects[0].base_world.x() += 0.2;
-  const cv::Mat changed = RenderBirdsEye(scene, SmallFigure());
+  const cv::Mat changed = BirdsEyeFigure(scene, SmallFigure()).image;
   EXPECT_EQ(MatchingFraction(original, original), 1.0);
   EXPECT_LT(MatchingFraction(changed, original), kMinMatchingFraction);
 }

@@ -106,9 +106,10 @@ TEST(EvaluateMap, CountsFoundSpuriousAndErrors) {
   EXPECT_GT(m.estimate.rpe_translation_rmse_m, 0.0);
   // eval.json has the keys its readers rely on.
   const std::string json = m.Json();
-  for (const char* key : {"ate_rmse_m", "odometry_ate_rmse_m", "object_position_error_median_m",
-                          "diameter_error_mean_m", "height_error_mean_m", "class_accuracy",
-                          "true_objects_found", "true_objects_total", "spurious_objects"})
+  for (const char* key :
+       {"ate_rmse_m", "odometry_ate_rmse_m", "object_position_error_median_m",
+        "object_horizontal_error_median_m", "diameter_error_mean_m", "height_error_mean_m",
+        "class_accuracy", "true_objects_found", "true_objects_total", "spurious_objects"})
     EXPECT_NE(json.find(std::string("\"") + key + "\""), std::string::npos) << key;
 
   // The ball's match is 0.3 m off in height only: 3D and horizontal errors differ.
@@ -116,6 +117,9 @@ TEST(EvaluateMap, CountsFoundSpuriousAndErrors) {
   EXPECT_NEAR(m.object_position_error_max_m, 0.3, 1e-12);
   EXPECT_NEAR(m.object_horizontal_error_median_m, 0.5 * (0.1 + 0.0), 1e-12);
   EXPECT_NEAR(m.object_horizontal_error_max_m, 0.1, 1e-12);
+  // The printed table names each of the two (what `oslam run` and `oslam eval` print).
+  EXPECT_NE(m.Table().find("median 0.200 m 3D, 0.050 m horizontal"), std::string::npos)
+      << m.Table();
   ASSERT_EQ(m.matches.size(), 2u);
   EXPECT_EQ(m.matches[1].map_id, 6);
   EXPECT_NEAR(m.matches[1].position_error_m, 0.3, 1e-12);

@@ -285,13 +285,14 @@ TEST(OMapJson, MalformedFilesNameTheField) {
   EXPECT_EQ(ErrorFor(Edited("[1.5, -0.5, 0.0]", "[1.5, \"a\", 0.0]")),
             "objects[0].base_point_m[1]: must be a number");
   EXPECT_EQ(ErrorFor(Edited("\"id\": 3", "\"id\": 3.5")), "objects[0].id: must be a whole number");
-  EXPECT_EQ(ErrorFor(Edited("\"id\": 3", "\"id\": 1e12")), "objects[0].id: is out of range");
+  EXPECT_EQ(ErrorFor(Edited("\"id\": 3", "\"id\": 1e12")),
+            "objects[0].id: 1e+12 is outside [-1e+09, 1e+09] (docs/formats.md, Bounds)");
   EXPECT_EQ(ErrorFor(Edited("\"class\": \"green box\"", "\"class\": 2")),
             "objects[0].class: must be a string");
   EXPECT_EQ(ErrorFor(Edited("\"num_detections\": 12", "\"num_detections\": \"x\"")),
             "objects[0].num_detections: must be a number");
   EXPECT_EQ(ErrorFor(Edited("\"num_detections\": 12", "\"num_detections\": -1")),
-            "objects[0].num_detections: is out of range");
+            "objects[0].num_detections: -1 is outside [0, 1e+09] (docs/formats.md, Bounds)");
   EXPECT_EQ(ErrorFor(Edited("[0,0,0,0,0.02]]", "[0,0,0,0,\"x\"]]")),
             "objects[0].covariance: must be a 5x5 matrix of numbers");
   EXPECT_EQ(ErrorFor(Edited("\"orange door\": 0.1", "\"orange door\": 2")),
@@ -301,7 +302,7 @@ TEST(OMapJson, MalformedFilesNameTheField) {
   EXPECT_EQ(ErrorFor(Edited("\"tracks\": [0, 4]", "\"tracks\": 4")),
             "objects[0].tracks: must be a list");
   EXPECT_EQ(ErrorFor(Edited("\"tracks\": [0, 4]", "\"tracks\": [0, -4]")),
-            "objects[0].tracks[1]: is out of range");
+            "objects[0].tracks[1]: -4 is outside [0, 1e+09] (docs/formats.md, Bounds)");
   EXPECT_EQ(ErrorFor(Edited("\"num_samples\": 90", "\"samples\": 90")),
             "objects[0].num_samples: missing");
   EXPECT_EQ(ErrorFor(Edited("{\"tracks\": [0], \"num_samples\": 80}", "{\"tracks\": [0]}")),
@@ -320,7 +321,38 @@ TEST(OMapJson, MalformedFilesNameTheField) {
   EXPECT_EQ(ErrorFor(Edited("\"version\": 1",
                             "\"version\": 1, \"source\": {\"run\": \"r\", \"association\": \"x\", "
                             "\"seed\": -1}")),
-            "source.seed: is out of range");
+            "source.seed: -1 is outside [0, 9.0072e+15] (docs/formats.md, Bounds)");
+  // Physical bounds: finite but absurd values drive the figures and meshes.
+  const std::string bound = " (docs/formats.md, Bounds)";
+  EXPECT_EQ(ErrorFor(Edited("[1.5, -0.5, 0.0]", "[1e300, -0.5, 0.0]")),
+            "objects[0].base_point_m[0]: 1e+300 is outside [-100000, 100000] m" + bound);
+  EXPECT_EQ(ErrorFor(Edited("\"diameter_m\": 0.68", "\"diameter_m\": -0.68")),
+            "objects[0].diameter_m: -0.68 is outside [0, 100] m" + bound);
+  EXPECT_EQ(ErrorFor(Edited("\"height_m\": 0.57", "\"height_m\": 1e9")),
+            "objects[0].height_m: 1e+09 is outside [0, 100] m" + bound);
+  EXPECT_EQ(ErrorFor(Edited("\"x_m\": 0.2", "\"x_m\": -1e308")),
+            "trajectory[1].x_m: -1e+308 is outside [-100000, 100000] m" + bound);
+  EXPECT_EQ(ErrorFor(Edited("[0,0,0,0,0.02]]", "[0,0,0,0,1e11]]")),
+            "objects[0].covariance[4][4]: 1e+11 is outside [-1e+10, 1e+10]" + bound);
+}
+
+TEST(OMapJson, TimingIsWrittenOnlyWhenAskedAndReadBack) {
+  OMap map;
+  map.reports.push_back({"solver", R"({"iterations": 3})"});
+  map.timing.push_back({"solver", R"({"total_time_s": 0.5})"});
+  EXPECT_EQ(OMapToJson(map).find("timing"), std::string::npos);
+  EXPECT_EQ(OMapToJson(map).find("total_time_s"), std::string::npos);
+  const std::string with = OMapToJson(map, OMapTiming::kInclude);
+  EXPECT_NE(with.find("\"timing\": {\n  \"solver\": {\n   \"total_time_s\": 0.5"),
+            std::string::npos)
+      << with;
+  testing::TempDir dir;
+  WriteOMap(dir.Path("omap.json"), map, OMapTiming::kInclude);
+  const OMap read = ReadOMap(dir.Path("omap.json"));
+  ASSERT_EQ(read.reports.size(), 1u);  // "timing" is no report
+  ASSERT_EQ(read.timing.size(), 1u);
+  EXPECT_EQ(read.timing[0].name, "solver");
+  EXPECT_EQ(OMapToJson(read, OMapTiming::kInclude), with);
 }
 
 }  // namespace

@@ -26,6 +26,37 @@ nlohmann::json Json(const std::string& path) {
   return nlohmann::json::parse(ReadFile(path));
 }
 
+size_t Count(const std::string& text, const std::string& part) {
+  size_t n = 0;
+  for (size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) ++n;
+  return n;
+}
+
+// Everything `oslam run` writes on the simulated run (16 frames, ground truth).
+const std::vector<std::string> kRunFiles = {"detections.csv",
+                                            "omap.json",
+                                            "map.glb",
+                                            "map.gltf",
+                                            "map.ply",
+                                            "trajectory.ply",
+                                            "trajectory_estimated.txt",
+                                            "trajectory_odometry.txt",
+                                            "trajectory_truth.txt",
+                                            "birdseye.png",
+                                            "birdseye.svg",
+                                            "birdseye.csv",
+                                            "perspective.png",
+                                            "trajectories.png",
+                                            "trajectories.svg",
+                                            "trajectories.csv",
+                                            "overlays/000000.jpg",
+                                            "overlays/000015.jpg",
+                                            "sampler_trace.png",
+                                            "sampler_trace.svg",
+                                            "sampler_trace.csv",
+                                            "eval.json",
+                                            "report.md"};
+
 TEST(RunPipeline, WritesEveryFileAndEqualsTheSingleCommands) {
   const std::string run = testing::SimulatedRun();
   ASSERT_FALSE(run.empty());
@@ -54,15 +85,33 @@ TEST(RunPipeline, WritesEveryFileAndEqualsTheSingleCommands) {
   EXPECT_EQ(result.times[1].name, "o-slam");
   EXPECT_EQ(result.Total().seconds,
             result.times[0].seconds + result.times[1].seconds + result.times[2].seconds);
-  for (const char* file : {"detections.csv", "omap.json", "map.glb", "map.gltf", "map.ply",
-                           "trajectory.ply", "birdseye.png", "perspective.png", "trajectories.png",
-                           "overlays/000000.png", "overlays/000015.png", "eval.json", "report.md"})
+  for (const std::string& file : kRunFiles)
     EXPECT_TRUE(fs::is_regular_file(fs::path(out) / file)) << file;
   EXPECT_EQ(result.eval_path, out + "/eval.json");
   ASSERT_TRUE(result.metrics.has_value());
   EXPECT_EQ(result.metrics->true_objects_total, 1);
   EXPECT_EQ(result.map.trajectory.size(), 16u);
-  EXPECT_NE(ReadFile(result.report_path).find("method: oslam, seed 3."), std::string::npos);
+  // The report: the input counts, the sampler as a plot and numbers (no
+  // raw trace), every score named once with its definition.
+  const std::string report = ReadFile(result.report_path);
+  EXPECT_NE(report.find("| frames | 16 |"), std::string::npos) << report;
+  EXPECT_NE(report.find("| detections | " + std::to_string(result.detect.detections.size()) + " |"),
+            std::string::npos);
+  const SamplerOptions& sampler = options.slam.sampler;
+  EXPECT_NE(report.find(std::to_string(sampler.num_chains) + " chains, " +
+                        std::to_string(sampler.num_iterations) + " iterations (the first " +
+                        std::to_string(sampler.burn_in) + " burn-in), seed 3"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("oslam " OSLAM_VERSION), std::string::npos);
+  EXPECT_NE(report.find("![sampler trace](sampler_trace.png)"), std::string::npos);
+  EXPECT_NE(report.find("| effective sample size | "), std::string::npos);
+  EXPECT_EQ(report.find("cold_chain_log_target"), std::string::npos);
+  for (const char* name : {"3D position error, median", "horizontal position error, median"})
+    EXPECT_EQ(Count(report, name), 1u) << name;
+  EXPECT_EQ(Count(ReadFile(out + "/sampler_trace.csv"), "\n"),
+            1 + result.slam.sampler.summary.hill_climb_trace.size() +
+                result.slam.sampler.summary.cold_trace.size());
 
   // The single commands, given the same options as flags.
   const std::string single = dir.Path("single");
@@ -86,7 +135,7 @@ TEST(RunPipeline, WritesEveryFileAndEqualsTheSingleCommands) {
       Oslam("export " + result.omap_path + " --run " + run + " -o " + single + "/export --quiet")
           .exit_code,
       0);
-  for (const char* file : {"map.gltf", "map.ply", "trajectory.ply"})
+  for (const char* file : {"map.gltf", "map.ply", "trajectory.ply", "trajectory_estimated.txt"})
     EXPECT_EQ(ReadFile(single + "/export/" + file), ReadFile(out + "/" + file)) << file;
 
   const testing::CommandResult eval =
@@ -106,7 +155,8 @@ TEST(RunPipeline, NearestNeighbourMethodAndNoOverlays) {
   EXPECT_FALSE(fs::exists(dir.Path("nn/overlays")));
   EXPECT_EQ(Json(result.omap_path)["source"]["association"], "nearest neighbour (gated, 0.5 m)");
   EXPECT_FALSE(Json(result.omap_path).contains("sampler"));
-  EXPECT_NE(ReadFile(result.report_path).find("method: nn"), std::string::npos);
+  EXPECT_NE(ReadFile(result.report_path).find("| method | nn |"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir.Path("nn/sampler_trace.png")));
 }
 
 TEST(RunPipeline, InvalidOptionsAndInputAreRefusedBeforeAnythingIsWritten) {

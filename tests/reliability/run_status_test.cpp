@@ -1,0 +1,157 @@
+// `oslam run` marks its output folder (run.json): a run that failed or was
+// killed half way never looks finished, a re-run leaves no older result
+// beside its own, and --resume reuses what a killed run completed.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <iostream>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "reliability_fixture.h"
+
+extern char** environ;
+
+namespace oslam {
+namespace {
+
+using testing::CopyOfRun;
+using testing::FixtureRun;
+using testing::Oslam;
+using testing::OslamResult;
+using testing::ReadFile;
+using testing::TempDir;
+using testing::WriteFile;
+namespace fs = std::filesystem;
+
+const char* const kFast[] = {"--set",  "slam.samples=60",
+                             "--set",  "slam.burn_in=10",
+                             "--set",  "slam.hill_climb=20",
+                             "--set",  "export.overlays=0",
+                             "--seed", "3",
+                             "--quiet"};
+
+std::string FastArguments() {
+  std::string text;
+  for (const char* a : kFast) text += std::string(" ") + a;
+  return text;
+}
+
+nlohmann::json Status(const std::string& out) {
+  return nlohmann::json::parse(ReadFile(out + "/run.json"));
+}
+
+TEST(RunStatus, ACompleteRunSaysSo) {
+  TempDir dir;
+  const std::string out = dir.Path("out");
+  const OslamResult r = Oslam("run " + FixtureRun() + " -o " + out + FastArguments());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json status = Status(out);
+  EXPECT_EQ(status["format"], "oslam-run");
+  EXPECT_EQ(status["status"], "complete");
+  for (const char* stage : {"configuration", "detect", "o-slam", "export", "eval", "report"})
+    EXPECT_EQ(status["stages"][stage], "complete") << stage;
+  EXPECT_FALSE(status.contains("error"));
+  // Run times are in the report, not in the map.
+  EXPECT_EQ(ReadFile(out + "/omap.json").find("time"), std::string::npos);
+  EXPECT_NE(ReadFile(out + "/report.md").find("## Run times of the sampler"), std::string::npos);
+}
+
+TEST(RunStatus, AFailedReRunLeavesNoOlderResultAndSaysWhy) {
+  TempDir dir;
+  const std::string out = dir.Path("out");
+  ASSERT_EQ(Oslam("run " + FixtureRun() + " -o " + out + FastArguments()).exit_code, 0);
+  WriteFile(out + "/notes.txt", "the user's own file");
+  const std::string run = CopyOfRun(dir.Path("run"));
+  const std::string frame = run + "/frames/000009.png";
+  WriteFile(frame, "not a png");
+  const OslamResult r = Oslam("run " + run + " -o " + out + FastArguments());
+  std::cout << "| run, failed re-run into an earlier run's folder | " << r.exit_code << " | "
+            << r.err.substr(0, r.err.size() - 1) << " | config.yaml notes.txt run.json |"
+            << std::endl;
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find(frame + ": not an image"), std::string::npos) << r.err;
+  for (const char* old : {"omap.json", "map.glb", "map.gltf", "map.ply", "report.md", "eval.json",
+                          "detections.csv", "birdseye.png"})
+    EXPECT_FALSE(fs::exists(out + "/" + old)) << old << " of the earlier run is left";
+  EXPECT_EQ(ReadFile(out + "/notes.txt"), "the user's own file");
+  EXPECT_TRUE(fs::exists(out + "/config.yaml"));
+  const nlohmann::json status = Status(out);
+  EXPECT_EQ(status["status"], "failed");
+  EXPECT_EQ(status["stages"]["detect"], "failed");
+  EXPECT_EQ(status["stages"]["o-slam"], "pending");
+  EXPECT_NE(status["error"].get<std::string>().find("000009.png"), std::string::npos);
+}
+
+// Starts oslam with `arguments`; returns its pid.
+pid_t Start(const std::vector<std::string>& arguments) {
+  std::vector<std::string> all = {OSLAM_BINARY};
+  all.insert(all.end(), arguments.begin(), arguments.end());
+  std::vector<char*> argv;
+  for (std::string& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int failed = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  return failed ? -1 : pid;
+}
+
+TEST(RunStatus, AKilledRunLooksUnfinishedAndResumeReusesItsStages) {
+  TempDir dir;
+  const std::string out = dir.Path("out");
+  std::vector<std::string> arguments = {"run", FixtureRun(), "-o", out};
+  arguments.insert(arguments.end(), std::begin(kFast), std::end(kFast));
+  const pid_t pid = Start(arguments);
+  ASSERT_GT(pid, 0);
+  // Killed (no chance to clean up) once the detections are done.
+  bool detected = false;
+  const auto start = std::chrono::steady_clock::now();
+  while (!detected && std::chrono::steady_clock::now() - start < std::chrono::seconds(120)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    const std::string text = ReadFile(out + "/run.json");
+    detected = text.find("\"detect\": \"complete\"") != std::string::npos;
+  }
+  ::kill(pid, SIGKILL);
+  int wait_status = 0;
+  ::waitpid(pid, &wait_status, 0);
+  ASSERT_TRUE(detected) << "the run never finished its detect stage";
+  const nlohmann::json killed = Status(out);
+  std::cout << "| run, killed after the detect stage | (SIGKILL) | - | run.json: "
+            << killed["status"] << " |" << std::endl;
+  EXPECT_EQ(killed["status"], "running");  // never "complete"
+  EXPECT_FALSE(fs::exists(out + "/report.md"));
+
+  const OslamResult resumed =
+      Oslam("run " + FixtureRun() + " -o " + out + " --resume" + FastArguments());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  const nlohmann::json status = Status(out);
+  EXPECT_EQ(status["status"], "complete");
+  EXPECT_EQ(status["stages"]["detect"], "reused");
+  EXPECT_EQ(status["stages"]["o-slam"], "complete");
+  // The same map as a run from scratch (into another folder: the paths in
+  // the map differ by that folder only).
+  const std::string fresh = dir.Path("fresh");
+  ASSERT_EQ(Oslam("run " + FixtureRun() + " -o " + fresh + FastArguments()).exit_code, 0);
+  std::string map = ReadFile(out + "/omap.json");
+  for (size_t at; (at = map.find(out + "/")) != std::string::npos;)
+    map.replace(at, out.size(), fresh);
+  EXPECT_EQ(map, ReadFile(fresh + "/omap.json"));
+  // Other settings: nothing is reused.
+  const OslamResult other = Oslam("run " + FixtureRun() + " -o " + out +
+                                  " --resume --set detect.min_area_px=41" + FastArguments());
+  ASSERT_EQ(other.exit_code, 0) << other.err;
+  EXPECT_EQ(Status(out)["stages"]["detect"], "complete");
+}
+
+}  // namespace
+}  // namespace oslam
