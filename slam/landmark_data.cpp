@@ -20,30 +20,6 @@ namespace oslam {
 
 namespace {
 
-// Whitespace-separated numeric text files: calls `row(line, tokens)` for
-// every line that is not blank or a '#' comment.
-void ForEachRow(const std::string& path,
-                const std::function<void(int, const std::vector<std::string>&)>& row) {
-  std::ifstream in(path);
-  if (!in) throw Error::InFile(path, "cannot open the file");
-  CheckInputFile(path);
-  std::string text;
-  int line = 0;
-  bool any = false;
-  while (std::getline(in, text)) {
-    ++line;
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    std::istringstream fields(text);
-    std::vector<std::string> tokens;
-    for (std::string token; fields >> token;) tokens.push_back(token);
-    if (tokens.empty() || tokens[0][0] == '#') continue;
-    any = true;
-    row(line, tokens);
-  }
-  if (in.bad()) throw Error::InFile(path, "read error");
-  if (!any) throw Error::InFile(path, "no data (empty file)");
-}
-
 double Number(const std::string& path, int line, const std::string& token, const char* what) {
   errno = 0;
   char* end = nullptr;
@@ -165,6 +141,28 @@ std::vector<Pose2> DeadReckoning(int num_poses, const std::vector<RelativePoseMe
 
 }  // namespace
 
+void ForEachLandmarkRecord(const std::string& path,
+                           const std::function<void(int, const std::vector<std::string>&)>& row) {
+  std::ifstream in(path);
+  if (!in) throw Error::InFile(path, "cannot open the file");
+  CheckInputFile(path);
+  std::string text;
+  int line = 0;
+  bool any = false;
+  while (std::getline(in, text)) {
+    ++line;
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    std::istringstream fields(text);
+    std::vector<std::string> tokens;
+    for (std::string token; fields >> token;) tokens.push_back(token);
+    if (tokens.empty() || tokens[0][0] == '#') continue;
+    any = true;
+    row(line, tokens);
+  }
+  if (in.bad()) throw Error::InFile(path, "read error");
+  if (!any) throw Error::InFile(path, "no data (empty file)");
+}
+
 // ---------------------------------------------------------------------------
 
 LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
@@ -178,7 +176,7 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
     LandmarkSighting sighting;
   };
   std::vector<PendingSighting> pending;
-  ForEachRow(path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     if (t[0] == "ODOMETRY") {
       ExpectFields(path, line, t, 12, "ODOMETRY i j dx dy dtheta c11 c12 c13 c22 c23 c33");
       const long i = Integer(path, line, t[1], "pose i"), j = Integer(path, line, t[2], "pose j");
@@ -338,7 +336,7 @@ LandmarkDataset ReadVictoriaRaw(const std::string& measurements_path,
 
   // Scans: one pose per distinct time.
   double last_time = -std::numeric_limits<double>::infinity();
-  ForEachRow(measurements_path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(measurements_path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(measurements_path, line, t, 4, "time range bearing diameter");
     const double time = Number(measurements_path, line, t[0], "time");
     const double range = Number(measurements_path, line, t[1], "range", bounds::kCoordinateM, "m");
@@ -373,7 +371,7 @@ LandmarkDataset ReadVictoriaRaw(const std::string& measurements_path,
     double time, speed, steering;
   };
   std::vector<Input> inputs;
-  ForEachRow(inputs_path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(inputs_path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(inputs_path, line, t, 3, "time speed steering");
     const Input input{Number(inputs_path, line, t[0], "time"),
                       Number(inputs_path, line, t[1], "speed", bounds::kSpeedMps, "m/s"),
@@ -417,7 +415,7 @@ LandmarkDataset ReadVictoriaRaw(const std::string& measurements_path,
 
 std::vector<GpsFix> ReadGps(const std::string& path) {
   std::vector<GpsFix> fixes;
-  ForEachRow(path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(path, line, t, 3, "time x y");
     GpsFix fix{Number(path, line, t[0], "time"),
                Number(path, line, t[1], "x", bounds::kCoordinateM, "m"),
@@ -494,7 +492,7 @@ std::vector<int> GivenAssociation(const LandmarkDataset& data) {
 
 std::vector<int> ReadAssociation(const std::string& path, size_t num_sightings) {
   std::vector<int> association;
-  ForEachRow(path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(path, line, t, 1, "landmark id");
     errno = 0;
     char* end = nullptr;

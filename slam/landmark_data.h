@@ -21,6 +21,7 @@
 // Every malformed line throws oslam::Error "FILE:LINE: problem".
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <optional>
 #include <string>
@@ -154,5 +155,12 @@ std::vector<int> GivenAssociation(const LandmarkDataset& data);
 // "FILE:LINE: ..." on a bad line, "FILE: ..." unless it has exactly
 // `num_sightings` lines.
 std::vector<int> ReadAssociation(const std::string& path, size_t num_sightings);
+
+// Whitespace-separated text data (the GTSAM, Victoria Park, g2o, TORO and iSAM
+// files): checks the file (CheckInputFile), then calls `row(line, tokens)`
+// for every line that is not blank or a '#' comment. Throws oslam::Error
+// naming the file when it cannot be read or holds no data.
+void ForEachLandmarkRecord(const std::string& path,
+                           const std::function<void(int, const std::vector<std::string>&)>& row);
 
 }  // namespace oslam

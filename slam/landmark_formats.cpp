@@ -19,34 +19,13 @@
 #include "core/angles.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "slam/landmark_data.h"
 #include "slam/landmark_factors.h"
 
 namespace oslam {
 namespace {
 
 // ---- tokens ----
-
-// Calls row(line, tokens) for every line that is not blank or a '#' comment.
-void ForEachRecord(const std::string& path,
-                   const std::function<void(int, const std::vector<std::string>&)>& row) {
-  std::ifstream in(path);
-  if (!in) throw Error::InFile(path, "cannot open the file");
-  std::string text;
-  int line = 0;
-  bool any = false;
-  while (std::getline(in, text)) {
-    ++line;
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    std::istringstream fields(text);
-    std::vector<std::string> tokens;
-    for (std::string token; fields >> token;) tokens.push_back(token);
-    if (tokens.empty() || tokens[0][0] == '#') continue;
-    any = true;
-    row(line, tokens);
-  }
-  if (in.bad()) throw Error::InFile(path, "read error");
-  if (!any) throw Error::InFile(path, "no data (empty file)");
-}
 
 struct Record {
   const std::string& path;
@@ -310,7 +289,7 @@ DetectedLandmarkFormat DetectLandmarkFormat(const std::string& path) {
   bool toro_diagonal = true, isam_diagonal = true;
   int first_unknown = 0;
   std::string unknown;
-  ForEachRecord(path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     const std::string& tag = t[0];
     if (IsG2oTag(tag)) {
       g2o = true;
@@ -365,7 +344,7 @@ LandmarkDataset ReadG2oLandmarks(const std::string& path) {
   Builder builder(path, "g2o", /*poses_by_id=*/true);
   // Vertices first (g2o declares them before use, but a file may not).
   bool any_vertex = false;
-  ForEachRecord(path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     const Record r{path, line, t};
     if (t[0] == "VERTEX_SE2") {
       r.Expect(5, "id x y theta");
@@ -382,7 +361,7 @@ LandmarkDataset ReadG2oLandmarks(const std::string& path) {
     }
   });
   builder.SetPosesDeclared(any_vertex);
-  ForEachRecord(path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     const Record r{path, line, t};
     if (t[0] == "EDGE_SE2") {
       r.Expect(12, "i j dx dy dtheta i11 i12 i13 i22 i23 i33");
@@ -411,7 +390,7 @@ LandmarkDataset ReadG2oLandmarks(const std::string& path) {
 LandmarkDataset ReadToroGraph(const std::string& path) {
   Builder builder(path, "toro", /*poses_by_id=*/true);
   bool any_vertex = false;
-  ForEachRecord(path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     const Record r{path, line, t};
     if (t[0] == "VERTEX2") {
       r.Expect(5, "id x y theta");
@@ -423,7 +402,7 @@ LandmarkDataset ReadToroGraph(const std::string& path) {
     }
   });
   builder.SetPosesDeclared(any_vertex);
-  ForEachRecord(path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     const Record r{path, line, t};
     if (t[0] != "EDGE2") return;
     r.Expect(12, "i j forward sideward rotate inf_ff inf_fs inf_ss inf_rr inf_fr inf_sr");
@@ -440,7 +419,7 @@ LandmarkDataset ReadToroGraph(const std::string& path) {
 
 LandmarkDataset ReadIsamLandmarks(const std::string& path) {
   Builder builder(path, "isam", /*poses_by_id=*/false);
-  ForEachRecord(path, [&](int line, const std::vector<std::string>& t) {
+  ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     const Record r{path, line, t};
     if (t[0] == "ODOMETRY" || t[0] == "EDGE2") {
       r.Expect(12, "i j dx dy dtheta sqrt-information xx xy xt yy yt tt");
