@@ -18,6 +18,7 @@ for argument in "$@"; do
       OSLAM_BUILD_DIR="$OSLAM_ROOT/build-sanitize"
       OSLAM_CMAKE_EXTRA=(-DOSLAM_SANITIZE=ON -DOSLAM_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo)
       export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1"
+      export LSAN_OPTIONS="suppressions=$OSLAM_ROOT/scripts/lsan-suppressions.txt:print_suppressions=0"
       export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
       ;;
     *) echo "usage: scripts/test.sh [--all] [--sanitize]" >&2; exit 2 ;;
