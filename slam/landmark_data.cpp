@@ -20,21 +20,10 @@ namespace oslam {
 
 namespace {
 
-double Number(const std::string& path, int line, const std::string& token, const char* what) {
-  errno = 0;
-  char* end = nullptr;
-  const double value = std::strtod(token.c_str(), &end);
-  if (end == token.c_str() || *end != '\0')
-    throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not a number");
-  if (!std::isfinite(value) || errno == ERANGE)
-    throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not finite");
-  return value;
-}
-
 // A number within the physical bounds (core/bounds.h).
 double Number(const std::string& path, int line, const std::string& token, const char* what,
               double bound, const char* unit) {
-  const double value = Number(path, line, token, what);
+  const double value = ParseFiniteNumber(path, line, token, what);
   if (!bounds::Within(value, -bound, bound))
     throw Error::AtLine(
         path, line, std::string(what) + ": " + bounds::OutsideMessage(value, -bound, bound, unit));
@@ -141,6 +130,18 @@ std::vector<Pose2> DeadReckoning(int num_poses, const std::vector<RelativePoseMe
 
 }  // namespace
 
+double ParseFiniteNumber(const std::string& path, int line, const std::string& token,
+                         const char* what) {
+  errno = 0;
+  char* end = nullptr;
+  const double value = std::strtod(token.c_str(), &end);
+  if (end == token.c_str() || *end != '\0')
+    throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not a number");
+  if (!std::isfinite(value) || errno == ERANGE)
+    throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not finite");
+  return value;
+}
+
 void ForEachLandmarkRecord(const std::string& path,
                            const std::function<void(int, const std::vector<std::string>&)>& row) {
   std::ifstream in(path);
@@ -187,7 +188,7 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
       for (int k = 0; k < 9; ++k)
         v[k] = k < 2    ? Number(path, line, t[3 + k], kNames[k], bounds::kCoordinateM, "m")
                : k == 2 ? Number(path, line, t[3 + k], kNames[k], bounds::kAngleRad, "rad")
-                        : Number(path, line, t[3 + k], kNames[k]);
+                        : ParseFiniteNumber(path, line, t[3 + k], kNames[k]);
       RelativePoseMeasurement edge;
       edge.delta = {v[0], v[1], v[2]};
       // load2D's automatic noise format: a diagonal at entries 1, 3, 4 is a
@@ -232,8 +233,9 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
       s.landmark = static_cast<int>(id);
       const double x = Number(path, line, t[3], "x", bounds::kCoordinateM, "m"),
                    y = Number(path, line, t[4], "y", bounds::kCoordinateM, "m");
-      const double c11 = Number(path, line, t[5], "c11"), c12 = Number(path, line, t[6], "c12"),
-                   c22 = Number(path, line, t[7], "c22");
+      const double c11 = ParseFiniteNumber(path, line, t[5], "c11"),
+                   c12 = ParseFiniteNumber(path, line, t[6], "c12"),
+                   c22 = ParseFiniteNumber(path, line, t[7], "c22");
       if (!(c11 > 0 && c22 > 0 && c11 * c22 - c12 * c12 > 0))
         throw Error::AtLine(path, line, "the landmark covariance is not positive definite");
       s.range_m = std::hypot(x, y);
@@ -264,10 +266,10 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
       if (id > std::numeric_limits<int>::max())
         throw Error::AtLine(path, line, "landmark id " + t[2] + " is too large");
       s.landmark = static_cast<int>(id);
-      s.bearing_rad = Number(path, line, t[3], "bearing");
-      s.range_m = Number(path, line, t[4], "range");
-      s.bearing_std_rad = Number(path, line, t[5], "bearing_std");
-      s.range_std_m = Number(path, line, t[6], "range_std");
+      s.bearing_rad = ParseFiniteNumber(path, line, t[3], "bearing");
+      s.range_m = ParseFiniteNumber(path, line, t[4], "range");
+      s.bearing_std_rad = ParseFiniteNumber(path, line, t[5], "bearing_std");
+      s.range_std_m = ParseFiniteNumber(path, line, t[6], "range_std");
       if (!(s.range_m > 0)) throw Error::AtLine(path, line, "range must be > 0");
       if (!(s.bearing_std_rad > 0) || !(s.range_std_m > 0))
         throw Error::AtLine(path, line, "the noise stds must be > 0");
@@ -338,7 +340,7 @@ LandmarkDataset ReadVictoriaRaw(const std::string& measurements_path,
   double last_time = -std::numeric_limits<double>::infinity();
   ForEachLandmarkRecord(measurements_path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(measurements_path, line, t, 4, "time range bearing diameter");
-    const double time = Number(measurements_path, line, t[0], "time");
+    const double time = ParseFiniteNumber(measurements_path, line, t[0], "time");
     const double range = Number(measurements_path, line, t[1], "range", bounds::kCoordinateM, "m");
     const double bearing =
         Number(measurements_path, line, t[2], "bearing", bounds::kAngleRad, "rad");
@@ -373,9 +375,9 @@ LandmarkDataset ReadVictoriaRaw(const std::string& measurements_path,
   std::vector<Input> inputs;
   ForEachLandmarkRecord(inputs_path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(inputs_path, line, t, 3, "time speed steering");
-    const Input input{Number(inputs_path, line, t[0], "time"),
+    const Input input{ParseFiniteNumber(inputs_path, line, t[0], "time"),
                       Number(inputs_path, line, t[1], "speed", bounds::kSpeedMps, "m/s"),
-                      Number(inputs_path, line, t[2], "steering")};
+                      ParseFiniteNumber(inputs_path, line, t[2], "steering")};
     if (!inputs.empty() && input.time < inputs.back().time)
       throw Error::AtLine(inputs_path, line, "time goes backwards (" + t[0] + " s)");
     if (std::abs(input.steering) >= kPi / 2)
@@ -417,7 +419,7 @@ std::vector<GpsFix> ReadGps(const std::string& path) {
   std::vector<GpsFix> fixes;
   ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
     ExpectFields(path, line, t, 3, "time x y");
-    GpsFix fix{Number(path, line, t[0], "time"),
+    GpsFix fix{ParseFiniteNumber(path, line, t[0], "time"),
                Number(path, line, t[1], "x", bounds::kCoordinateM, "m"),
                Number(path, line, t[2], "y", bounds::kCoordinateM, "m")};
     if (!fixes.empty() && fix.time_s < fixes.back().time_s)

@@ -156,6 +156,11 @@ std::vector<int> GivenAssociation(const LandmarkDataset& data);
 // `num_sightings` lines.
 std::vector<int> ReadAssociation(const std::string& path, size_t num_sightings);
 
+// The number in `token`, finite; throws oslam::Error "FILE:LINE: WHAT: ..."
+// otherwise.
+double ParseFiniteNumber(const std::string& path, int line, const std::string& token,
+                         const char* what);
+
 // Whitespace-separated text data (the GTSAM, Victoria Park, g2o, TORO and iSAM
 // files): checks the file (CheckInputFile), then calls `row(line, tokens)`
 // for every line that is not blank or a '#' comment. Throws oslam::Error

@@ -39,15 +39,7 @@ struct Record {
                               layout + "), got " + std::to_string(tokens.size() - 1));
   }
   double Number(size_t i, const char* what) const {
-    const std::string& token = tokens[i];
-    errno = 0;
-    char* end = nullptr;
-    const double value = std::strtod(token.c_str(), &end);
-    if (end == token.c_str() || *end != '\0')
-      throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not a number");
-    if (!std::isfinite(value) || errno == ERANGE)
-      throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not finite");
-    return value;
+    return ParseFiniteNumber(path, line, tokens[i], what);
   }
   long Id(size_t i, const char* what) const {
     const std::string& token = tokens[i];
@@ -585,14 +577,24 @@ void WriteToroGraph(const LandmarkDataset& data, const std::string& path) {
   WriteTextFileAtomically(path, out.str());
 }
 
+namespace {
+
+// The indices of the sightings made at each pose.
+std::vector<std::vector<int>> SightingsByPose(const LandmarkDataset& data) {
+  std::vector<std::vector<int>> at(data.num_poses);
+  for (size_t k = 0; k < data.sightings.size(); ++k)
+    at[data.sightings[k].pose].push_back(static_cast<int>(k));
+  return at;
+}
+
+}  // namespace
+
 void WriteIsamLandmarks(const LandmarkDataset& data, const std::string& path) {
   CheckWritable(data, path, true);
   std::ostringstream out;
   // Sightings after the first edge reaching their pose (iSAM numbers poses
   // as the odometry reaches them).
-  std::vector<std::vector<int>> at(data.num_poses);
-  for (size_t k = 0; k < data.sightings.size(); ++k)
-    at[data.sightings[k].pose].push_back(static_cast<int>(k));
+  std::vector<std::vector<int>> at = SightingsByPose(data);
   auto sightings = [&](int pose) {
     for (int k : at[pose]) {
       const LandmarkSighting& s = data.sightings[k];
@@ -617,9 +619,7 @@ void WriteIsamLandmarks(const LandmarkDataset& data, const std::string& path) {
 void WriteGtsamLandmarks(const LandmarkDataset& data, const std::string& path) {
   CheckWritable(data, path, true);
   std::ostringstream out;
-  std::vector<std::vector<int>> at(data.num_poses);
-  for (size_t k = 0; k < data.sightings.size(); ++k)
-    at[data.sightings[k].pose].push_back(static_cast<int>(k));
+  std::vector<std::vector<int>> at = SightingsByPose(data);
   auto sightings = [&](int pose) {
     for (int k : at[pose]) {
       const LandmarkSighting& s = data.sightings[k];
