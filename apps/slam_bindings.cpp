@@ -142,10 +142,13 @@ void BindProposals(SlamStageOptions* o, Bindings* b) {
              "d_j counts o_j itself (#41)")
       .Key("merge_count_includes_self", "1: d_j counts o_j itself (docs/method.md §13 #41)");
   b->AddChoice(&m.split_sampler,
-               {{"uniform", SplitSampler::kUniform}, {"thesis", SplitSampler::kThesis}},
-               "split-sampler", "uniform|thesis", "split partition proposal (#18/#43)")
+               {{"uniform", SplitSampler::kUniform},
+                {"thesis", SplitSampler::kThesis},
+                {"one-or-uniform", SplitSampler::kOneTrackOrUniform}},
+               "split-sampler", "uniform|thesis|one-or-uniform", "split partition proposal (#18/#43)")
       .Key("split_sampler",
-           "uniform (non-empty subset) or thesis (Algorithm 6) (docs/method.md §13 #18/#43)");
+           "uniform (non-empty subset), thesis (Algorithm 6) or one-or-uniform (one track alone "
+           "half the time) (docs/method.md §9.2, §13 #18/#43)");
 }
 
 // The model: class confusion and priors, detection and odometry noise, the solver.
