@@ -145,7 +145,8 @@ void BindProposals(SlamStageOptions* o, Bindings* b) {
                {{"uniform", SplitSampler::kUniform},
                 {"thesis", SplitSampler::kThesis},
                 {"one-or-uniform", SplitSampler::kOneTrackOrUniform}},
-               "split-sampler", "uniform|thesis|one-or-uniform", "split partition proposal (#18/#43)")
+               "split-sampler", "uniform|thesis|one-or-uniform",
+               "split partition proposal (#18/#43)")
       .Key("split_sampler",
            "uniform (non-empty subset), thesis (Algorithm 6) or one-or-uniform (one track alone "
            "half the time) (docs/method.md §9.2, §13 #18/#43)");

@@ -50,7 +50,7 @@ struct FusionOptions {
   // geometry evidence. Only with class_geometry_evidence. false: (4.43), every
   // class prior removed.
   bool existence_given_class = true;
-  double min_existence = 0.0;         // identities below this pi are left out of the map
+  double min_existence = 0.0;  // identities below this pi are left out of the map
 
   // Identity merging (docs/method.md §7.3); false = the thesis' Algorithm 3 as printed.
   bool merge_identities = true;
