@@ -7,10 +7,10 @@
 #include <memory>
 #include <string>
 #include <utility>
-
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 
 #include "association/omap_fusion.h"
 
