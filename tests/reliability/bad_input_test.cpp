@@ -18,6 +18,7 @@ namespace oslam {
 namespace {
 
 using testing::CopyOfRun;
+using testing::FilesLeft;
 using testing::FilesUnder;
 using testing::FixtureRun;
 using testing::Oslam;
@@ -54,21 +55,13 @@ void EditCsv(const std::string& path, int row, int column, const std::string& va
   WriteFile(path, out);
 }
 
-std::string FilesLeft(const std::string& folder) {
-  std::string list;
-  for (const std::string& f : FilesUnder(folder)) list += (list.empty() ? "" : " ") + f;
-  return list.empty() ? "none" : list;
-}
-
 // Prints the row and checks what every row needs: the exit code, exactly one
 // line on stderr holding every `parts`, and no run longer than `max_seconds`.
 void Row(const std::string& name, const OslamResult& r, int exit_code,
          const std::vector<std::string>& parts, const std::string& files_left,
          double max_seconds = 30) {
-  std::string message = r.err;
-  if (!message.empty() && message.back() == '\n') message.pop_back();
-  std::cout << "| " << name << " | " << r.exit_code << " | " << message << " | " << files_left
-            << " |" << std::endl;
+  std::cout << "| " << name << " | " << r.exit_code << " | " << testing::OneLine(r.err) << " | "
+            << files_left << " |" << std::endl;
   EXPECT_FALSE(r.timed_out) << name;
   EXPECT_EQ(r.exit_code, exit_code) << name << ": " << r.err;
   EXPECT_EQ(testing::Lines(r.err), 1) << name << ": " << r.err;
@@ -281,6 +274,18 @@ TEST_F(BadInput, LandmarksWithXOf1e300AreRefusedBeforeAnythingIsWritten) {
   const std::string out = dir_.Path("out");
   const OslamResult r = Oslam("map --landmarks " + data + " -o " + out + "/omap.json --quiet");
   Row("map --landmarks, x 1e300", r, 1, {data + ":2: x: 1e+300 is outside"}, FilesLeft(out), 10);
+  EXPECT_TRUE(FilesUnder(out).empty());
+}
+
+TEST_F(BadInput, AG2oVertexAt1e300IsRefusedBeforeAnythingIsWritten) {
+  const std::string data = dir_.Path("landmarks.g2o");
+  WriteFile(data,
+            "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_XY 2 1e300 5\n"
+            "EDGE_SE2 0 1 1 0 0 100 0 0 100 0 1000\nEDGE_SE2_XY 0 2 3 5 10 0 10\n");
+  const std::string out = dir_.Path("out");
+  const OslamResult r = Oslam("map --landmarks " + data + " -o " + out + "/omap.json --quiet");
+  Row("map --landmarks (g2o), vertex x 1e300", r, 1, {data + ":3: x: 1e+300 is outside"},
+      FilesLeft(out), 10);
   EXPECT_TRUE(FilesUnder(out).empty());
 }
 
