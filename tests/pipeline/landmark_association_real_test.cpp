@@ -17,37 +17,11 @@
 #include "pipeline/landmark_association.h"
 #include "slam/landmark_data.h"
 #include "slam/landmark_noise.h"
+#include "slam/landmark_reference.h"
 #include "tests/test_util.h"
 
 namespace oslam {
 namespace {
-
-// The shipped association with its duplicates joined: landmarks solved
-// within `radius_m` of each other that no scan sees both of (one tree given
-// two ids by the file's front end).
-std::vector<int> WithDuplicatesJoined(const LandmarkDataset& data, const std::vector<int>& ids,
-                                      const LandmarkSlamResult& known, double radius_m,
-                                      int* joined) {
-  std::map<int, std::set<int>> scans;
-  for (size_t k = 0; k < ids.size(); ++k) scans[ids[k]].insert(data.sightings[k].pose);
-  std::map<int, int> into;
-  *joined = 0;
-  for (size_t a = 0; a < known.landmarks.size(); ++a)
-    for (size_t b = a + 1; b < known.landmarks.size(); ++b) {
-      const MappedLandmark& p = known.landmarks[a];
-      const MappedLandmark& q = known.landmarks[b];
-      if ((p.position_m - q.position_m).norm() > radius_m || into.count(q.id)) continue;
-      const std::set<int>& x = scans[p.id];
-      const std::set<int>& y = scans[q.id];
-      if (std::any_of(x.begin(), x.end(), [&](int pose) { return y.count(pose) > 0; })) continue;
-      into[q.id] = into.count(p.id) ? into[p.id] : p.id;
-      ++*joined;
-    }
-  std::vector<int> out = ids;
-  for (int& id : out)
-    if (into.count(id)) id = into[id];
-  return out;
-}
 
 TEST(LandmarkAssociationRealTest, VictoriaParkWithIdsHidden) {
   const std::string shared = testing::SharedDataDir();
@@ -66,7 +40,7 @@ TEST(LandmarkAssociationRealTest, VictoriaParkWithIdsHidden) {
   const LandmarkSlamResult known =
       LandmarkSlam(known_options).Solve(WithNoiseScales(data, result.noise_scales), shipped);
   int joined = 0;
-  const std::vector<int> fixed = WithDuplicatesJoined(data, shipped, known, 0.25, &joined);
+  const std::vector<int> fixed = JoinDuplicateLandmarks(data, shipped, known, 0.25, &joined);
   const PairwiseAgreement a = ComparePairwise(result.association, shipped);
   const PairwiseAgreement b = ComparePairwise(result.association, fixed);
   const double rmse = TrajectoryRmse(result.solution.trajectory, known.trajectory);
