@@ -241,6 +241,8 @@ class LandmarkAssociation {
   long DuplicateSweep();
   long MergeRounds(int first_new, double sweep_m);
   std::vector<MergeCandidate> BestMerges(int first_new, double sweep_m);
+  std::vector<std::pair<double, int>> MergeCandidatesOf(size_t j, int first_new,
+                                                        double sweep_m) const;
   bool MakeMerges(const std::vector<MergeCandidate>& best, double sweep_m, int* made);
   // Joint re-entry merge at window end n; returns the pairs merged.
   long JointMerge(int n);
