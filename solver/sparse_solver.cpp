@@ -415,6 +415,20 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
                           blocks, why);
 }
 
+bool SparseSolver::CovarianceRoots(const std::vector<std::vector<int>>& key_groups,
+                                   std::vector<Eigen::MatrixXd>* roots, std::string* why) {
+  const SerialOpenMpScope serial_openmp;
+  const NormalEquations& normal = impl_->normal;
+  if (!normal.factor_is_final()) {
+    if (why) *why = "no valid final factorisation (call Solve first)";
+    return false;
+  }
+  std::vector<std::vector<int>> columns;
+  if (!GroupColumns(normal, key_groups, &columns, why)) return false;
+  return oslam::CovarianceRoots(normal.factor(), normal.inverse_permutation(), normal.common(),
+                                columns, roots, why);
+}
+
 bool SparseSolver::CovarianceSamples(const std::vector<std::vector<int>>& key_groups, int count,
                                      unsigned long seed, std::vector<Eigen::MatrixXd>* samples,
                                      std::string* why) {

@@ -275,6 +275,40 @@ TEST(SolverTest, ObjectCovariancesOfASupernodalFactorEqualTheDenseInverse) {
   ExpectBlocksOfDenseCovariance(graph, dense, groups, blocks, 1e-8);
 }
 
+// The square-root columns of a small (simplicial LDL') and of the same
+// supernodal factor: Y_a' Y_b is the
+// (a, b) block of the inverse (MarginalCovariances, checked against the
+// dense inverse above), within a group and across two.
+TEST(SolverTest, CovarianceRootsGiveTheBlocksOfTheDenseInverse) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  for (const int poses : {25, 120}) {  // a simplicial LDL' and a supernodal LL' factor
+    SCOPED_TRACE(poses);
+    FactorGraph graph =
+        poses == 120 ? SmallSlamGraph(camera, 4, 120, 14) : SmallSlamGraph(camera, 1, poses);
+    SolverOptions options;
+    options.apply_final_step = false;
+    SparseSolver solver(options);
+    ASSERT_TRUE(solver.Solve(&graph).summary.IsUsable());
+    const int last = graph.num_variables() - 1;
+    const std::vector<std::vector<int>> groups = {{last - 1, last}, {5}, {20, last - 2}};
+    std::vector<Eigen::MatrixXd> roots;
+    ASSERT_TRUE(solver.CovarianceRoots(groups, &roots));
+    ASSERT_EQ(roots.size(), groups.size());
+    for (size_t a = 0; a < groups.size(); ++a)
+      for (size_t b = a; b < groups.size(); ++b) {
+        std::vector<Eigen::MatrixXd> block;  // the joint block, its (a, b) part compared
+        std::vector<int> both = groups[a];
+        both.insert(both.end(), groups[b].begin(), groups[b].end());
+        ASSERT_TRUE(solver.MarginalCovariances({both}, &block));
+        const Eigen::MatrixXd product = roots[a].transpose() * roots[b];
+        const Eigen::MatrixXd expected =
+            block[0].block(0, block[0].cols() - product.cols(), product.rows(), product.cols());
+        EXPECT_LT((product - expected).cwiseAbs().maxCoeff(), 1e-8 * expected.cwiseAbs().maxCoeff())
+            << "groups " << a << ", " << b;
+      }
+  }
+}
+
 // Every fill-reducing ordering (and the QR path) must give the same
 // iterates, evidence and covariances: the permutation is bookkeeping only.
 TEST(SolverTest, EveryOrderingGivesTheSameSolutionEvidenceAndCovariance) {
