@@ -59,7 +59,7 @@ struct SilhouetteEnd {
 
 bool SilhouetteEnds(const CameraModel& camera, const Eigen::Vector3d& base_robot, double range,
                     const CylinderGeometry& object, double depth_half_extent, bool jacobians,
-                    SilhouetteEnd* inner, SilhouetteEnd* outer) {
+                    SilhouetteEnd* inner, SilhouetteEnd* outer, bool* outer_beyond) {
   const double delta = depth_half_extent * object.diameter_m;
   if (!(range > delta)) return false;  // the robot inside the footprint
   const Eigen::Vector2d along = base_robot.head<2>() / range;
@@ -79,7 +79,11 @@ bool SilhouetteEnds(const CameraModel& camera, const Eigen::Vector3d& base_robot
       if (top) point.z() += object.height_m;
       double radius = 0.0;
       Eigen::RowVector3d wrt = Eigen::RowVector3d::Zero();
-      if (!camera.ProjectRadius(point, &radius, jacobians ? &wrt : nullptr)) return false;
+      if (!camera.ProjectRadius(point, &radius, jacobians ? &wrt : nullptr)) {
+        if (!top || !outer_beyond) return false;
+        *outer_beyond = true;  // a top edge beyond the mirror's field of view
+        continue;
+      }
       SilhouetteEnd* end = top ? outer : inner;
       bool& first = top ? first_top : first_base;
       const bool better = first || (top ? radius > end->radius_px : radius < end->radius_px);
@@ -102,7 +106,7 @@ bool SilhouetteEnds(const CameraModel& camera, const Eigen::Vector3d& base_robot
 // at unit distance along its ray.
 bool SphereEnds(const CameraModel& camera, const Eigen::Vector3d& base_robot, double range,
                 const CylinderGeometry& object, double viewpoint_height, bool jacobians,
-                SilhouetteEnd* inner, SilhouetteEnd* outer) {
+                SilhouetteEnd* inner, SilhouetteEnd* outer, bool* outer_beyond) {
   const double r = 0.5 * object.height_m;
   const double w = base_robot.z() + r - viewpoint_height;
   const double distance2 = range * range + w * w;
@@ -117,7 +121,11 @@ bool SphereEnds(const CameraModel& camera, const Eigen::Vector3d& base_robot, do
     const Eigen::Vector3d point(c * along.x(), c * along.y(), viewpoint_height + s);
     SilhouetteEnd* end = side < 0 ? inner : outer;
     Eigen::RowVector3d wrt = Eigen::RowVector3d::Zero();
-    if (!camera.ProjectRadius(point, &end->radius_px, jacobians ? &wrt : nullptr)) return false;
+    if (!camera.ProjectRadius(point, &end->radius_px, jacobians ? &wrt : nullptr)) {
+      if (side < 0 || !outer_beyond) return false;
+      *outer_beyond = true;
+      continue;
+    }
     if (!jacobians) continue;
     // d(elevation)/d(rho, w, r).
     const double d_half_d_distance = -r / (distance * tangent);
@@ -162,7 +170,8 @@ SliceCensoring CensoringOf(const CameraModel& camera, const BoundingSlice& measu
 
 bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
                   const CylinderGeometry& object, BoundingSlice* slice,
-                  SliceJacobians* jacobians, const SilhouetteModel& silhouette) {
+                  SliceJacobians* jacobians, const SilhouetteModel& silhouette,
+                  bool* top_beyond_view) {
   // Pose2::WorldToRobot, with cos and sin kept for the Jacobians below (one
   // sincos per prediction instead of two).
   const double c = std::cos(robot_pose_world.theta), s = std::sin(robot_pose_world.theta);
@@ -181,7 +190,11 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   Eigen::RowVector3d* want_top = jacobians ? &top_jacobian : nullptr;
   if (!camera.ProjectToPolar(base_robot, &base_polar, want_base)) return false;
   // The top has the base's bearing: only its radius is needed.
-  if (!camera.ProjectRadius(top_robot, &top_radius, want_top)) return false;
+  bool beyond = false;
+  if (!silhouette.enabled && !camera.ProjectRadius(top_robot, &top_radius, want_top)) {
+    if (!top_beyond_view) return false;
+    beyond = true;
+  }
 
   const double d = object.diameter_m;
   // s_phi = 2 atan(k d / rho), k = 1/2 in the thesis (A.10).
@@ -189,11 +202,11 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   SilhouetteEnd inner, outer;
   if (silhouette.enabled && silhouette.sphere) {
     if (!SphereEnds(camera, base_robot, range, object, silhouette.viewpoint_height_m,
-                    jacobians != nullptr, &inner, &outer))
+                    jacobians != nullptr, &inner, &outer, top_beyond_view ? &beyond : nullptr))
       return false;
   } else if (silhouette.enabled) {
     if (!SilhouetteEnds(camera, base_robot, range, object, silhouette.depth_half_extent,
-                        jacobians != nullptr, &inner, &outer))
+                        jacobians != nullptr, &inner, &outer, top_beyond_view ? &beyond : nullptr))
       return false;
   } else {
     inner.radius_px = base_polar.radius_px;
@@ -203,6 +216,13 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
       outer.wrt_point = top_jacobian;
       outer.wrt_height = top_jacobian(2);
     }
+  }
+  if (top_beyond_view) *top_beyond_view = beyond;
+  if (beyond) {
+    // The outer end is past every radius the mirror images.
+    outer.radius_px = kBeyondViewRadiusPx;
+    outer.wrt_point.setZero();
+    outer.wrt_diameter = outer.wrt_height = 0.0;
   }
   slice->u_r_px = inner.radius_px;
   slice->u_phi_rad = base_polar.angle_rad;

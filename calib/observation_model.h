@@ -64,9 +64,14 @@ struct SliceJacobians {
 // Returns false when the base or the top has no image (or the object stands on
 // the camera axis; with a silhouette, when the robot is inside the footprint).
 // Does not check occlusion or the mirror annulus.
+// With `top_beyond_view`, a top with no image (beyond the mirror's field of
+// view) does not fail: the flag is set, the outer end is put at
+// kBeyondViewRadiusPx and its derivatives are zero (for censored slices).
 bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
                   const CylinderGeometry& object, BoundingSlice* slice,
-                  SliceJacobians* jacobians = nullptr, const SilhouetteModel& silhouette = {});
+                  SliceJacobians* jacobians = nullptr, const SilhouetteModel& silhouette = {},
+                  bool* top_beyond_view = nullptr);
+inline constexpr double kBeyondViewRadiusPx = 1e6;
 
 // Which radial ends of a measured slice are bounds rather than values: the
 // blob reaches the mirror's outer limit (rim) or the image border (outer end:

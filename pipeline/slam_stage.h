@@ -43,7 +43,7 @@ struct SlamStageOptions {
   // location_std_z_m.
   bool silhouette_model = true;
   bool censor_slices = true;
-  double censor_margin_px = 2.0;
+  double censor_margin_px = 10.0;
   bool support_prior = true;
   // Detected classes are right: no switch moves, no merges across classes (Sec. 6.2).
   bool known_classes = false;

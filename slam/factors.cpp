@@ -143,8 +143,10 @@ bool BoundingSliceFactor::Linearize(const Values& values, Eigen::Ref<Eigen::Vect
   object.height_m = values.Data(keys()[2])[1];
   BoundingSlice predicted;
   SliceJacobians jacobians;
+  // A censored outer end is satisfied by a top beyond the mirror's view.
+  bool beyond = false;
   if (!PredictSlice(*camera_, pose, object, &predicted, jacobian ? &jacobians : nullptr,
-                    silhouette_))
+                    silhouette_, censoring_.outer ? &beyond : nullptr))
     return false;
   error = inverse_sigma_.cwiseProduct(
       CensoredResidual(predicted, measured_, censoring_, jacobian ? &jacobians : nullptr));

@@ -164,8 +164,10 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
     for (size_t k = 0; k < detections.size(); ++k) {
       const BoundingSlice& z = detections[k]->slice;
       BoundingSlice predicted;
+      bool beyond = false;
       if (!PredictSlice(camera, poses[detections[k]->frame], candidate, &predicted,
-                        gradient ? &jacobians : nullptr, prior.slice_model.silhouette))
+                        gradient ? &jacobians : nullptr, prior.slice_model.silhouette,
+                        censoring[k].outer ? &beyond : nullptr))
         return false;
       const Eigen::Vector4d inverse_sigma =
           BoundingSliceFactor::NoiseSigma(z, pixel_std_px).cwiseInverse();
@@ -328,10 +330,15 @@ CylinderGeometry GeometricSlam::InitialObject(const std::vector<Pose2>& poses,
   auto unpredictable = [&](const CylinderGeometry& candidate) {
     int failures = 0;
     BoundingSlice predicted;
-    for (const SliceObservation* observation : list)
+    for (const SliceObservation* observation : list) {
+      const SliceModel& model = prior.slice_model;
+      bool beyond = false;
+      const bool censored = model.censor_at_image_limits &&
+                            CensoringOf(camera_, observation->slice, model.censor_margin_px).outer;
       if (!PredictSlice(camera_, poses[observation->frame], candidate, &predicted, nullptr,
-                        prior.slice_model.silhouette))
+                        model.silhouette, censored ? &beyond : nullptr))
         ++failures;
+    }
     return failures;
   };
   int best_failures = -1;

@@ -156,8 +156,11 @@ TEST(BoundingSliceFactorTest, CensoredJacobiansMatchCentralDifferences) {
       ExpectJacobianMatchesNumeric(factor, values, 1e-5);
       // A prediction beyond the bound costs nothing in that row.
       const bool active = tall ? gap < 0 : gap > 0;
-      if (!active) EXPECT_EQ(bound_row, 0.0);
-      if (active) EXPECT_NE(bound_row, 0.0);
+      if (active) {
+        EXPECT_NE(bound_row, 0.0);
+      } else {
+        EXPECT_EQ(bound_row, 0.0);
+      }
       ++checked[tall][active];
     }
   }
