@@ -252,7 +252,9 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   jacobians->wrt_size.setZero();
   jacobians->wrt_size(0, 0) = inner.wrt_diameter;
   jacobians->wrt_size(2, 0) = outer.wrt_diameter - inner.wrt_diameter;
-  jacobians->wrt_size(2, 1) = outer.wrt_height;  // d(s_r)/d(h) = d(radius_top)/dz
+  // A ball's lower tangent moves with its height too; a cylinder's base not.
+  jacobians->wrt_size(0, 1) = inner.wrt_height;
+  jacobians->wrt_size(2, 1) = outer.wrt_height - inner.wrt_height;
   jacobians->wrt_size(3, 0) = 2.0 * k * range / denominator;
   return true;
 }
