@@ -130,26 +130,32 @@ TEST(BoundingSliceFactorTest, CensoredJacobiansMatchCentralDifferences) {
       const double range = 1.2 + 1.5 * (u(rng) + 1.0), bearing = 3.0 * u(rng);
       const int base_key = values.Add(Eigen::Vector3d(
           p.RobotToWorld({range * std::cos(bearing), range * std::sin(bearing), 0.05 * u(rng)})));
-      const bool tall = trial % 2 == 0;
-      const int size_key = values.Add(Eigen::Vector2d(0.4 + 0.1 * u(rng), tall ? 2.0 : 0.3));
-      // Outer end at the rim (tall objects) or inner end at the blind disc.
+      // Outer end at the rim (trial % 4 < 2: a 2 m top beyond it, or a 0.4 m
+      // one short of it) or inner end at the blind disc, read with a margin
+      // so wide that slices at any radius touch it (the bound then lies on
+      // either side of the prediction).
+      const bool tall = trial % 4 < 2;
+      const int size_key =
+          values.Add(Eigen::Vector2d(0.4 + 0.1 * u(rng), tall && trial % 2 == 0 ? 2.0 : 0.4));
+      model.censor_margin_px = tall ? 2.0 : 400.0;
       const BoundingSlice measured =
           tall ? BoundingSlice{150.0 + 10 * u(rng), u(rng), annulus.rim_radius_px - 150.0 - 10 * u(rng), 0.2}
-               : BoundingSlice{annulus.blind_radius_px + 1.0, u(rng), 60.0 + 40 * u(rng), 0.2};
+               : BoundingSlice{120.0 + 60 * u(rng), u(rng), 60.0 + 40 * u(rng), 0.2};
       // Keep the end at the limit: re-derive s_r from the rim for tall ones.
       BoundingSlice at_limit = measured;
       if (tall) at_limit.s_r_px = annulus.rim_radius_px - 1.0 - at_limit.u_r_px;
       BoundingSliceFactor factor(&camera, pose, base_key, size_key, at_limit, 30.0, model);
-      ASSERT_EQ(factor.censoring().outer, tall);
-      ASSERT_EQ(factor.censoring().inner, !tall);
+      ASSERT_EQ(factor.censoring().inner, !tall);  // (the wide margin censors both ends)
+      ASSERT_TRUE(factor.censoring().outer);
       Eigen::VectorXd error(4);
       if (!factor.Linearize(values, error, nullptr)) continue;
       // Away from the kink, where the bound switches on.
       const double bound_row = tall ? error[2] : error[0];
       BoundingSlice predicted;
+      bool beyond = false;  // a tall top may be beyond the mirror's view: bound met
       ASSERT_TRUE(PredictSlice(camera, p, {values.Get(base_key), values.Data(size_key)[0],
                                            values.Data(size_key)[1]},
-                               &predicted, nullptr, model.silhouette));
+                               &predicted, nullptr, model.silhouette, tall ? &beyond : nullptr));
       const double gap = tall ? predicted.u_r_px + predicted.s_r_px - (at_limit.u_r_px + at_limit.s_r_px)
                               : predicted.u_r_px - at_limit.u_r_px;
       if (std::abs(gap) < 0.5) continue;
@@ -194,8 +200,8 @@ TEST(BoundingSliceFactorTest, CensoredOuterEndKeepsTheHeightAbovePrediction) {
   EXPECT_NEAR(error[0], 0.0, 1e-9);
   ASSERT_TRUE(plain.Linearize(values, error, nullptr));
   EXPECT_GT(error[2], 0.1);  // the plain factor pulls it shorter
-  // A door shorter than the rim shows costs.
-  values.Set(size, Eigen::Vector2d(1.0, 1.0));
+  // A door shorter than the rim shows (its top below the camera) costs.
+  values.Set(size, Eigen::Vector2d(1.0, 0.6));
   ASSERT_TRUE(censored.Linearize(values, error, nullptr));
   EXPECT_LT(error[2], -0.1);
 }
