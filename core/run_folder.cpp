@@ -485,21 +485,25 @@ FrameSource::FrameSource(const std::string& run_or_video) {
   double frame_rate = 0;
   if (!video_path_.empty()) {
     decoder_ = std::make_unique<Decoder>();
-    if (!decoder_->capture.open(video_path_))
+    // FFmpeg only (docs/formats.md, Video): with any backend allowed, OpenCV
+    // hands a file FFmpeg refused on to its camera backends, and gphoto2's
+    // probes every USB camera driver for a second, then unloads them.
+    if (!decoder_->capture.open(video_path_, cv::CAP_FFMPEG))
       throw Error::InFile(video_path_, "OpenCV cannot open this video");
     const double frames = decoder_->capture.get(cv::CAP_PROP_FRAME_COUNT);
     if (!(frames > 0)) throw Error::InFile(video_path_, "video has no frames");
     if (frames > bounds::kFrames)
-      throw Error::InFile(video_path_, "declares " +
-                                           bounds::OutsideMessage(frames, 1, bounds::kFrames) +
-                                           " frames");
+      throw Error::InFile(
+          video_path_,
+          "declares " + bounds::OutsideMessage(frames, 1, bounds::kFrames) + " frames");
     const double width = decoder_->capture.get(cv::CAP_PROP_FRAME_WIDTH),
                  height = decoder_->capture.get(cv::CAP_PROP_FRAME_HEIGHT);
     if (!(width <= bounds::kImageSidePx && height <= bounds::kImageSidePx &&
           width * height <= bounds::kImagePixels))
-      throw Error::InFile(video_path_, "declares frames of " + std::to_string(width) + "x" +
-                                           std::to_string(height) +
-                                           " pixels, beyond the image bounds (docs/formats.md, Bounds)");
+      throw Error::InFile(video_path_,
+                          "declares frames of " + std::to_string(width) + "x" +
+                              std::to_string(height) +
+                              " pixels, beyond the image bounds (docs/formats.md, Bounds)");
     count_ = static_cast<size_t>(frames);
     frame_rate = decoder_->capture.get(cv::CAP_PROP_FPS);
   }

@@ -334,7 +334,12 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   SolverSummary& summary = result.summary;
   Impl& impl = *impl_;
   impl.linearizer.ResetCounts();
+  // The last solve's factorisation belongs to another graph: until this
+  // solve ends with a usable one, covariances and samples are refused
+  // rather than taken from it.
+  impl.normal.set_factor_is_final(false);
   auto finish = [&](TerminationType type, const std::string& message) {
+    if (type == TerminationType::kFailure) impl.normal.set_factor_is_final(false);
     summary.termination = type;
     summary.message = message;
     summary.reused_linearizations = impl.linearizer.reused();

@@ -18,6 +18,7 @@
 #include "calib/camera_io.h"
 #include "calib/hyperbolic_camera.h"
 #include "calib/mei_camera.h"
+#include "core/atomic_file.h"
 #include "samples/renderer.h"
 #include "samples/scene.h"
 #include "test_util.h"
@@ -188,10 +189,9 @@ TEST(CalibrationOnRenders, RecoversTheLpaHyperbolicCamera) {
   EXPECT_LE(rms, 0.3);
 
   // b estimated: reported; only the fit quality and the centre are asserted.
-  const testing::CommandResult free_b =
-      Calibrate(dir.Path("images"),
-                "--model hyperbolic --mirror-a 0.03929 --focus-height 0.76 --mount-yaw 0",
-                dir.Path("lpa_free_b.yaml"));
+  const testing::CommandResult free_b = Calibrate(
+      dir.Path("images"), "--model hyperbolic --mirror-a 0.03929 --focus-height 0.76 --mount-yaw 0",
+      dir.Path("lpa_free_b.yaml"));
   const std::unique_ptr<CameraModel> free_camera = LoadCamera(dir.Path("lpa_free_b.yaml"));
   const auto* free_hyperbolic = dynamic_cast<const HyperbolicCamera*>(free_camera.get());
   ASSERT_NE(free_hyperbolic, nullptr);
@@ -217,9 +217,8 @@ TEST(CalibrationOnRenders, RecoversAMeiCameraFromItsCameraYaml) {
       RenderViews("{file: " + camera_file + "}", boards, dir.Path(), dir.Path("images"));
   std::printf("rendered %d Mei views in %.1f s\n", kViews, render_seconds);
 
-  const testing::CommandResult result =
-      Calibrate(dir.Path("images"), "--model mei --focus-height 1.0 --mount-yaw 0",
-                dir.Path("mei.yaml"));
+  const testing::CommandResult result = Calibrate(
+      dir.Path("images"), "--model mei --focus-height 1.0 --mount-yaw 0", dir.Path("mei.yaml"));
   const std::unique_ptr<CameraModel> calibrated = LoadCamera(dir.Path("mei.yaml"));
   const auto* mei = dynamic_cast<const MeiCamera*>(calibrated.get());
   ASSERT_NE(mei, nullptr);
@@ -256,6 +255,18 @@ TEST(CalibrationOnRenders, RecoversAMeiCameraFromItsCameraYaml) {
   EXPECT_LT(centre_error, 1.0);
   EXPECT_LT(max_image_error, 1.0);
   EXPECT_LE(rms, 0.3);
+
+  // --quiet prints nothing, also with cv::omnidir's comparison table, and
+  // writes the same camera.
+  const testing::CommandResult quiet = testing::RunShellCommand(
+      std::string(OSLAM_BINARY) + " calibrate " + dir.Path("images") +
+      " --pattern 7x6 --square 0.03 --model mei --focus-height 1.0 --mount-yaw 0 "
+      "--compare-opencv --quiet -o " +
+      dir.Path("mei_quiet.yaml"));
+  EXPECT_EQ(quiet.exit_code, 0) << quiet.err;
+  EXPECT_EQ(quiet.out, "");
+  EXPECT_EQ(quiet.err, "");
+  EXPECT_EQ(ReadTextFile(dir.Path("mei_quiet.yaml")), ReadTextFile(dir.Path("mei.yaml")));
 }
 
 }  // namespace

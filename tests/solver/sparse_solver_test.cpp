@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -401,6 +402,53 @@ TEST(SolverTest, ReportsProblemsInTheSummaryInsteadOfThrowing) {
   const SolveResult too_wide = solver.Solve(&wide);
   EXPECT_EQ(too_wide.summary.termination, TerminationType::kFailure);
   EXPECT_NE(too_wide.summary.message.find("more than 255 entries"), std::string::npos);
+}
+
+// A failed solve leaves nothing of the solve before it: covariances and
+// samples are refused until a solve succeeds again (then they are its own).
+TEST(SolverTest, AFailedSolveLeavesNoCovariancesOfTheSolveBefore) {
+  SparseSolver solver;
+  FactorGraph good;
+  const int x = good.AddVariable(Eigen::VectorXd::Zero(1));
+  AddReading(&good, x, 1.0, 0.5);
+  AddReading(&good, x, 2.0, 0.5);
+  ASSERT_TRUE(solver.Solve(&good).summary.IsUsable());
+  std::vector<Eigen::MatrixXd> blocks;
+  ASSERT_TRUE(solver.MarginalCovariances({{x}}, &blocks));
+  EXPECT_NEAR(blocks[0](0, 0), 0.125, 1e-12);  // 1 / (2 / 0.25)
+
+  FactorGraph unconstrained;  // fails in the set-up, before any factorisation
+  const int y = unconstrained.AddVariable(Eigen::VectorXd::Zero(1));
+  unconstrained.AddVariable(Eigen::VectorXd::Zero(2));
+  AddReading(&unconstrained, y, 1.0, 1.0);
+  FactorGraph bad_start;  // fails at the first evaluation
+  const int z = bad_start.AddVariable(Eigen::VectorXd::Constant(1, std::nan("")));
+  AddReading(&bad_start, z, 1.0, 1.0);
+  SolverOptions invalid;
+  invalid.initial_damping = -1;
+  const std::vector<std::function<SolveResult()>> failures = {
+      [&] { return solver.Solve(nullptr); }, [&] { return solver.Solve(&unconstrained); },
+      [&] { return solver.Solve(&bad_start); },
+      [&] {
+        const SolverOptions kept = solver.options();
+        solver.set_options(invalid);
+        const SolveResult result = solver.Solve(&good);
+        solver.set_options(kept);
+        return result;
+      }};
+  for (size_t k = 0; k < failures.size(); ++k) {
+    ASSERT_TRUE(solver.Solve(&good).summary.IsUsable());
+    ASSERT_TRUE(solver.MarginalCovariances({{x}}, &blocks));
+    EXPECT_EQ(failures[k]().summary.termination, TerminationType::kFailure) << k;
+    std::string why;
+    EXPECT_FALSE(solver.MarginalCovariances({{x}}, &blocks, &why)) << k;
+    EXPECT_NE(why.find("no valid final factorisation"), std::string::npos) << k << ": " << why;
+    std::vector<Eigen::MatrixXd> samples;
+    EXPECT_FALSE(solver.CovarianceSamples({{x}}, 4, 1, &samples)) << k;
+  }
+  ASSERT_TRUE(solver.Solve(&good).summary.IsUsable());
+  ASSERT_TRUE(solver.MarginalCovariances({{x}}, &blocks));
+  EXPECT_NEAR(blocks[0](0, 0), 0.125, 1e-12);
 }
 
 TEST(SolverTest, ReusesTheSymbolicAnalysisWhenThePatternFits) {
