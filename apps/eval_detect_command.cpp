@@ -1,9 +1,11 @@
 // oslam eval-detect: a run's detections against its ground truth.
 #include <cstdio>
+#include <memory>
 
 #include "apps/arguments.h"
 #include "apps/bindings.h"
 #include "apps/commands.h"
+#include "calib/camera_io.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/run_folder.h"
@@ -41,8 +43,29 @@ int RunEvalDetectCommand(const std::vector<std::string>& args) {
                                           : RunFolderPaths::Of(run_dir).detections;
   const DetectionEvaluation evaluation =
       EvaluateDetections(ReadDetections(detections_path, classes), *truth, classes, options);
-  if (!arguments.Flag("quiet")) std::fputs(evaluation.Table().c_str(), stdout);
-  if (arguments.Has("json")) WriteTextFileAtomically(arguments.Get("json"), evaluation.Json());
+  // Signed slice errors per class: the detector's share against the visible
+  // pixels, the models' against the truth (docs/detection.md).
+  const std::vector<VisibleSlice> visible = ReadVisibleSlices(run_dir);
+  std::vector<ClassSliceErrors> signed_errors;
+  if (!visible.empty()) {
+    const std::unique_ptr<CameraModel> camera = LoadCamera(RunFolderPaths::Of(run_dir).camera);
+    signed_errors = SignedSliceErrorsPerClass(ReadDetections(detections_path, classes), *truth,
+                                              visible, classes, *camera, options);
+  }
+  if (!arguments.Flag("quiet")) {
+    std::fputs(evaluation.Table().c_str(), stdout);
+    if (!signed_errors.empty()) std::fputs(SignedSliceErrorsTable(signed_errors).c_str(), stdout);
+  }
+  if (arguments.Has("json")) {
+    std::string json = evaluation.Json();
+    if (!signed_errors.empty()) {
+      // The object's closing brace: add the per-class signed errors before it.
+      json.erase(json.rfind('}'));
+      while (!json.empty() && (json.back() == '\n' || json.back() == ' ')) json.pop_back();
+      json += ",\n  \"signed_slice_errors\": " + SignedSliceErrorsJson(signed_errors) + "\n}\n";
+    }
+    WriteTextFileAtomically(arguments.Get("json"), json);
+  }
   if (arguments.Has("write-confusion")) {
     const std::string path = arguments.Get("write-confusion");
     const std::vector<ObjectClass> target = ReadClasses(path);

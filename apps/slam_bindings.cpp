@@ -171,6 +171,25 @@ void BindModel(SlamStageOptions* o, Bindings* b) {
   b->Add(&o->location_std_z_m, "location-std-z", "M", "class location prior std, z")
       .Key("location_std_z_m", "class location prior std in z, m (docs/method.md §13 #7)")
       .Check([o] { return o->location_std_z_m > 0; }, "must be > 0 m");
+  b->AddNegatedFlag(&o->silhouette_model, "no-silhouette",
+                    "predict the cylinder's section (thesis) instead of the class's silhouette")
+      .Key("silhouette_model",
+           "1: detections predicted as the class's silhouette (classes.yaml shape; "
+           "docs/method.md §4.2)");
+  b->AddNegatedFlag(&o->censor_slices, "no-censoring",
+                    "slice ends cut by the image's limits count as values (thesis)")
+      .Key("censor_slices",
+           "1: slice ends at the mirror rim, blind disc or image border are bounds "
+           "(docs/method.md §4.2)");
+  b->Add(&o->censor_margin_px, "censor-margin", "PX",
+         "a slice end this close to an image limit is a bound")
+      .Key("censor_margin_px", "a slice end this close to an image limit is a bound, px")
+      .Check([o] { return o->censor_margin_px >= 0; }, "must be >= 0 px");
+  b->AddNegatedFlag(&o->support_prior, "no-support-prior",
+                    "base height from location-std-z for every class (thesis)")
+      .Key("support_prior",
+           "1: base height from the class's support prior (classes.yaml base_height_m, "
+           "base_height_std_m; docs/method.md §5.1)");
   b->Add(&g.pixel_std_px, "pixel-noise", "PX", "detection noise E (docs/method.md §4.2; thesis 30)")
       .Key("pixel_noise_px",
            "detection noise E, px: R = diag(E^2, (E/u_r)^2) (docs/method.md §4.2, §13 #5)");

@@ -200,15 +200,27 @@ double LocationVarianceWithout(const Matrix5d& covariance, const Vector5d& remov
   Matrix5d information = ldlt.solve(Matrix5d::Identity());
   information.diagonal() -= removed;
   information = 0.5 * (information + information.transpose());
-  Eigen::SelfAdjointEigenSolver<Matrix5d> eigen(information);
-  const double largest = eigen.eigenvalues().maxCoeff();
-  if (!(eigen.eigenvalues().minCoeff() > 1e-12 * largest)) return infinity;  // §7.2 guard
-  // The location block of the inverse, not the inverse of the location block.
-  const Matrix5d prior_free = eigen.eigenvectors() *
-                              eigen.eigenvalues().cwiseInverse().asDiagonal() *
-                              eigen.eigenvectors().transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> location(prior_free.topLeftCorner<3, 3>());
-  return location.eigenvalues().maxCoeff();
+  // The location block of the inverse, not the inverse of the location block:
+  // the inverse of the Schur complement of the size block. A size direction
+  // the detections leave free (a height censored by the mirror's rim,
+  // method.md §4.2) carries no location information in a positive
+  // semi-definite matrix and is marginalised by the pseudo-inverse; a
+  // direction mixing range and size (one sighting) leaves the complement
+  // singular, and the variance infinite (§7.2 guard).
+  const double largest = Eigen::SelfAdjointEigenSolver<Matrix5d>(information).eigenvalues().maxCoeff();
+  const double tiny = 1e-12 * largest;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> size(information.bottomRightCorner<2, 2>());
+  Eigen::Vector2d size_inverse = Eigen::Vector2d::Zero();
+  for (int k = 0; k < 2; ++k)
+    if (size.eigenvalues()[k] > tiny) size_inverse[k] = 1.0 / size.eigenvalues()[k];
+  const Eigen::Matrix<double, 3, 2> coupling = information.topRightCorner<3, 2>();
+  const Eigen::Matrix3d schur =
+      information.topLeftCorner<3, 3>() -
+      coupling * size.eigenvectors() * size_inverse.asDiagonal() *
+          size.eigenvectors().transpose() * coupling.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> location(0.5 * (schur + schur.transpose()));
+  if (!(location.eigenvalues().minCoeff() > tiny)) return infinity;  // §7.2 guard
+  return 1.0 / location.eigenvalues().minCoeff();
 }
 
 }  // namespace

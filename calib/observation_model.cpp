@@ -1,12 +1,177 @@
 #include "calib/observation_model.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace oslam {
 
+double ViewpointHeight(const CameraModel& camera) {
+  const MirrorAnnulus& annulus = camera.annulus();
+  const double radius = annulus.rim_radius_px > annulus.blind_radius_px
+                            ? 0.5 * (annulus.blind_radius_px + annulus.rim_radius_px)
+                            : 100.0;
+  Ray ray;
+  if (!camera.BackProjectPixel(camera.ImageCenter() + Eigen::Vector2d(radius, 0.0), &ray))
+    return 0.0;
+  return ray.origin_robot.z();
+}
+
+SilhouetteModel SilhouetteOf(const CameraModel& camera, ObjectShape shape,
+                             double footprint_aspect) {
+  constexpr double kPi = 3.14159265358979323846;
+  SilhouetteModel model;
+  model.enabled = true;
+  switch (shape) {
+    case ObjectShape::kCylinder:
+      break;
+    case ObjectShape::kBox: {
+      // Mean over yaw of a rectangle's half extent in one direction:
+      // (L + W) / pi; per unit diagonal sqrt(L^2 + W^2).
+      const double a = std::clamp(footprint_aspect, 0.0, 1.0);
+      model.depth_half_extent = model.width_half_extent = (1.0 + a) / (kPi * std::hypot(1.0, a));
+      break;
+    }
+    case ObjectShape::kSphere:
+      model.sphere = true;
+      model.depth_half_extent = 0.0;
+      model.viewpoint_height_m = ViewpointHeight(camera);
+      break;
+    case ObjectShape::kPanel:
+      // Half length times the mean |cos| (or |sin|) over the front half space.
+      model.depth_half_extent = model.width_half_extent = 1.0 / kPi;
+      break;
+  }
+  return model;
+}
+
+namespace {
+
+// The silhouette's radial ends (docs/method.md §4.2, "Silhouette model"): the
+// footprint points at +-delta along the line of sight, at the base and at the
+// top; the inner end is the smaller radius at the base, the outer end the
+// larger at the top. Each end's derivative is taken with respect to the base
+// point in the robot frame (3), the diameter and the height.
+struct SilhouetteEnd {
+  double radius_px = 0.0;
+  Eigen::RowVector3d wrt_point = Eigen::RowVector3d::Zero();
+  double wrt_diameter = 0.0, wrt_height = 0.0;
+};
+
+bool SilhouetteEnds(const CameraModel& camera, const Eigen::Vector3d& base_robot, double range,
+                    const CylinderGeometry& object, double depth_half_extent, bool jacobians,
+                    SilhouetteEnd* inner, SilhouetteEnd* outer, bool* outer_beyond) {
+  const double delta = depth_half_extent * object.diameter_m;
+  if (!(range > delta)) return false;  // the robot inside the footprint
+  const Eigen::Vector2d along = base_robot.head<2>() / range;
+  bool first_base = true, first_top = true;
+  for (const int side : {-1, 1}) {
+    const double scale = 1.0 + side * delta / range;
+    // d(point)/d(base point): the horizontal part scales with the range.
+    Eigen::Matrix3d point_wrt_base = Eigen::Matrix3d::Zero();
+    point_wrt_base.topLeftCorner<2, 2>() =
+        scale * Eigen::Matrix2d::Identity() -
+        side * delta / range * along * along.transpose();
+    point_wrt_base(2, 2) = 1.0;
+    const Eigen::Vector3d point_wrt_diameter(side * depth_half_extent * along.x(),
+                                             side * depth_half_extent * along.y(), 0.0);
+    for (const bool top : {false, true}) {
+      Eigen::Vector3d point(scale * base_robot.x(), scale * base_robot.y(), base_robot.z());
+      if (top) point.z() += object.height_m;
+      double radius = 0.0;
+      Eigen::RowVector3d wrt = Eigen::RowVector3d::Zero();
+      if (!camera.ProjectRadius(point, &radius, jacobians ? &wrt : nullptr)) {
+        if (!top || !outer_beyond) return false;
+        *outer_beyond = true;  // a top edge beyond the mirror's field of view
+        continue;
+      }
+      SilhouetteEnd* end = top ? outer : inner;
+      bool& first = top ? first_top : first_base;
+      const bool better = first || (top ? radius > end->radius_px : radius < end->radius_px);
+      first = false;
+      if (!better) continue;
+      end->radius_px = radius;
+      if (!jacobians) continue;
+      end->wrt_point = wrt * point_wrt_base;
+      end->wrt_diameter = wrt.dot(point_wrt_diameter);
+      end->wrt_height = top ? wrt(2) : 0.0;
+    }
+  }
+  return true;
+}
+
+// A ball's radial ends: the rays from the viewpoint tangent to it in the
+// vertical plane through its centre, at elevations atan2(w, rho) -+ asin(r /
+// D), r = h/2 its vertical radius, w = z + r - z_v the centre's height above
+// the viewpoint, D = sqrt(rho^2 + w^2). Each end is imaged through the point
+// at unit distance along its ray.
+bool SphereEnds(const CameraModel& camera, const Eigen::Vector3d& base_robot, double range,
+                const CylinderGeometry& object, double viewpoint_height, bool jacobians,
+                SilhouetteEnd* inner, SilhouetteEnd* outer, bool* outer_beyond) {
+  const double r = 0.5 * object.height_m;
+  const double w = base_robot.z() + r - viewpoint_height;
+  const double distance2 = range * range + w * w;
+  const double tangent = std::sqrt(std::max(0.0, distance2 - r * r));  // sqrt(D^2 - r^2)
+  if (!(tangent > 0.0)) return false;  // the viewpoint inside the ball
+  const double distance = std::sqrt(distance2);
+  const double centre = std::atan2(w, range), half = std::asin(r / distance);
+  const Eigen::Vector2d along = base_robot.head<2>() / range;
+  for (const int side : {-1, 1}) {
+    const double elevation = centre + side * half;
+    const double c = std::cos(elevation), s = std::sin(elevation);
+    const Eigen::Vector3d point(c * along.x(), c * along.y(), viewpoint_height + s);
+    SilhouetteEnd* end = side < 0 ? inner : outer;
+    Eigen::RowVector3d wrt = Eigen::RowVector3d::Zero();
+    if (!camera.ProjectRadius(point, &end->radius_px, jacobians ? &wrt : nullptr)) {
+      if (side < 0 || !outer_beyond) return false;
+      *outer_beyond = true;
+      continue;
+    }
+    if (!jacobians) continue;
+    // d(elevation)/d(rho, w, r).
+    const double d_half_d_distance = -r / (distance * tangent);
+    const double d_rho = -w / distance2 + side * d_half_d_distance * range / distance;
+    const double d_w = range / distance2 + side * d_half_d_distance * w / distance;
+    const double d_r = side / tangent;
+    const double along_elevation = wrt.dot(Eigen::Vector3d(-s * along.x(), -s * along.y(), c));
+    // The point's horizontal direction turns with the base's bearing.
+    const Eigen::Matrix2d d_along =
+        (Eigen::Matrix2d::Identity() - along * along.transpose()) / range;
+    end->wrt_point.head<2>() =
+        along_elevation * d_rho * along.transpose() + c * wrt.head<2>() * d_along;
+    end->wrt_point(2) = along_elevation * d_w;
+    end->wrt_diameter = 0.0;
+    end->wrt_height = along_elevation * 0.5 * (d_w + d_r);
+  }
+  return true;
+}
+
+}  // namespace
+
+SliceCensoring CensoringOf(const CameraModel& camera, const BoundingSlice& measured,
+                           double margin_px) {
+  SliceCensoring censoring;
+  const MirrorAnnulus& annulus = camera.annulus();
+  const double outer_radius = measured.u_r_px + measured.s_r_px;
+  censoring.inner = measured.u_r_px <= annulus.blind_radius_px + margin_px;
+  censoring.outer = annulus.rim_radius_px > 0 && outer_radius >= annulus.rim_radius_px - margin_px;
+  // The image border: the slice's outer corners and middle.
+  const int width = camera.image_width(), height = camera.image_height();
+  if (!censoring.outer && width > 0 && height > 0) {
+    for (const double offset : {-0.5, 0.0, 0.5}) {
+      const Eigen::Vector2d pixel =
+          camera.PolarToPixel({outer_radius, measured.u_phi_rad + offset * measured.s_phi_rad});
+      const double clearance = std::min({pixel.x() + 0.5, width - 0.5 - pixel.x(), pixel.y() + 0.5,
+                                         height - 0.5 - pixel.y()});
+      if (clearance <= margin_px) censoring.outer = true;
+    }
+  }
+  return censoring;
+}
+
 bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
                   const CylinderGeometry& object, BoundingSlice* slice,
-                  SliceJacobians* jacobians) {
+                  SliceJacobians* jacobians, const SilhouetteModel& silhouette,
+                  bool* top_beyond_view) {
   // Pose2::WorldToRobot, with cos and sin kept for the Jacobians below (one
   // sincos per prediction instead of two).
   const double c = std::cos(robot_pose_world.theta), s = std::sin(robot_pose_world.theta);
@@ -25,21 +190,53 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   Eigen::RowVector3d* want_top = jacobians ? &top_jacobian : nullptr;
   if (!camera.ProjectToPolar(base_robot, &base_polar, want_base)) return false;
   // The top has the base's bearing: only its radius is needed.
-  if (!camera.ProjectRadius(top_robot, &top_radius, want_top)) return false;
+  bool beyond = false;
+  if (!silhouette.enabled && !camera.ProjectRadius(top_robot, &top_radius, want_top)) {
+    if (!top_beyond_view) return false;
+    beyond = true;
+  }
 
   const double d = object.diameter_m;
-  slice->u_r_px = base_polar.radius_px;
+  // s_phi = 2 atan(k d / rho), k = 1/2 in the thesis (A.10).
+  const double k = silhouette.enabled ? silhouette.width_half_extent : 0.5;
+  SilhouetteEnd inner, outer;
+  if (silhouette.enabled && silhouette.sphere) {
+    if (!SphereEnds(camera, base_robot, range, object, silhouette.viewpoint_height_m,
+                    jacobians != nullptr, &inner, &outer, top_beyond_view ? &beyond : nullptr))
+      return false;
+  } else if (silhouette.enabled) {
+    if (!SilhouetteEnds(camera, base_robot, range, object, silhouette.depth_half_extent,
+                        jacobians != nullptr, &inner, &outer, top_beyond_view ? &beyond : nullptr))
+      return false;
+  } else {
+    inner.radius_px = base_polar.radius_px;
+    outer.radius_px = top_radius;
+    if (jacobians) {
+      inner.wrt_point = base_jacobian.row(0);
+      outer.wrt_point = top_jacobian;
+      outer.wrt_height = top_jacobian(2);
+    }
+  }
+  if (top_beyond_view) *top_beyond_view = beyond;
+  if (beyond) {
+    // The outer end is past every radius the mirror images.
+    outer.radius_px = kBeyondViewRadiusPx;
+    outer.wrt_point.setZero();
+    outer.wrt_diameter = outer.wrt_height = 0.0;
+  }
+  slice->u_r_px = inner.radius_px;
   slice->u_phi_rad = base_polar.angle_rad;
-  slice->s_r_px = top_radius - base_polar.radius_px;
-  slice->s_phi_rad = 2.0 * std::atan(d / (2.0 * range));
+  slice->s_r_px = outer.radius_px - inner.radius_px;
+  slice->s_phi_rad = 2.0 * std::atan(k * d / range);
   if (!jacobians) return true;
 
   // d(slice)/d(point in robot frame); the top point moves with the base.
   Eigen::Matrix<double, 4, 3> wrt_point;
-  wrt_point.row(0) = base_jacobian.row(0);
+  wrt_point.row(0) = inner.wrt_point;
   wrt_point.row(1) = base_jacobian.row(1);
-  wrt_point.row(2) = top_jacobian - base_jacobian.row(0);
-  const double d_width_d_range = -4.0 * d / (4.0 * range * range + d * d);
+  wrt_point.row(2) = outer.wrt_point - inner.wrt_point;
+  const double denominator = range * range + k * k * d * d;
+  const double d_width_d_range = -2.0 * k * d / denominator;
   wrt_point.row(3) << d_width_d_range * base_robot.x() / range,
       d_width_d_range * base_robot.y() / range, 0.0;
 
@@ -53,8 +250,12 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   jacobians->wrt_base = wrt_point * point_wrt_base;
   jacobians->wrt_pose = wrt_point * point_wrt_pose;
   jacobians->wrt_size.setZero();
-  jacobians->wrt_size(2, 1) = top_jacobian(2);  // d(s_r)/d(h) = d(radius_top)/dz
-  jacobians->wrt_size(3, 0) = 4.0 * range / (4.0 * range * range + d * d);
+  jacobians->wrt_size(0, 0) = inner.wrt_diameter;
+  jacobians->wrt_size(2, 0) = outer.wrt_diameter - inner.wrt_diameter;
+  // A ball's lower tangent moves with its height too; a cylinder's base not.
+  jacobians->wrt_size(0, 1) = inner.wrt_height;
+  jacobians->wrt_size(2, 1) = outer.wrt_height - inner.wrt_height;
+  jacobians->wrt_size(3, 0) = 2.0 * k * range / denominator;
   return true;
 }
 

@@ -54,7 +54,29 @@ constexpr double kMaxElongation = 1000.0;
 
 const std::vector<std::string> kClassKeys = {
     "name",          "display_rgb",  "shape",  "diameter_mean_m", "diameter_std_m",
-    "height_mean_m", "height_std_m", "colour", "image_shape"};
+    "height_mean_m", "height_std_m", "footprint_aspect", "base_height_m", "base_height_std_m",
+    "colour",        "image_shape"};
+
+// The optional footprint aspect and support prior of a class.
+void ParseClassGeometry(const YamlFile& file, const cv::FileNode& node, const std::string& key,
+                        ObjectClass* object_class) {
+  object_class->footprint_aspect = file.OptionalDouble(node, "footprint_aspect", 1.0, key);
+  if (!(object_class->footprint_aspect > 0 && object_class->footprint_aspect <= 1))
+    file.Fail(key + "footprint_aspect", "must be in (0, 1] (footprint width / length)");
+  object_class->base_height_m = file.OptionalDouble(node, "base_height_m", 0.0, key);
+  file.Within(object_class->base_height_m, key + "base_height_m", -bounds::kObjectSizeM,
+              bounds::kObjectSizeM, "m");
+  const cv::FileNode spread = node["base_height_std_m"];
+  if (spread.isString() && static_cast<std::string>(spread) == "none") {
+    object_class->supported = false;
+  } else {
+    object_class->base_height_std_m = file.OptionalDouble(node, "base_height_std_m", 0.03, key);
+    if (!(object_class->base_height_std_m > 0))
+      file.Fail(key + "base_height_std_m", "must be positive (or none: no support)");
+    file.Within(object_class->base_height_std_m, key + "base_height_std_m", bounds::kMinStdM,
+                bounds::kObjectSizeM, "m");
+  }
+}
 
 ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std::string& prefix) {
   if (!node.isMap()) file.Fail(prefix, "each class must be a mapping");
@@ -83,6 +105,7 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
     const bool is_std = std::string(field).find("_std_") != std::string::npos;
     file.Within(value, key + field, is_std ? bounds::kMinStdM : 0, bounds::kObjectSizeM, "m");
   }
+  ParseClassGeometry(file, node, key, &object_class);
   const cv::FileNode colour = node["colour"];
   if (!colour.empty() && !colour.isNone()) {
     const std::string colour_key = key + "colour.";
@@ -204,6 +227,13 @@ void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& pa
     out << "    diameter_std_m: " << Number(c.diameter_std_m) << "\n";
     out << "    height_mean_m: " << Number(c.height_mean_m) << "\n";
     out << "    height_std_m: " << Number(c.height_std_m) << "\n";
+    if (c.footprint_aspect != 1.0)
+      out << "    footprint_aspect: " << Number(c.footprint_aspect) << "\n";
+    if (c.base_height_m != 0.0) out << "    base_height_m: " << Number(c.base_height_m) << "\n";
+    if (!c.supported)
+      out << "    base_height_std_m: none\n";
+    else if (c.base_height_std_m != 0.03)
+      out << "    base_height_std_m: " << Number(c.base_height_std_m) << "\n";
     if (c.colour) {
       out << "    colour:\n";
       out << "      yuv_mean: " << NumberList(c.colour->yuv_mean) << "\n";

@@ -57,6 +57,16 @@ struct ObjectClass {
   double diameter_std_m = 0.0;
   double height_mean_m = 0.0;
   double height_std_m = 0.0;
+  // Box footprint width / length (<= 1), for the silhouette of docs/method.md
+  // §4.2; optional `footprint_aspect:`, default 1 (square).
+  double footprint_aspect = 1.0;
+  // Support prior (docs/method.md §5.1): the base point's height ~ N(base_height_m,
+  // base_height_std_m^2). Default: on the floor within 3 cm. `base_height_std_m:
+  // none` in classes.yaml: no support (floating, wall-mounted; the run's
+  // location prior in z applies).
+  double base_height_m = 0.0;
+  double base_height_std_m = 0.03;
+  bool supported = true;
   std::optional<ColourBox> colour;             // detector settings, once trained
   std::optional<ImageShapeModel> image_shape;  // likewise; optional
 };

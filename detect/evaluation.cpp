@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <sstream>
 
+#include "calib/observation_model.h"
 #include "core/angles.h"
+#include "core/csv.h"
 
 namespace oslam {
 namespace {
@@ -147,6 +150,146 @@ DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
   result.median_s_phi_error_px = Median(s_phi);
   result.median_position_error_px = Median(position);
   return result;
+}
+
+std::vector<VisibleSlice> ReadVisibleSlices(const std::string& run_dir) {
+  const std::string path =
+      (std::filesystem::path(run_dir) / "ground_truth" / "visible_slices.csv").string();
+  std::vector<VisibleSlice> rows;
+  if (!std::filesystem::exists(path)) return rows;
+  const CsvTable table = CsvTable::Read(path);
+  const int frame = table.ColumnIndex("frame"), object = table.ColumnIndex("object_id"),
+            visible = table.ColumnIndex("visible_px"), footprint = table.ColumnIndex("footprint_px");
+  for (size_t row = 0; row < table.num_rows(); ++row)
+    rows.push_back({table.Integer(row, frame, 0, 1L << 40),
+                    static_cast<int>(table.Integer(row, object, 0, 1L << 30)),
+                    table.Integer(row, visible, 0, 1L << 40),
+                    table.Integer(row, footprint, 0, 1L << 40), SliceAtRow(table, row)});
+  return rows;
+}
+
+namespace {
+
+// Running sums of signed errors for SignedSliceErrors.
+struct ErrorSums {
+  int count = 0;
+  std::array<double, 4> sum{}, sum2{};
+  void Add(const BoundingSlice& a, const BoundingSlice& b, double radius) {
+    const std::array<double, 4> e = {a.u_r_px - b.u_r_px,
+                                     WrapAngle(a.u_phi_rad - b.u_phi_rad) * radius,
+                                     a.s_r_px - b.s_r_px, (a.s_phi_rad - b.s_phi_rad) * radius};
+    ++count;
+    for (int k = 0; k < 4; ++k) sum[k] += e[k], sum2[k] += e[k] * e[k];
+  }
+  SignedSliceErrors Result() const {
+    SignedSliceErrors r;
+    r.count = count;
+    for (int k = 0; k < 4 && count > 0; ++k) {
+      r.mean[k] = sum[k] / count;
+      r.std[k] = std::sqrt(std::max(0.0, sum2[k] / count - r.mean[k] * r.mean[k]));
+    }
+    return r;
+  }
+};
+
+ObjectShape ShapeOfTruth(const GroundTruthObject& object) {
+  return ParseObjectShape(object.shape).value_or(ObjectShape::kCylinder);
+}
+
+}  // namespace
+
+std::vector<ClassSliceErrors> SignedSliceErrorsPerClass(
+    const std::vector<Detection>& detections, const GroundTruth& truth,
+    const std::vector<VisibleSlice>& visible, const std::vector<ObjectClass>& classes,
+    const CameraModel& camera, const DetectionEvaluationOptions& options) {
+  std::map<int, const GroundTruthObject*> objects;
+  for (const GroundTruthObject& o : truth.objects) objects[o.id] = &o;
+  std::map<long, std::vector<const Detection*>> detections_by_frame;
+  for (const Detection& d : detections) detections_by_frame[d.frame].push_back(&d);
+  std::vector<ErrorSums> detector(classes.size()), section(classes.size()),
+      silhouette(classes.size());
+  for (const VisibleSlice& view : visible) {
+    const auto found = objects.find(view.object_id);
+    if (found == objects.end() || found->second->class_name.empty()) continue;
+    const GroundTruthObject& object = *found->second;
+    const int class_index = FindClass(classes, object.class_name);
+    if (class_index < 0 || view.frame >= static_cast<long>(truth.trajectory.size())) continue;
+    if (view.visible_px < options.min_visible_fraction * view.footprint_px) continue;
+    const Pose2& pose = truth.trajectory[view.frame];
+    if (std::hypot(object.base_world.x() - pose.x, object.base_world.y() - pose.y) >
+        options.max_range_m)
+      continue;
+    const CylinderGeometry geometry{object.base_world, object.diameter_m, object.height_m};
+    BoundingSlice thesis, shaped;
+    const double aspect = object.length_m > 0 && object.width_m > 0
+                              ? std::min(object.length_m, object.width_m) /
+                                    std::max(object.length_m, object.width_m)
+                              : 1.0;
+    if (!PredictSlice(camera, pose, geometry, &thesis) ||
+        !PredictSlice(camera, pose, geometry, &shaped, nullptr,
+                      SilhouetteOf(camera, ShapeOfTruth(object), aspect)))
+      continue;
+    const double radius = std::max(1.0, view.slice.u_r_px);
+    section[class_index].Add(view.slice, thesis, radius);
+    silhouette[class_index].Add(view.slice, shaped, radius);
+    // The largest detection of the class overlapping the visible slice.
+    GroundTruthSighting as_sighting;
+    as_sighting.u_r_px = view.slice.u_r_px;
+    as_sighting.u_phi_rad = view.slice.u_phi_rad;
+    as_sighting.s_r_px = view.slice.s_r_px;
+    as_sighting.s_phi_rad = view.slice.s_phi_rad;
+    const Detection* best = nullptr;
+    for (const Detection* d : detections_by_frame[view.frame])
+      if (d->class_index == class_index && Matches(*d, as_sighting, options.slack_px) &&
+          (!best || d->area_px > best->area_px))
+        best = d;
+    if (best) detector[class_index].Add(best->slice, view.slice, radius);
+  }
+  std::vector<ClassSliceErrors> result(classes.size());
+  for (size_t c = 0; c < classes.size(); ++c)
+    result[c] = {classes[c].name, detector[c].Result(), section[c].Result(),
+                 silhouette[c].Result()};
+  return result;
+}
+
+std::string SignedSliceErrorsTable(const std::vector<ClassSliceErrors>& errors) {
+  std::ostringstream out;
+  char line[240];
+  out << "signed slice errors, px, mean (std) of u_r, u_phi, s_r, s_phi:\n";
+  auto row = [&](const char* name, const char* what, const SignedSliceErrors& e) {
+    std::snprintf(line, sizeof(line),
+                  "%-16s %-10s %5d  %+6.2f (%5.2f) %+6.2f (%5.2f) %+6.2f (%5.2f) %+6.2f (%5.2f)\n",
+                  name, what, e.count, e.mean[0], e.std[0], e.mean[1], e.std[1], e.mean[2],
+                  e.std[2], e.mean[3], e.std[3]);
+    out << line;
+  };
+  for (const ClassSliceErrors& c : errors) {
+    row(c.class_name.c_str(), "detector", c.detector);
+    row("", "section", c.section);
+    row("", "silhouette", c.silhouette);
+  }
+  return out.str();
+}
+
+std::string SignedSliceErrorsJson(const std::vector<ClassSliceErrors>& errors) {
+  std::ostringstream out;
+  auto block = [&](const char* name, const SignedSliceErrors& e) {
+    out << "\"" << name << "\": {\"count\": " << e.count << ", \"mean_px\": [" << e.mean[0]
+        << ", " << e.mean[1] << ", " << e.mean[2] << ", " << e.mean[3] << "], \"std_px\": ["
+        << e.std[0] << ", " << e.std[1] << ", " << e.std[2] << ", " << e.std[3] << "]}";
+  };
+  out << "[";
+  for (size_t i = 0; i < errors.size(); ++i) {
+    out << (i ? ",\n    " : "\n    ") << "{\"class\": \"" << errors[i].class_name << "\", ";
+    block("detector", errors[i].detector);
+    out << ", ";
+    block("section", errors[i].section);
+    out << ", ";
+    block("silhouette", errors[i].silhouette);
+    out << "}";
+  }
+  out << "\n  ]";
+  return out.str();
 }
 
 std::vector<std::vector<double>> ConfusionFromCounts(const std::vector<std::vector<int>>& counts,

@@ -2,8 +2,11 @@
 // class, class confusions, and bounding-slice errors in pixels.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
+
+#include "calib/camera_model.h"
 
 #include "core/run_folder.h"
 #include "detect/blob_detector.h"
@@ -47,6 +50,42 @@ struct DetectionEvaluation {
   std::string Table() const;
   std::string Json() const;
 };
+
+// One row of RUN/ground_truth/visible_slices.csv: the slice of an object's
+// visible pixels in a frame (what a pixel-exact detector would report).
+struct VisibleSlice {
+  long frame = 0;
+  int object_id = 0;
+  long visible_px = 0, footprint_px = 0;
+  BoundingSlice slice;
+};
+// Reads it; throws "FILE:LINE: ..." on a bad row. Empty when the file is absent.
+std::vector<VisibleSlice> ReadVisibleSlices(const std::string& run_dir);
+
+// Mean and standard deviation of signed slice errors (u_r, u_phi, s_r, s_phi),
+// all in pixels (angles as arc length at the true base radius).
+struct SignedSliceErrors {
+  int count = 0;
+  std::array<double, 4> mean{}, std{};
+};
+
+// Where a class's slice errors come from (docs/detection.md, "Signed slice
+// errors"), over the unoccluded sightings that count for recall:
+//   detector   = best detection - the visible slice (the detector's share);
+//   section    = visible slice - the thesis' cylinder section (A.7-A.10);
+//   silhouette = visible slice - the silhouette model of the object's true
+//                shape (docs/method.md §4.2), the model oslam run fits.
+struct ClassSliceErrors {
+  std::string class_name;
+  SignedSliceErrors detector, section, silhouette;
+};
+
+std::vector<ClassSliceErrors> SignedSliceErrorsPerClass(
+    const std::vector<Detection>& detections, const GroundTruth& truth,
+    const std::vector<VisibleSlice>& visible, const std::vector<ObjectClass>& classes,
+    const CameraModel& camera, const DetectionEvaluationOptions& options = {});
+std::string SignedSliceErrorsTable(const std::vector<ClassSliceErrors>& errors);
+std::string SignedSliceErrorsJson(const std::vector<ClassSliceErrors>& errors);
 
 DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
                                        const GroundTruth& truth,

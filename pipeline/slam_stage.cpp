@@ -1,5 +1,7 @@
 #include "pipeline/slam_stage.h"
 
+#include <cmath>
+
 #include <algorithm>
 #include <chrono>
 #include <limits>
@@ -41,6 +43,14 @@ LoadedInput Load(const SlamStageInput& input, const SlamStageOptions& options) {
     prior.size_std_m = {c.diameter_std_m, c.height_std_m};
     prior.location_std_m = {options.location_std_xy_m, options.location_std_xy_m,
                             options.location_std_z_m};
+    if (options.support_prior && c.supported) {
+      prior.location_mean_m.z() = c.base_height_m;
+      prior.location_std_m.z() = c.base_height_std_m;
+    }
+    if (options.silhouette_model)
+      prior.slice_model.silhouette = SilhouetteOf(*loaded.camera, c.shape, c.footprint_aspect);
+    prior.slice_model.censor_at_image_limits = options.censor_slices;
+    prior.slice_model.censor_margin_px = options.censor_margin_px;
     loaded.data.classes.push_back(prior);
     loaded.class_names.push_back(c.name);
   }
@@ -153,6 +163,8 @@ bool SlamStageOptions::Validate(std::string* why) const {
     return fail("the confusion floor must be in (0, 1)");
   if (!(location_std_xy_m > 0) || !(location_std_z_m > 0))
     return fail("the class location prior's std devs must be > 0 m");
+  if (!(censor_margin_px >= 0) || !std::isfinite(censor_margin_px))
+    return fail("the censoring margin must be >= 0 px");
   return tracks.Validate(why) && target.Validate(why) && fusion.Validate(why) &&
          EffectiveSampler().Validate(why) && baseline.Validate(why);
 }

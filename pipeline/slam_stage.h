@@ -35,6 +35,16 @@ struct SlamStageOptions {
   NearestNeighbourOptions baseline;
   double confusion_floor = 1e-3;                            // smallest P(a | c) (docs/method.md §13 #12)
   double location_std_xy_m = 10.0, location_std_z_m = 2.0;  // Gamma(c) (docs/method.md §13 #7)
+  // Beyond the thesis (docs/method.md §4.2, §5.1): each class's detections
+  // predicted as its silhouette (classes.yaml `shape:`) rather than the
+  // cylinder's section; slice ends cut by the image's limits taken as bounds
+  // (within censor_margin_px); the base height from the class's support
+  // prior (classes.yaml `base_height_m`, `base_height_std_m`) instead of
+  // location_std_z_m.
+  bool silhouette_model = true;
+  bool censor_slices = true;
+  double censor_margin_px = 10.0;
+  bool support_prior = true;
   // Detected classes are right: no switch moves, no merges across classes (Sec. 6.2).
   bool known_classes = false;
   // log P(a | c) counted once per track (default) or once per detection

@@ -238,8 +238,8 @@ std::vector<ObjectClass> ParseClasses(const Reader& r, const cv::FileNode& root)
     const std::string prefix = "classes[" + std::to_string(i) + "].";
     const cv::FileNode node = r.MapOrFail(list[i], prefix.substr(0, prefix.size() - 1));
     r.file.RequireOnlyKeys(node, prefix,
-                           {"name", "display_rgb", "diameter_mean_m", "diameter_std_m",
-                            "height_mean_m", "height_std_m"});
+                           {"name", "display_rgb", "shape", "footprint_aspect", "diameter_mean_m",
+                            "diameter_std_m", "height_mean_m", "height_std_m"});
     ObjectClass c;
     c.name = r.file.String(node, "name", prefix);
     if (c.name.empty() || c.name.find(',') != std::string::npos)
@@ -248,6 +248,15 @@ std::vector<ObjectClass> ParseClasses(const Reader& r, const cv::FileNode& root)
       r.file.Fail(prefix + "name", "duplicate class '" + c.name + "'");
     const Eigen::Vector3f rgb = r.Colour(node, "display_rgb", prefix) * 255.0f;
     for (int k = 0; k < 3; ++k) c.display_rgb[k] = static_cast<int>(std::lround(rgb[k]));
+    // The class's shape and box footprint, for the silhouette model (docs/method.md §4.2).
+    if (r.Has(node, "shape")) {
+      const std::optional<ObjectShape> shape = ParseObjectShape(r.file.String(node, "shape", prefix));
+      if (!shape) r.file.Fail(prefix + "shape", "must be one of cylinder, box, sphere, panel");
+      c.shape = *shape;
+    }
+    c.footprint_aspect = r.file.OptionalDouble(node, "footprint_aspect", 1.0, prefix);
+    if (!(c.footprint_aspect > 0 && c.footprint_aspect <= 1))
+      r.file.Fail(prefix + "footprint_aspect", "must be in (0, 1] (footprint width / length)");
     c.diameter_mean_m = r.Positive(node, "diameter_mean_m", prefix);
     c.diameter_std_m = r.Positive(node, "diameter_std_m", prefix);
     r.file.Within(c.diameter_std_m, prefix + "diameter_std_m", bounds::kMinStdM, kSize, "m");

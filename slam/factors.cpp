@@ -1,5 +1,6 @@
 #include "slam/factors.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Cholesky>
@@ -68,13 +69,18 @@ bool OdometryFactor::Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd>
 
 BoundingSliceFactor::BoundingSliceFactor(const CameraModel* camera, int pose_key, int base_key,
                                          int size_key, const BoundingSlice& measured,
-                                         double pixel_std_px)
-    : Factor({pose_key, base_key, size_key}), camera_(camera), measured_(measured) {
+                                         double pixel_std_px, const SliceModel& model)
+    : Factor({pose_key, base_key, size_key}),
+      camera_(camera),
+      measured_(measured),
+      silhouette_(model.silhouette) {
   if (!camera) throw Error("BoundingSliceFactor needs a camera");
   if (!(pixel_std_px > 0.0) || !std::isfinite(pixel_std_px))
     throw Error("the pixel noise E must be positive");
   if (!(measured.u_r_px > 0.0) || !std::isfinite(measured.u_r_px))
     throw Error("a bounding slice needs a positive radius u_r");
+  if (model.censor_at_image_limits)
+    censoring_ = CensoringOf(*camera, measured, model.censor_margin_px);
   const Eigen::Vector4d sigma = NoiseSigma(measured, pixel_std_px);
   inverse_sigma_ = sigma.cwiseInverse();
   // log |R| |W| = 2 sum log sigma, sigma = (E, E/u_r, sqrt2 E, sqrt2 E/u_r),
@@ -95,6 +101,39 @@ Eigen::Vector4d BoundingSliceFactor::Residual(const BoundingSlice& predicted,
           predicted.s_r_px - measured.s_r_px, predicted.s_phi_rad - measured.s_phi_rad};
 }
 
+Eigen::Vector4d BoundingSliceFactor::CensoredResidual(const BoundingSlice& predicted,
+                                                      const BoundingSlice& measured,
+                                                      const SliceCensoring& censoring,
+                                                      SliceJacobians* jacobians) {
+  Eigen::Vector4d residual = Residual(predicted, measured);
+  if (!censoring.inner && !censoring.outer) return residual;
+  // Rows 0 and 2 of every Jacobian block, changed together.
+  auto rows = [jacobians](auto&& change) {
+    if (!jacobians) return;
+    change(jacobians->wrt_pose);
+    change(jacobians->wrt_base);
+    change(jacobians->wrt_size);
+  };
+  const double inner = residual[0];
+  const double outer = residual[0] + residual[2];  // predicted - measured outer radius
+  // Row 2 compares the outer ends once either end is a bound (the measured
+  // s_r is then not a length); a censored outer end is a lower bound on the
+  // true outer radius, a censored inner end an upper bound on the inner.
+  residual[2] = censoring.outer ? std::min(0.0, outer) : outer;
+  const bool outer_free = censoring.outer && outer >= 0.0;
+  rows([outer_free](auto& j) {
+    if (outer_free)
+      j.row(2).setZero();
+    else
+      j.row(2) += j.row(0);
+  });
+  if (censoring.inner) {
+    residual[0] = std::max(0.0, inner);
+    if (inner <= 0.0) rows([](auto& j) { j.row(0).setZero(); });
+  }
+  return residual;
+}
+
 bool BoundingSliceFactor::Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd> error,
                                     Eigen::MatrixXd* jacobian) const {
   const Pose2 pose = PoseOf(values, keys()[0]);
@@ -104,9 +143,13 @@ bool BoundingSliceFactor::Linearize(const Values& values, Eigen::Ref<Eigen::Vect
   object.height_m = values.Data(keys()[2])[1];
   BoundingSlice predicted;
   SliceJacobians jacobians;
-  if (!PredictSlice(*camera_, pose, object, &predicted, jacobian ? &jacobians : nullptr))
+  // A censored outer end is satisfied by a top beyond the mirror's view.
+  bool beyond = false;
+  if (!PredictSlice(*camera_, pose, object, &predicted, jacobian ? &jacobians : nullptr,
+                    silhouette_, censoring_.outer ? &beyond : nullptr))
     return false;
-  error = inverse_sigma_.cwiseProduct(Residual(predicted, measured_));
+  error = inverse_sigma_.cwiseProduct(
+      CensoredResidual(predicted, measured_, censoring_, jacobian ? &jacobians : nullptr));
   if (!jacobian) return true;
   jacobian->leftCols<3>() = inverse_sigma_.asDiagonal() * jacobians.wrt_pose;
   jacobian->middleCols<3>(3) = inverse_sigma_.asDiagonal() * jacobians.wrt_base;

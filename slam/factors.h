@@ -9,6 +9,7 @@
 
 #include "calib/camera_model.h"
 #include "core/bounding_slice.h"
+#include "calib/observation_model.h"
 #include "core/motion_model.h"
 #include "solver/factor.h"
 
@@ -48,10 +49,18 @@ class OdometryFactor final : public Factor {
 // z = (h^u(x, l), h^s(x, l, g)) + noise, with R = diag(E^2, (E/u_r)^2) on u and
 // W = 2R on s, u_r the *measured* radius. The u_phi residual is wrapped.
 // Keys: (pose, base point, cylinder). The camera must outlive the factor.
+//
+// Beyond the thesis (docs/method.md §4.2): with `model` the prediction is the
+// class's silhouette, and a slice end cut by the image's limits
+// (CensoringOf) is a one-sided bound: a censored outer end gives the residual
+// min(0, predicted - measured outer radius u_r + s_r) in place of the s_r
+// row, a censored inner end max(0, predicted - measured u_r) in the u_r row
+// (and the s_r row then compares the outer ends).
 class BoundingSliceFactor final : public Factor {
  public:
   BoundingSliceFactor(const CameraModel* camera, int pose_key, int base_key, int size_key,
-                      const BoundingSlice& measured, double pixel_std_px);
+                      const BoundingSlice& measured, double pixel_std_px,
+                      const SliceModel& model = {});
 
   int Dimension() const override { return 4; }
   bool Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd> error,
@@ -66,10 +75,20 @@ class BoundingSliceFactor final : public Factor {
   // sqrt(2)E/u_r) and the unwhitened residual, u_phi wrapped.
   static Eigen::Vector4d NoiseSigma(const BoundingSlice& measured, double pixel_std_px);
   static Eigen::Vector4d Residual(const BoundingSlice& predicted, const BoundingSlice& measured);
+  // The residual with censored ends applied (see the class comment); when
+  // `jacobians` is given its rows are changed to match.
+  static Eigen::Vector4d CensoredResidual(const BoundingSlice& predicted,
+                                          const BoundingSlice& measured,
+                                          const SliceCensoring& censoring,
+                                          SliceJacobians* jacobians);
+
+  const SliceCensoring& censoring() const { return censoring_; }
 
  private:
   const CameraModel* camera_;
   BoundingSlice measured_;
+  SilhouetteModel silhouette_;
+  SliceCensoring censoring_;
   Eigen::Vector4d inverse_sigma_;
   double log_det_;
 };

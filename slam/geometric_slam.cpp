@@ -83,7 +83,9 @@ bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
     candidate.diameter_m = d;
     candidate.height_m = h;
     BoundingSlice predicted;
-    if (!PredictSlice(camera, pose, candidate, &predicted)) return false;
+    if (!PredictSlice(camera, pose, candidate, &predicted, nullptr,
+                      prior.slice_model.silhouette))
+      return false;
     const double sigma_sr = std::sqrt(2.0) * sigma_ur + std::abs(slice.s_r_px) * rel_h;
     const double sigma_sphi =
         std::sqrt(2.0) * sigma_ur / slice.u_r_px + std::abs(slice.s_phi_rad) * rel_d;
@@ -145,6 +147,11 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
         size_weight.cwiseProduct(theta.tail<2>() - prior.size_mean_m);
     return error;
   };
+  std::vector<SliceCensoring> censoring(detections.size());
+  if (prior.slice_model.censor_at_image_limits)
+    for (size_t k = 0; k < detections.size(); ++k)
+      censoring[k] =
+          CensoringOf(camera, detections[k]->slice, prior.slice_model.censor_margin_px);
   // Cost, gradient and Gauss-Newton matrix of the object's own factors.
   auto evaluate = [&](const Vector5d& theta, double* cost, Vector5d* gradient, Matrix5d* hessian) {
     CylinderGeometry candidate;
@@ -154,16 +161,18 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
     double sum = 0.0;
     if (gradient) gradient->setZero(), hessian->setZero();
     SliceJacobians jacobians;
-    for (const SliceObservation* detection : detections) {
-      const BoundingSlice& z = detection->slice;
+    for (size_t k = 0; k < detections.size(); ++k) {
+      const BoundingSlice& z = detections[k]->slice;
       BoundingSlice predicted;
-      if (!PredictSlice(camera, poses[detection->frame], candidate, &predicted,
-                        gradient ? &jacobians : nullptr))
+      bool beyond = false;
+      if (!PredictSlice(camera, poses[detections[k]->frame], candidate, &predicted,
+                        gradient ? &jacobians : nullptr, prior.slice_model.silhouette,
+                        censoring[k].outer ? &beyond : nullptr))
         return false;
       const Eigen::Vector4d inverse_sigma =
           BoundingSliceFactor::NoiseSigma(z, pixel_std_px).cwiseInverse();
-      const Eigen::Vector4d error =
-          inverse_sigma.cwiseProduct(BoundingSliceFactor::Residual(predicted, z));
+      const Eigen::Vector4d error = inverse_sigma.cwiseProduct(BoundingSliceFactor::CensoredResidual(
+          predicted, z, censoring[k], gradient ? &jacobians : nullptr));
       sum += error.squaredNorm();
       if (gradient) {
         Eigen::Matrix<double, 4, 5> j;
@@ -321,8 +330,15 @@ CylinderGeometry GeometricSlam::InitialObject(const std::vector<Pose2>& poses,
   auto unpredictable = [&](const CylinderGeometry& candidate) {
     int failures = 0;
     BoundingSlice predicted;
-    for (const SliceObservation* observation : list)
-      if (!PredictSlice(camera_, poses[observation->frame], candidate, &predicted)) ++failures;
+    for (const SliceObservation* observation : list) {
+      const SliceModel& model = prior.slice_model;
+      bool beyond = false;
+      const bool censored = model.censor_at_image_limits &&
+                            CensoringOf(camera_, observation->slice, model.censor_margin_px).outer;
+      if (!PredictSlice(camera_, poses[observation->frame], candidate, &predicted, nullptr,
+                        model.silhouette, censored ? &beyond : nullptr))
+        ++failures;
+    }
     return failures;
   };
   int best_failures = -1;
@@ -446,7 +462,8 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     for (const SliceObservation* observation : by_object[object.id]) {
       Factor* slice = graph.Emplace<BoundingSliceFactor>(&camera_, pose_keys[observation->frame],
                                                          object.base, object.size,
-                                                         observation->slice, options_.pixel_std_px);
+                                                         observation->slice, options_.pixel_std_px,
+                                                         problem.classes[object.class_index].slice_model);
       if (slots && observation->detection_id >= 0)
         slice->set_linearization_slot(DetectionSlot(observation->detection_id));
     }

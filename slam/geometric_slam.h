@@ -45,6 +45,9 @@ struct ClassPrior {
   Eigen::Vector2d size_std_m{0.1, 0.1};
   Eigen::Vector3d location_mean_m = Eigen::Vector3d::Zero();  // gamma(c): 0 (docs/method.md §5.1)
   Eigen::Vector3d location_std_m{10.0, 10.0, 2.0};            // Gamma(c), docs/method.md §5.1 [G]
+  // How the class's detections relate to its geometry (silhouette,
+  // censored slice ends; docs/method.md §4.2). Default: the thesis' section.
+  SliceModel slice_model{};
 };
 
 struct GeometricSlamProblem {

@@ -120,7 +120,8 @@ StageFit SolveStage(const StageContext& context, int first_free, int end, Sparse
     stage_objects.push_back({id, base, size});
     for (const SliceObservation* observation : seen)
       graph.Emplace<BoundingSliceFactor>(&context.camera, key_of(observation->frame), base, size,
-                                         observation->slice, context.pixel_std_px);
+                                         observation->slice, context.pixel_std_px,
+                                         prior.slice_model);
     graph.Add(MakeLocationPrior(base, prior.location_mean_m, prior.location_std_m));
     graph.Add(MakeSizePrior(size, prior.size_mean_m, prior.size_std_m));
   }

@@ -94,6 +94,137 @@ TEST(ObservationModel, JacobiansMatchCentralDifferences) {
   }
 }
 
+Eigen::VectorXd SilhouetteVector(const CameraModel& camera, const SilhouetteModel& model,
+                                 const Eigen::VectorXd& x) {
+  BoundingSlice slice;
+  EXPECT_TRUE(
+      PredictSlice(camera, {x[0], x[1], x[2]}, {x.segment<3>(3), x[6], x[7]}, &slice, nullptr, model));
+  return Eigen::Vector4d(slice.u_r_px, slice.u_phi_rad, slice.s_r_px, slice.s_phi_rad);
+}
+
+TEST(SilhouetteModel, JacobiansMatchCentralDifferences) {
+  const HyperbolicCamera cameras[] = {HyperbolicCamera::Preset("lpa"),
+                                      HyperbolicCamera::Preset("cogniron")};
+  // Objects below the viewpoint and a door above it (its top's near edge is outermost).
+  std::vector<Eigen::Matrix<double, 8, 1>> cases(4);
+  cases[0] << 0, 0, 0, 2, 1, 0, 0.6, 0.6;
+  cases[1] << 1, -1, kPi / 2, 1.5, 2, 0, 0.25, 0.25;
+  cases[2] << 0.5, 0.5, 0.3, -1, 2, 0.02, 1.0, 2.1;
+  cases[3] << -2, 3, -2.5, 1, -1, 0.05, 0.3, 0.4;
+  for (const ObjectShape shape :
+       {ObjectShape::kCylinder, ObjectShape::kBox, ObjectShape::kSphere, ObjectShape::kPanel}) {
+    const SilhouetteModel model = SilhouetteOf(cameras[0], shape, 0.6);
+    for (const HyperbolicCamera& camera : cameras) {
+      for (const auto& x : cases) {
+        BoundingSlice slice;
+        SliceJacobians analytic;
+        ASSERT_TRUE(PredictSlice(camera, {x[0], x[1], x[2]}, {x.segment<3>(3), x[6], x[7]},
+                                 &slice, &analytic, model));
+        const Eigen::MatrixXd numeric = testing::NumericJacobian(
+            [&](const Eigen::VectorXd& v) { return SilhouetteVector(camera, model, v); }, x);
+        Eigen::Matrix<double, 4, 8> combined;
+        combined << analytic.wrt_pose, analytic.wrt_base, analytic.wrt_size;
+        EXPECT_LT((combined - numeric).cwiseAbs().maxCoeff(),
+                  1e-6 * std::max(1.0, numeric.cwiseAbs().maxCoeff()))
+            << ObjectShapeName(shape) << " case " << x.transpose();
+      }
+    }
+  }
+}
+
+// The silhouette's ends are the image radii of the footprint's near edge at
+// the base and of the top's far edge (below the viewpoint) or near edge
+// (above it), and its width is the cylinder's.
+TEST(SilhouetteModel, EndsAreTheFootprintEdges) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  const SilhouetteModel cylinder = SilhouetteOf(camera, ObjectShape::kCylinder);
+  for (const double height : {0.5, 2.0}) {  // the LPA viewpoint is at 0.76 m
+    BoundingSlice section, silhouette;
+    const CylinderGeometry object{Eigen::Vector3d(2, 0, 0), 0.4, height};
+    ASSERT_TRUE(PredictSlice(camera, {}, object, &section));
+    ASSERT_TRUE(PredictSlice(camera, {}, object, &silhouette, nullptr, cylinder));
+    double near_base, top;
+    ASSERT_TRUE(camera.ProjectRadius({1.8, 0, 0}, &near_base));
+    ASSERT_TRUE(camera.ProjectRadius({height < 0.76 ? 2.2 : 1.8, 0, height}, &top));
+    EXPECT_NEAR(silhouette.u_r_px, near_base, 1e-9);
+    EXPECT_NEAR(silhouette.u_r_px + silhouette.s_r_px, top, 1e-9);
+    EXPECT_LT(silhouette.u_r_px, section.u_r_px - 2.0);  // the near edge is well inside
+    EXPECT_GT(silhouette.s_r_px, section.s_r_px);       // and the top face adds length
+    EXPECT_NEAR(silhouette.s_phi_rad, section.s_phi_rad, 1e-12);
+  }
+}
+
+// A ball's outline against brute force: the smallest and largest image radius
+// over points on its surface.
+TEST(SilhouetteModel, SphereEndsMatchItsSurface) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  const SilhouetteModel sphere = SilhouetteOf(camera, ObjectShape::kSphere);
+  for (const double diameter : {0.2, 0.5}) {
+    for (double range = 0.8; range <= 4.0; range += 0.8) {
+      BoundingSlice slice;
+      const Eigen::Vector3d base(range, 0.3, 0.0);
+      ASSERT_TRUE(PredictSlice(camera, {}, {base, diameter, diameter}, &slice, nullptr, sphere));
+      double low = 1e9, high = 0;
+      const Eigen::Vector3d centre = base + Eigen::Vector3d(0, 0, diameter / 2);
+      for (int i = 0; i <= 400; ++i) {
+        const double polar = kPi * i / 400;
+        for (int j = 0; j < 400; ++j) {
+          const double azimuth = 2 * kPi * j / 400;
+          const Eigen::Vector3d point =
+              centre + diameter / 2 *
+                           Eigen::Vector3d(std::sin(polar) * std::cos(azimuth),
+                                           std::sin(polar) * std::sin(azimuth), std::cos(polar));
+          double radius;
+          if (!camera.ProjectRadius(point, &radius)) continue;
+          low = std::min(low, radius);
+          high = std::max(high, radius);
+        }
+      }
+      EXPECT_NEAR(slice.u_r_px, low, 0.05) << "range " << range;
+      EXPECT_NEAR(slice.u_r_px + slice.s_r_px, high, 0.05) << "range " << range;
+    }
+  }
+}
+
+TEST(SilhouetteModel, BoxAndPanelExtentsAreMeansOverYaw) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  // A square box: the mean half extent of a square of diagonal 1 over yaw, 2/(pi sqrt 2).
+  EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kBox, 1.0).width_half_extent, 0.450158, 1e-6);
+  // By quadrature over yaw for a 0.23 x 0.14 box (aspect 0.61).
+  const double length = 0.23, width = 0.14, diagonal = std::hypot(length, width);
+  double mean = 0;
+  const int steps = 100000;
+  for (int i = 0; i < steps; ++i) {
+    const double yaw = (i + 0.5) * kPi / steps;
+    mean += 0.5 * (length * std::abs(std::cos(yaw)) + width * std::abs(std::sin(yaw))) / steps;
+  }
+  EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kBox, width / length).depth_half_extent, mean / diagonal,
+              1e-6);
+  EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kPanel).width_half_extent, 1 / kPi, 1e-12);
+  EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kSphere).viewpoint_height_m,
+              camera.parameters().focus_height_m, 1e-9);
+}
+
+TEST(SliceCensoring, EndsAtTheImageLimitsAreBounds) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  const MirrorAnnulus annulus = camera.annulus();
+  ASSERT_GT(annulus.rim_radius_px, 0);
+  // Pointing along the image's long side (angle 0: +x), away from its border.
+  BoundingSlice inside{120, 0.0, 40, 0.2};
+  SliceCensoring c = CensoringOf(camera, inside, 2.0);
+  EXPECT_FALSE(c.inner);
+  EXPECT_FALSE(c.outer);
+  BoundingSlice at_rim{150, 0.0, annulus.rim_radius_px - 150 - 1.0, 0.2};
+  EXPECT_TRUE(CensoringOf(camera, at_rim, 2.0).outer);
+  EXPECT_FALSE(CensoringOf(camera, at_rim, 0.5).outer);
+  BoundingSlice at_blind{annulus.blind_radius_px + 1.0, 0.0, 30, 0.2};
+  EXPECT_TRUE(CensoringOf(camera, at_blind, 2.0).inner);
+  // The image border: towards the short side (y), a slice reaching the border.
+  const double to_border = camera.image_height() / 2.0;
+  BoundingSlice at_border{to_border - 40, kPi / 2, 39.8, 0.05};
+  if (to_border - 0.5 < annulus.rim_radius_px) EXPECT_TRUE(CensoringOf(camera, at_border, 0.5).outer);
+}
+
 TEST(ObservationModel, ObjectOnTheCameraAxisHasNoSlice) {
   BoundingSlice slice;
   EXPECT_FALSE(PredictSlice(HyperbolicCamera::Preset("lpa"), {1, 1, 0},

@@ -107,8 +107,23 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
   EXPECT_EQ(error_for(good + "    size: 3\n"),
             path +
                 ": classes[0].size: unknown key (allowed: name, display_rgb, shape, "
-                "diameter_mean_m, diameter_std_m, height_mean_m, height_std_m, colour, "
-                "image_shape)");
+                "diameter_mean_m, diameter_std_m, height_mean_m, height_std_m, "
+                "footprint_aspect, base_height_m, base_height_std_m, colour, image_shape)");
+  EXPECT_EQ(error_for(good + "    footprint_aspect: 1.5\n"),
+            path + ": classes[0].footprint_aspect: must be in (0, 1] (footprint width / length)");
+  // The support prior: defaults, a declared height and spread, and none.
+  std::ofstream(path) << good;
+  EXPECT_TRUE(ReadClasses(path).at(0).supported);
+  std::ofstream(path) << good + "    base_height_m: 1.2\n    base_height_std_m: 0.05\n";
+  std::vector<ObjectClass> read = ReadClasses(path);
+  EXPECT_EQ(read.at(0).base_height_m, 1.2);
+  EXPECT_EQ(read.at(0).base_height_std_m, 0.05);
+  std::ofstream(path) << good + "    base_height_std_m: none\n";
+  read = ReadClasses(path);
+  EXPECT_FALSE(read.at(0).supported);
+  WriteClasses(read, path);  // and back: `none` survives a write
+  EXPECT_FALSE(ReadClasses(path).at(0).supported);
+  std::ofstream(path) << good;
   EXPECT_EQ(error_for(good + "    shape: cone\n"),
             path + ": classes[0].shape: must be one of cylinder, box, sphere, panel");
   std::ofstream(path) << good;

@@ -110,6 +110,102 @@ TEST(BoundingSliceFactorTest, WhiteningIsRAndTwoRAndAngleResidualWraps) {
   EXPECT_NEAR(factor.LogDetCovariance(), 2 * log_det_r + 2 * std::log(2.0), 1e-9);
 }
 
+// The censored slice factor: numeric Jacobians on both sides of each bound,
+// with every silhouette, and slices placed at the rim and the blind disc.
+TEST(BoundingSliceFactorTest, CensoredJacobiansMatchCentralDifferences) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  const MirrorAnnulus annulus = camera.annulus();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int checked[2][2] = {{0, 0}, {0, 0}};  // [outer censored][bound active]
+  for (const ObjectShape shape :
+       {ObjectShape::kCylinder, ObjectShape::kBox, ObjectShape::kSphere, ObjectShape::kPanel}) {
+    SliceModel model;
+    model.silhouette = SilhouetteOf(camera, shape, 0.7);
+    model.censor_at_image_limits = true;
+    for (int trial = 0; trial < 40; ++trial) {
+      Values values;
+      const int pose = values.AddPose(u(rng), u(rng), 3.0 * u(rng));
+      const Pose2 p{values.Data(pose)[0], values.Data(pose)[1], values.Data(pose)[2]};
+      const double range = 1.2 + 1.5 * (u(rng) + 1.0), bearing = 3.0 * u(rng);
+      const int base_key = values.Add(Eigen::Vector3d(
+          p.RobotToWorld({range * std::cos(bearing), range * std::sin(bearing), 0.05 * u(rng)})));
+      // Outer end at the rim (trial % 4 < 2: a 2 m top beyond it, or a 0.4 m
+      // one short of it) or inner end at the blind disc, read with a margin
+      // so wide that slices at any radius touch it (the bound then lies on
+      // either side of the prediction).
+      const bool tall = trial % 4 < 2;
+      const int size_key =
+          values.Add(Eigen::Vector2d(0.4 + 0.1 * u(rng), tall && trial % 2 == 0 ? 2.0 : 0.4));
+      model.censor_margin_px = tall ? 2.0 : 400.0;
+      const BoundingSlice measured =
+          tall ? BoundingSlice{150.0 + 10 * u(rng), u(rng), annulus.rim_radius_px - 150.0 - 10 * u(rng), 0.2}
+               : BoundingSlice{120.0 + 60 * u(rng), u(rng), 60.0 + 40 * u(rng), 0.2};
+      // Keep the end at the limit: re-derive s_r from the rim for tall ones.
+      BoundingSlice at_limit = measured;
+      if (tall) at_limit.s_r_px = annulus.rim_radius_px - 1.0 - at_limit.u_r_px;
+      BoundingSliceFactor factor(&camera, pose, base_key, size_key, at_limit, 30.0, model);
+      ASSERT_EQ(factor.censoring().inner, !tall);  // (the wide margin censors both ends)
+      ASSERT_TRUE(factor.censoring().outer);
+      Eigen::VectorXd error(4);
+      if (!factor.Linearize(values, error, nullptr)) continue;
+      // Away from the kink, where the bound switches on.
+      const double bound_row = tall ? error[2] : error[0];
+      BoundingSlice predicted;
+      bool beyond = false;  // a tall top may be beyond the mirror's view: bound met
+      ASSERT_TRUE(PredictSlice(camera, p, {values.Get(base_key), values.Data(size_key)[0],
+                                           values.Data(size_key)[1]},
+                               &predicted, nullptr, model.silhouette, tall ? &beyond : nullptr));
+      const double gap = tall ? predicted.u_r_px + predicted.s_r_px - (at_limit.u_r_px + at_limit.s_r_px)
+                              : predicted.u_r_px - at_limit.u_r_px;
+      if (std::abs(gap) < 0.5) continue;
+      ExpectJacobianMatchesNumeric(factor, values, 1e-5);
+      // A prediction beyond the bound costs nothing in that row.
+      const bool active = tall ? gap < 0 : gap > 0;
+      if (active) {
+        EXPECT_NE(bound_row, 0.0);
+      } else {
+        EXPECT_EQ(bound_row, 0.0);
+      }
+      ++checked[tall][active];
+    }
+  }
+  for (int tall = 0; tall < 2; ++tall)
+    for (int active = 0; active < 2; ++active)
+      EXPECT_GT(checked[tall][active], 3) << "tall " << tall << " active " << active;
+}
+
+// A door seen only up to the rim keeps its height: with the outer end
+// censored, the fit of one detection series leaves the height at the prior
+// instead of shrinking it to what the rim shows.
+TEST(BoundingSliceFactorTest, CensoredOuterEndKeepsTheHeightAbovePrediction) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  const MirrorAnnulus annulus = camera.annulus();
+  SliceModel model;
+  model.censor_at_image_limits = true;
+  Values values;
+  const int pose = values.AddPose(0, 0, 0);
+  const int base = values.Add(Eigen::Vector3d(1.5, 0.0, 0.0));
+  const int size = values.Add(Eigen::Vector2d(1.0, 2.17));
+  BoundingSlice truth;
+  ASSERT_TRUE(PredictSlice(camera, Pose2{}, {Eigen::Vector3d(1.5, 0, 0), 1.0, 2.17}, &truth));
+  ASSERT_GT(truth.u_r_px + truth.s_r_px, annulus.rim_radius_px);  // beyond the rim
+  BoundingSlice measured = truth;
+  measured.s_r_px = annulus.rim_radius_px - 0.5 - truth.u_r_px;  // cut at the rim
+  BoundingSliceFactor censored(&camera, pose, base, size, measured, 30.0, model);
+  BoundingSliceFactor plain(&camera, pose, base, size, measured, 30.0);
+  Eigen::VectorXd error(4);
+  ASSERT_TRUE(censored.Linearize(values, error, nullptr));
+  EXPECT_EQ(error[2], 0.0);  // the true door satisfies the bound
+  EXPECT_NEAR(error[0], 0.0, 1e-9);
+  ASSERT_TRUE(plain.Linearize(values, error, nullptr));
+  EXPECT_GT(error[2], 0.1);  // the plain factor pulls it shorter
+  // A door shorter than the rim shows (its top below the camera) costs.
+  values.Set(size, Eigen::Vector2d(1.0, 0.6));
+  ASSERT_TRUE(censored.Linearize(values, error, nullptr));
+  EXPECT_LT(error[2], -0.1);
+}
+
 TEST(PriorFactorTest, JacobianErrorAndNormaliser) {
   Values values;
   const int key = values.Add(Eigen::Vector3d(1.0, -2.0, 0.5));
