@@ -24,14 +24,16 @@ int RunMaskCommand(const std::vector<std::string>& args) {
       "frame's, does not change over a drive. Writes a mask image (black = ignored), by\n"
       "default RUN_DIR/mask.png, which detection then uses (docs/formats.md, mask.png).");
   arguments.AddPositional("RUN_DIR|VIDEO", "a run folder, or a video file in one");
-  arguments.AddOption("output", "-o", "MASK.png", "where to write the mask (default RUN_DIR/mask.png)");
+  arguments.AddOption("output", "-o", "MASK.png",
+                      "where to write the mask (default RUN_DIR/mask.png)");
   arguments.AddOption("camera", "", "CAMERA.yaml", "the camera (default RUN_DIR/camera.yaml)");
   StaticMaskOptions options;
   Bindings bindings;
   bindings.Add(&options.samples, "samples", "N", "frames read, spread over the recording");
   bindings.Add(&options.max_change, "max-change", "X",
                "largest change of a rig pixel (std of its grey level, exposure removed)");
-  bindings.Add(&options.min_region_px, "min-region", "PX", "smaller static regions are the world's");
+  bindings.Add(&options.min_region_px, "min-region", "PX",
+               "smaller static regions are the world's");
   bindings.Add(&options.margin_px, "margin", "PX", "grow the mask by this much");
   bindings.Declare(&arguments);
   arguments.AddFlag("quiet", "print nothing but errors");
@@ -46,12 +48,12 @@ int RunMaskCommand(const std::vector<std::string>& args) {
   const std::unique_ptr<CameraModel> camera =
       LoadCamera(arguments.Has("camera") ? arguments.Get("camera") : paths.camera);
   const FrameSource frames(arguments.Get("RUN_DIR|VIDEO"));
-  Progress progress("mask", std::min(frames.size(), static_cast<size_t>(options.samples)),
-                    "frames", quiet);
+  Progress progress("mask", std::min(frames.size(), static_cast<size_t>(options.samples)), "frames",
+                    quiet);
   const StaticMaskResult result = DetectStaticMask(
       frames, *camera, options, [&](size_t done, size_t) { progress.Update(done); });
-  progress.Done(Format("%.1f %% of the mirror annulus is the rig's", 
-                       100.0 * result.masked_share_of_annulus));
+  progress.Done(
+      Format("%.1f %% of the mirror annulus is the rig's", 100.0 * result.masked_share_of_annulus));
   WriteStaticMask(result.mask, output);
   if (!quiet) std::printf("wrote %s\n", output.c_str());
   return 0;

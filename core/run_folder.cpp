@@ -460,16 +460,17 @@ FrameSource::FrameSource(const std::string& run_or_video) {
     const double frames = decoder_->capture.get(cv::CAP_PROP_FRAME_COUNT);
     if (!(frames > 0)) throw Error::InFile(video_path_, "video has no frames");
     if (frames > bounds::kFrames)
-      throw Error::InFile(video_path_, "declares " +
-                                           bounds::OutsideMessage(frames, 1, bounds::kFrames) +
-                                           " frames");
+      throw Error::InFile(
+          video_path_,
+          "declares " + bounds::OutsideMessage(frames, 1, bounds::kFrames) + " frames");
     const double width = decoder_->capture.get(cv::CAP_PROP_FRAME_WIDTH),
                  height = decoder_->capture.get(cv::CAP_PROP_FRAME_HEIGHT);
     if (!(width <= bounds::kImageSidePx && height <= bounds::kImageSidePx &&
           width * height <= bounds::kImagePixels))
-      throw Error::InFile(video_path_, "declares frames of " + std::to_string(width) + "x" +
-                                           std::to_string(height) +
-                                           " pixels, beyond the image bounds (docs/formats.md, Bounds)");
+      throw Error::InFile(video_path_,
+                          "declares frames of " + std::to_string(width) + "x" +
+                              std::to_string(height) +
+                              " pixels, beyond the image bounds (docs/formats.md, Bounds)");
     count_ = static_cast<size_t>(frames);
     frame_rate = decoder_->capture.get(cv::CAP_PROP_FPS);
   }

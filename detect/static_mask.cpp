@@ -131,6 +131,8 @@ cv::Mat ReadStaticMask(const std::string& path, int width, int height) {
   return image != 0;
 }
 
-void WriteStaticMask(const cv::Mat& mask, const std::string& path) { WriteImage(path, mask); }
+void WriteStaticMask(const cv::Mat& mask, const std::string& path) {
+  WriteImage(path, mask);
+}
 
 }  // namespace oslam

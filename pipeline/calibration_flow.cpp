@@ -164,11 +164,10 @@ std::unique_ptr<CameraModel> MountFromFloorBoard(const CameraModel& camera,
   if (flow.floor_board_pattern.square_m > 0) pattern.square_m = flow.floor_board_pattern.square_m;
   const cv::Mat image = ReadImage(flow.floor_board_image, ImageColour::kGray);
   if (image.cols != camera.image_width() || image.rows != camera.image_height())
-    throw Error::InFile(flow.floor_board_image,
-                        "image is " + std::to_string(image.cols) + "x" +
-                            std::to_string(image.rows) + ", the boards " +
-                            std::to_string(camera.image_width()) + "x" +
-                            std::to_string(camera.image_height()));
+    throw Error::InFile(flow.floor_board_image, "image is " + std::to_string(image.cols) + "x" +
+                                                    std::to_string(image.rows) + ", the boards " +
+                                                    std::to_string(camera.image_width()) + "x" +
+                                                    std::to_string(camera.image_height()));
   Corners corners;
   if (!DetectBoardCorners(image, pattern, CornerDetectionOptions(), &corners))
     throw Error::InFile(flow.floor_board_image,
@@ -182,10 +181,11 @@ std::unique_ptr<CameraModel> MountFromFloorBoard(const CameraModel& camera,
   }
   std::unique_ptr<CameraModel> mounted =
       WithMount(camera, mount.focus_height_m, mount.yaw_change_rad);
-  output.Print(Format("mount: focus height %.4f m, yaw %.4f rad from the floor board (%d corners, "
-                      "RMS %.1f mm on the floor, %.2f px in the image)",
-                      mount.focus_height_m, mount.yaw_change_rad, mount.corners,
-                      1000.0 * mount.floor_rms_m, mount.image_rms_px));
+  output.Print(
+      Format("mount: focus height %.4f m, yaw %.4f rad from the floor board (%d corners, "
+             "RMS %.1f mm on the floor, %.2f px in the image)",
+             mount.focus_height_m, mount.yaw_change_rad, mount.corners, 1000.0 * mount.floor_rms_m,
+             mount.image_rms_px));
   return mounted;
 }
 

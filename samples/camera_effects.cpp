@@ -30,8 +30,10 @@ CameraEffects::CameraEffects(const CameraModel& camera, const RealismOptions& op
   const Eigen::Vector2d centre = camera.ImageCenter();
   centre_ = cv::Point2f(static_cast<float>(centre.x()), static_cast<float>(centre.y()));
   const MirrorAnnulus& annulus = camera.annulus();
-  const double rim = annulus.rim_radius_px > 0 ? annulus.rim_radius_px : 0.5 * std::min(width, height);
-  const double body_outer = annulus.blind_radius_px + options.body_depth * (rim - annulus.blind_radius_px);
+  const double rim =
+      annulus.rim_radius_px > 0 ? annulus.rim_radius_px : 0.5 * std::min(width, height);
+  const double body_outer =
+      annulus.blind_radius_px + options.body_depth * (rim - annulus.blind_radius_px);
   const double behind = ImageAngleBehind(camera);
   usable_.create(height, width, CV_8UC1);
   vignette_.create(height, width, CV_32FC1);
@@ -40,7 +42,8 @@ CameraEffects::CameraEffects(const CameraModel& camera, const RealismOptions& op
     for (int x = 0; x < width; ++x) {
       const PolarPoint polar = camera.PixelToPolar(Eigen::Vector2d(x, y));
       const double r = polar.radius_px / rim;
-      vignette_.at<float>(y, x) = static_cast<float>(std::max(0.0, 1.0 - options.vignetting * r * r));
+      vignette_.at<float>(y, x) =
+          static_cast<float>(std::max(0.0, 1.0 - options.vignetting * r * r));
       annulus_.at<uint8_t>(y, x) = camera.IsInAnnulus(Eigen::Vector2d(x, y)) ? 255 : 0;
       bool rig = polar.radius_px <= body_outer &&
                  std::abs(WrapAngle(polar.angle_rad - behind)) <= 0.5 * options.body_angle_rad;
@@ -58,7 +61,8 @@ CameraEffects::CameraEffects(const CameraModel& camera, const RealismOptions& op
   std::normal_distribution<double> normal(0.0, 1.0);
   cv::Mat texture(height / 4 + 1, width / 4 + 1, CV_32FC1);
   for (int y = 0; y < texture.rows; ++y)
-    for (int x = 0; x < texture.cols; ++x) texture.at<float>(y, x) = static_cast<float>(12 * normal(rng));
+    for (int x = 0; x < texture.cols; ++x)
+      texture.at<float>(y, x) = static_cast<float>(12 * normal(rng));
   cv::resize(texture, texture, cv::Size(width, height), 0, 0, cv::INTER_LINEAR);
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
@@ -66,9 +70,9 @@ CameraEffects::CameraEffects(const CameraModel& camera, const RealismOptions& op
       const bool body = polar.radius_px <= body_outer;
       const double base = body ? 95.0 : 45.0;
       const double v = base + texture.at<float>(y, x);
-      rig_colour_.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(v + 6),
-                                                  cv::saturate_cast<uchar>(v),
-                                                  cv::saturate_cast<uchar>(v - 4));
+      rig_colour_.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(cv::saturate_cast<uchar>(v + 6), cv::saturate_cast<uchar>(v),
+                    cv::saturate_cast<uchar>(v - 4));
     }
   }
 }
@@ -98,7 +102,8 @@ void CameraEffects::Apply(cv::Mat* bgr, double turn_rad, double noise_std, std::
     cv::Vec3f* out = image.ptr<cv::Vec3f>(y);
     for (int x = 0; x < image.cols; ++x)
       if (!usable[x])
-        for (int c = 0; c < 3; ++c) out[x][c] = static_cast<float>(rig[x][c] + noise_std * normal(rng));
+        for (int c = 0; c < 3; ++c)
+          out[x][c] = static_cast<float>(rig[x][c] + noise_std * normal(rng));
   }
   image.setTo(cv::Scalar::all(0), annulus_ == 0);
   // Auto-exposure towards the first frame's mean brightness.

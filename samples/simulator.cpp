@@ -219,11 +219,11 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
     AddSightings(scene, renderer, path.true_poses[frame], frame, render, truth.objects,
                  &truth.sightings, &visible_rows);
     if (effects)
-      effects->Apply(&render.image,
-                     frame > 0 ? WrapAngle(path.true_poses[frame].theta -
-                                           path.true_poses[frame - 1].theta)
-                               : 0.0,
-                     scene.sensor.noise_std, effects_rng);
+      effects->Apply(
+          &render.image,
+          frame > 0 ? WrapAngle(path.true_poses[frame].theta - path.true_poses[frame - 1].theta)
+                    : 0.0,
+          scene.sensor.noise_std, effects_rng);
     summary.render_seconds += SecondsSince(frame_start);
     if (pending_write.valid()) pending_write.get();  // rethrows a failed write
     if (video_output)

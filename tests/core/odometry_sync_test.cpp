@@ -196,8 +196,8 @@ TEST(OdometrySync, StopAndGoStepsOfExactlyTheThresholdAreAllKept) {
   EXPECT_EQ(SelectFrames(short_steps, frame_times, options).frames.size(),
             static_cast<size_t>(stops));
   // Half-size steps are no stops of the selection: every second one is kept.
-  const FrameSelection halves = SelectFrames(StopAndGo(0.1, DegToRad(5.0), stops, period),
-                                             frame_times, options);
+  const FrameSelection halves =
+      SelectFrames(StopAndGo(0.1, DegToRad(5.0), stops, period), frame_times, options);
   EXPECT_NEAR(static_cast<double>(halves.frames.size()), stops / 2.0, 3.0);
   // Strict thresholds (no tolerance) show the rounding this guards against.
   options.step_tolerance = 0.0;
