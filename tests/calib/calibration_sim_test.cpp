@@ -203,14 +203,14 @@ TEST(CalibrationOnRenders, RecoversTheLpaHyperbolicCamera) {
   EXPECT_LE(PrintedRms(free_b.out), 0.3);
   EXPECT_LT((free_hyperbolic->ImageCenter() - lpa.ImageCenter()).norm(), 1.0);
 
-  // The mount from a board lying on the floor (6 cm squares) 1 m ahead and
+  // The mount from a board lying on the floor (10 cm squares) 1 m ahead and
   // 0.25 m left, its rows turned 0.3 rad, seen by the robot turned 0.6 rad:
   // the same picture as a camera mounted with a yaw of 0.6 rad. The
   // calibrated camera must image the room as that camera, 0.76 m high, does.
   SceneObject floor_board = boards[0];
-  floor_board.square_m = floor_board.margin_m = 0.06;
-  floor_board.length_m = kCols * 0.06 + 2 * 0.06;
-  floor_board.height_m = kRows * 0.06 + 2 * 0.06;
+  floor_board.square_m = floor_board.margin_m = 0.1;
+  floor_board.length_m = kCols * 0.1 + 2 * 0.1;
+  floor_board.height_m = kRows * 0.1 + 2 * 0.1;
   floor_board.position = Eigen::Vector2d(1.0, 0.25);
   floor_board.center_z_m = 0.002;
   floor_board.yaw_rad = 0.3;
@@ -232,7 +232,7 @@ TEST(CalibrationOnRenders, RecoversTheLpaHyperbolicCamera) {
   const testing::CommandResult mounted =
       Calibrate(dir.Path("images"),
                 "--model hyperbolic --mirror-a 0.03929 --mirror-b 0.01965 --floor-board " +
-                    dir.Path("floor_board.png") + " --floor-square 0.06 --board-at " + board_at,
+                    dir.Path("floor_board.png") + " --floor-square 0.1 --board-at " + board_at,
                 dir.Path("lpa_mounted.yaml"));
   EXPECT_NE(mounted.out.find("mount: focus height"), std::string::npos) << mounted.out;
   const std::unique_ptr<CameraModel> mounted_camera = LoadCamera(dir.Path("lpa_mounted.yaml"));

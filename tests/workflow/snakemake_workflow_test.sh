@@ -24,7 +24,7 @@ if ! command -v snakemake >/dev/null 2>&1; then
 fi
 
 WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
+[[ -n "${KEEP_WORK:-}" ]] || trap 'rm -rf "$WORK"' EXIT
 cd "$WORK"
 
 # One scene per checkerboard picture: the LPA camera (as the lab scene's),
@@ -54,9 +54,9 @@ for k in $(seq 0 13); do
   "$OSLAM" simulate "scenes/board_$k.yaml" -o "render_$k" --frames 1 --quiet
   mv "render_$k/frames/000000.png" "$(printf 'boards/view_%02d.png' "$k")"
 done
-# The floor board: 6 cm squares, flat on the floor 1 m ahead, 0.25 m left,
+# The floor board: 10 cm squares, flat on the floor 1 m ahead, 0.25 m left,
 # its rows turned 0.3 rad.
-board_scene 1.0 0.25 0.002 0.3 -1.5707963267948966 0 0.06 > scenes/floor.yaml
+board_scene 1.0 0.25 0.002 0.3 -1.5707963267948966 0 0.1 > scenes/floor.yaml
 "$OSLAM" simulate scenes/floor.yaml -o render_floor --frames 1 --quiet
 mv render_floor/frames/000000.png floor_board.png
 
@@ -75,13 +75,16 @@ cat > runs.yaml <<CONFIG
 recordings: recordings
 out: results
 boards: boards
-calibrate_args: --pattern 7x6 --square 0.03 --model hyperbolic --mirror-a 0.03929 --mirror-b 0.01965 --floor-board $WORK/floor_board.png --floor-square 0.06 --board-at 1.0,0.25,0.3
+calibrate_args: --pattern 7x6 --square 0.03 --model hyperbolic --mirror-a 0.03929 --mirror-b 0.01965 --floor-board $WORK/floor_board.png --floor-square 0.1 --board-at 1.0,0.25,0.3
 run_args: --set frames.time_offset_s=0.3 --quiet
 oslam: $OSLAM
 threads: 1
 CONFIG
 
-snakemake -s "$SOURCE/workflow/Snakefile" --configfile runs.yaml -j 2 --quiet
+if ! snakemake -s "$SOURCE/workflow/Snakefile" --configfile runs.yaml -j 2 --quiet; then
+  for log in results/logs/*.log; do echo "--- $log"; tail -n 20 "$log"; done
+  exit 1
+fi
 echo "--- results/summary.csv"
 cat results/summary.csv
 grep -q "^mount: focus height" results/logs/calibrate.log || {
