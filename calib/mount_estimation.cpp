@@ -87,24 +87,31 @@ MountEstimate EstimateMountFromFloorBoard(const CameraModel& camera, const Corne
       grid.push_back(Eigen::Vector2d(place.x_m, place.y_m) +
                      turn * Eigen::Vector2d((c - 0.5 * (pattern.cols - 1)) * pattern.square_m,
                                             (r - 0.5 * (pattern.rows - 1)) * pattern.square_m));
+  std::vector<Eigen::Vector2d> reflected = seen;
+  for (Eigen::Vector2d& u : reflected) u.y() = -u.y();
   Similarity best;
+  bool best_mirrored = false;
   std::vector<Eigen::Vector2d> best_lying;
   for (const std::vector<int>& order : GridSymmetries(pattern)) {
     std::vector<Eigen::Vector2d> lying(count);
     for (size_t i = 0; i < count; ++i) lying[i] = grid[order[i]];
-    const Similarity fit = FitScaleRotation(seen, lying);
-    if (fit.rms < best.rms) {
-      best = fit;
-      best_lying = lying;
+    for (const bool mirrored : {false, true}) {
+      const Similarity fit = FitScaleRotation(mirrored ? reflected : seen, lying);
+      if (fit.rms < best.rms) {
+        best = fit;
+        best_mirrored = mirrored;
+        best_lying = lying;
+      }
     }
   }
   MountEstimate estimate;
+  estimate.mirrored = best_mirrored;
   estimate.focus_height_m = best.scale;
   estimate.yaw_change_rad = WrapAngle(best.rotation_rad);
   estimate.floor_rms_m = best.rms;
   estimate.corners = static_cast<int>(count);
   const std::unique_ptr<CameraModel> mounted =
-      WithMount(camera, estimate.focus_height_m, estimate.yaw_change_rad);
+      WithMount(camera, estimate.focus_height_m, estimate.yaw_change_rad, estimate.mirrored);
   double sum = 0;
   for (size_t i = 0; i < count; ++i) {
     Eigen::Vector2d pixel;
@@ -118,11 +125,15 @@ MountEstimate EstimateMountFromFloorBoard(const CameraModel& camera, const Corne
 }
 
 std::unique_ptr<CameraModel> WithMount(const CameraModel& camera, double focus_height_m,
-                                       double yaw_change_rad) {
+                                       double yaw_change_rad, bool mirrored) {
   if (!(focus_height_m > 0) || !std::isfinite(focus_height_m) || !std::isfinite(yaw_change_rad))
     throw Error("mount: the height must be positive and the yaw finite");
   std::unique_ptr<CameraModel> mounted = camera.Clone();
   if (auto* mei = dynamic_cast<MeiCamera*>(mounted.get())) {
+    if (mirrored)
+      throw Error(
+          "mount: the floor board shows the image mirrored against the Mei model, which cannot "
+          "express it; calibrate with --model hyperbolic");
     MeiParameters p = mei->parameters();
     p.focus_height_m = focus_height_m;
     p.mount_yaw_rad = WrapAngle(p.mount_yaw_rad + yaw_change_rad);
@@ -130,10 +141,17 @@ std::unique_ptr<CameraModel> WithMount(const CameraModel& camera, double focus_h
   } else if (auto* hyperbolic = dynamic_cast<HyperbolicCamera*>(mounted.get())) {
     // Image angle = offset + s · bearing: the turned camera sees bearing b
     // as the unturned one saw b − Δ, so offset' = offset − s Δ.
+    // Mirrored: the true bearing is Δ − b for the model's b, so the sign
+    // flips and offset' = offset + s Δ (s the old sign).
     HyperbolicMirrorParameters p = hyperbolic->parameters();
     p.focus_height_m = focus_height_m;
     const double sign = p.flip_image_angle ? -1.0 : 1.0;
-    p.angle_offset_rad = WrapAngle(p.angle_offset_rad - sign * yaw_change_rad);
+    if (mirrored) {
+      p.flip_image_angle = !p.flip_image_angle;
+      p.angle_offset_rad = WrapAngle(p.angle_offset_rad + sign * yaw_change_rad);
+    } else {
+      p.angle_offset_rad = WrapAngle(p.angle_offset_rad - sign * yaw_change_rad);
+    }
     hyperbolic->set_parameters(p);
   } else {
     throw Error("mount: the " + camera.ModelName() + " model has no mount to set");

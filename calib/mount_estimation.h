@@ -13,7 +13,8 @@
 // the floor, Umeyama/Procrustes). The grid's corner order is ambiguous (the
 // image is mirrored, a board can be read from either end), so every
 // relabelling of the grid that maps it onto itself is tried and the one
-// that fits best kept.
+// that fits best kept. The corners are also fitted reflected, for an image
+// mirrored against the model.
 #pragma once
 
 #include <memory>
@@ -39,6 +40,10 @@ struct MountEstimate {
   // Yaw to add to the camera's (its mount_yaw_rad for Mei, its image angle
   // offset for the hyperbolic model; WithMount applies it).
   double yaw_change_rad = 0.0;
+  // The image is mirrored against the camera's model (calibration from
+  // boards cannot tell a mirror image from a direct one): the bearing's
+  // sign flips (WithMount applies it; hyperbolic model only).
+  bool mirrored = false;
   double floor_rms_m = 0.0;   // corners on the floor against where they lie
   double image_rms_px = 0.0;  // where the re-mounted camera images them against the detected ones
   int corners = 0;
@@ -52,9 +57,11 @@ MountEstimate EstimateMountFromFloorBoard(const CameraModel& camera, const Corne
 
 // The camera with its viewpoint at `focus_height_m` and turned by
 // `yaw_change_rad` about the vertical (a point at robot bearing b then
-// images where the unturned camera imaged b - yaw_change_rad). Mei and
-// hyperbolic models; throws oslam::Error for another.
+// images where the unturned camera imaged b - yaw_change_rad); `mirrored`:
+// the image's bearings reflected first (bearing b images where the camera
+// imaged -b). Mei and hyperbolic models (Mei not mirrored); throws
+// oslam::Error otherwise.
 std::unique_ptr<CameraModel> WithMount(const CameraModel& camera, double focus_height_m,
-                                       double yaw_change_rad);
+                                       double yaw_change_rad, bool mirrored = false);
 
 }  // namespace oslam

@@ -180,7 +180,7 @@ std::unique_ptr<CameraModel> MountFromFloorBoard(const CameraModel& camera,
     throw Error::InFile(flow.floor_board_image, e.what());
   }
   std::unique_ptr<CameraModel> mounted =
-      WithMount(camera, mount.focus_height_m, mount.yaw_change_rad);
+      WithMount(camera, mount.focus_height_m, mount.yaw_change_rad, mount.mirrored);
   output.Print(
       Format("mount: focus height %.4f m, yaw %.4f rad from the floor board (%d corners, "
              "RMS %.1f mm on the floor, %.2f px in the image)",

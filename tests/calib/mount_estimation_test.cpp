@@ -86,6 +86,7 @@ TEST(MountEstimation, RecoversHeightAndYawFromAFloorBoard) {
     // and the re-mounted camera images the room where the true one does.
     EXPECT_NEAR(estimate.focus_height_m, true_height, 0.01 * true_height);
     EXPECT_NEAR(estimate.yaw_change_rad, 0.35, 0.01);
+    EXPECT_FALSE(estimate.mirrored);
     EXPECT_LT(estimate.image_rms_px, 1.0);
     EXPECT_EQ(estimate.corners, 42);
     const std::unique_ptr<CameraModel> mounted =
@@ -99,6 +100,32 @@ TEST(MountEstimation, RecoversHeightAndYawFromAFloorBoard) {
     EXPECT_NEAR(again.focus_height_m, estimate.focus_height_m, 1e-9);
     EXPECT_NEAR(again.yaw_change_rad, estimate.yaw_change_rad, 1e-9);
   }
+}
+
+// A hyperbolic camera whose image is mirrored against the truth (what a
+// calibration from boards alone may give): the floor board shows it.
+TEST(MountEstimation, FindsAnImageMirroredAgainstTheModel) {
+  HyperbolicCamera truth = HyperbolicCamera::Preset("lpa");
+  HyperbolicMirrorParameters p = truth.parameters();
+  p.angle_offset_rad = 0.4;
+  truth.set_parameters(p);
+  HyperbolicCamera flipped = truth;
+  p.flip_image_angle = true;
+  p.angle_offset_rad = -1.1;
+  p.focus_height_m = 1.0;
+  flipped.set_parameters(p);
+  const FloorBoardPlace place{1.0, 0.25, 0.2};
+  Corners corners;
+  ASSERT_TRUE(ImageCorners(truth, place, 0.3, 9, &corners));
+  const MountEstimate estimate = EstimateMountFromFloorBoard(flipped, corners, kPattern, place);
+  EXPECT_TRUE(estimate.mirrored);
+  EXPECT_NEAR(estimate.focus_height_m, 0.76, 0.01 * 0.76);
+  EXPECT_LT(estimate.image_rms_px, 1.0);
+  const std::unique_ptr<CameraModel> mounted =
+      WithMount(flipped, estimate.focus_height_m, estimate.yaw_change_rad, estimate.mirrored);
+  EXPECT_LT(LargestImageDifference(truth, *mounted), 2.0);
+  // Mei cannot express a mirrored image.
+  EXPECT_THROW(WithMount(*testing::Cameras()[3].make(), 1.0, 0.0, true), Error);
 }
 
 TEST(MountEstimation, RejectsCornersThatCannotLieOnTheFloor) {
