@@ -148,34 +148,22 @@ TEST(OdometrySync, FramesAreKeptByDistanceOrTurn) {
   EXPECT_EQ(selection.frames.size() + selection.thinned, 241u);
 }
 
-// A stop-and-go robot like the thesis' (and the simulator's): steps of
-// exactly 0.2 m or 10°, the odometry integrated from the commanded increments
-// and logged at 20 Hz, one 30 fps frame per stop. Integration and
-// interpolation leave some steps a hair short of 0.2 m (0.19999...), which a
-// strict threshold dropped (about 40 % of the stops); with the default
-// tolerance every stop is kept, and steps clearly shorter are still thinned.
+// A stop-and-go robot like the thesis': steps of exactly 0.2 m or 10°, the
+// odometry integrated from the commanded increments and logged at each stop
+// on a clock 0.3 s ahead, one frame per stop. Integration leaves about half
+// of the steps a hair short of 0.2 m (0.19999...), which a strict threshold
+// dropped; with the default tolerance every stop is kept, and steps clearly
+// shorter are still thinned.
 TimedOdometry StopAndGo(double step_m, double turn_rad, int stops, double frame_period_s) {
   TimedOdometry odometry;
   Pose2 pose{-1.8, -1.8, 0.0};
-  std::vector<Pose2> at_stop{pose};
-  for (int k = 1; k < stops; ++k) {
-    const bool turn = k % 5 == 4;  // four steps forward, one turn
-    const OdometryIncrement step{turn ? 0.0 : step_m, turn ? turn_rad : 0.0};
-    pose = ApplyIncrement(pose, step);
-    at_stop.push_back(pose);
-  }
-  // The poses at the stops, 20 Hz rows between them (the frames' clock + 0.3 s).
-  TimedOdometry by_stop;
-  for (size_t i = 0; i < at_stop.size(); ++i) {
-    by_stop.stamps_s.push_back(i * frame_period_s);
-    by_stop.poses.push_back(at_stop[i]);
-  }
-  const double last = by_stop.stamps_s.back();
-  for (int k = 0;; ++k) {
-    const double t = std::min(last, k / 20.0);
-    odometry.stamps_s.push_back(t + 0.3);
-    odometry.poses.push_back(InterpolateOdometry(by_stop, t));
-    if (t >= last) break;
+  for (int k = 0; k < stops; ++k) {
+    if (k > 0) {
+      const bool turn = k % 5 == 4;  // four steps forward, one turn
+      pose = ApplyIncrement(pose, {turn ? 0.0 : step_m, turn ? turn_rad : 0.0});
+    }
+    odometry.stamps_s.push_back(k * frame_period_s + 0.3);
+    odometry.poses.push_back(pose);
   }
   return odometry;
 }
@@ -195,12 +183,12 @@ TEST(OdometrySync, StopAndGoStepsOfExactlyTheThresholdAreAllKept) {
   const TimedOdometry short_steps = StopAndGo(0.197, DegToRad(9.8), stops, period);
   EXPECT_EQ(SelectFrames(short_steps, frame_times, options).frames.size(),
             static_cast<size_t>(stops));
-  // Half-size steps are no stops of the selection: about every second one is
-  // kept (more where a half step and a half turn together reach the distance).
+  // Half-size steps are no stops of the selection: of every five stops (four
+  // half steps and a half turn) two are kept, where two half steps add up to
+  // the distance.
   const FrameSelection halves =
       SelectFrames(StopAndGo(0.1, DegToRad(5.0), stops, period), frame_times, options);
-  EXPECT_GE(halves.frames.size(), static_cast<size_t>(stops / 2 - 3));
-  EXPECT_LE(halves.frames.size(), static_cast<size_t>(0.85 * stops));
+  EXPECT_EQ(halves.frames.size(), static_cast<size_t>(2 * stops / 5));
   // Strict thresholds (no tolerance) show the rounding this guards against.
   options.step_tolerance = 0.0;
   EXPECT_LT(SelectFrames(exact, frame_times, options).frames.size(), static_cast<size_t>(stops));
