@@ -10,13 +10,6 @@ void BindDetectOptions(DetectStageOptions* o, Bindings* b) {
   BlobDetectorOptions& d = o->detector;
   b->Add(&o->debug_images_dir, "debug-images", "DIR",
          "also write each frame with its slices drawn");
-  b->Add(&o->mask, "mask", "FILE",
-         "static mask image (0 = ignore: robot body, mirror rods); default RUN/mask.png when "
-         "present, 'none' = no mask")
-      .Key("mask",
-           "static mask image, black = ignored (robot body, mirror rods); empty = RUN/mask.png "
-           "when present; none = no mask")
-      .ShowDefault("");
   b->Add(&d.min_area_px, "min-area", "PX", "smallest blob kept, in pixels")
       .Key("min_area_px", "smallest colour blob kept, pixels");
   b->Add(&d.opening_radius_px, "opening", "PX", "radius of the morphological opening, 0 = off")
@@ -62,6 +55,13 @@ void BindDetectOptions(DetectStageOptions* o, Bindings* b) {
       .Check([o] { return o->threads >= 0; }, "must be >= 0");
   b->AddFlag(&o->skip_bad_frames, "skip-bad-frames", "warn about unreadable frames and go on")
       .Key("skip_bad_frames", "1: warn about unreadable frames and go on instead of stopping");
+  b->Add(&o->mask, "mask", "FILE",
+         "static mask image (0 = ignore: robot body, mirror rods); default RUN/mask.png when "
+         "present, 'none' = no mask")
+      .Key("mask",
+           "static mask image, black = ignored (robot body, mirror rods); empty = RUN/mask.png "
+           "when present; none = no mask")
+      .ShowDefault("");
 }
 
 void BindExportOptions(ExportStageOptions* o, Bindings* b) {
