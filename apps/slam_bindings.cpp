@@ -55,7 +55,8 @@ void BindSampling(SlamStageOptions* o, Bindings* b) {
       .ShowDefault("");
   b->Add(&s.seed, "seed", "N", "seed of the sampler")
       .Key("seed", "seed of every random choice of the sampler");
-  b->Add(&s.num_iterations, "samples", "N", "MC3 iterations including burn-in (docs/method.md §13 #21)")
+  b->Add(&s.num_iterations, "samples", "N",
+         "MC3 iterations including burn-in (docs/method.md §13 #21)")
       .Key("samples", "MC3 iterations incl. burn-in (docs/method.md §9.8, §13 #21)");
   b->Add(&s.burn_in, "burn-in", "N", "iterations discarded")
       .Key("burn_in", "iterations discarded (docs/method.md §9.8)");
@@ -68,10 +69,12 @@ void BindSampling(SlamStageOptions* o, Bindings* b) {
       .Key("hill_climb_max");
   b->Add(&s.refine_every, "refine-every", "N",
          "K_NL: full re-optimisation of the current state every N hill-climbing steps")
-      .Key("refine_every", "K_NL: full re-optimisation every N hill-climbing steps (docs/method.md §9.7)");
+      .Key("refine_every",
+           "K_NL: full re-optimisation every N hill-climbing steps (docs/method.md §9.7)");
   AddMoves(&s.hill_climb_moves, "hill-climb-moves",
            "merge,split,switch probabilities in hill climbing", b)
-      .Key("hill_climb_moves", "merge,split,switch probabilities in hill climbing (docs/method.md §9.8)");
+      .Key("hill_climb_moves",
+           "merge,split,switch probabilities in hill climbing (docs/method.md §9.8)");
   AddMoves(&s.sampling_moves, "sampling-moves",
            "merge,split,switch probabilities in MC3 (--known-classes: switch 0, rest rescaled)", b)
       .Key("sampling_moves",
@@ -119,7 +122,8 @@ void BindProposals(SlamStageOptions* o, Bindings* b) {
   MoveOptions& m = o->sampler.moves;
   b->Add(&o->target.proposal_iterations, "proposal-iterations", "N",
          "solver iterations per proposed state")
-      .Key("proposal_iterations", "solver iterations per proposed state (docs/method.md §9.6, §13 #46)");
+      .Key("proposal_iterations",
+           "solver iterations per proposed state (docs/method.md §9.6, §13 #46)");
   b->AddFlag(&o->target.class_prior_per_object, "class-prior-per-object",
              "P(C, J) = prod_j 1/|classes| instead of uniform (#37)")
       .Key("class_prior_per_object",
@@ -142,10 +146,14 @@ void BindProposals(SlamStageOptions* o, Bindings* b) {
              "d_j counts o_j itself (#41)")
       .Key("merge_count_includes_self", "1: d_j counts o_j itself (docs/method.md §13 #41)");
   b->AddChoice(&m.split_sampler,
-               {{"uniform", SplitSampler::kUniform}, {"thesis", SplitSampler::kThesis}},
-               "split-sampler", "uniform|thesis", "split partition proposal (#18/#43)")
+               {{"uniform", SplitSampler::kUniform},
+                {"thesis", SplitSampler::kThesis},
+                {"one-or-uniform", SplitSampler::kOneTrackOrUniform}},
+               "split-sampler", "uniform|thesis|one-or-uniform",
+               "split partition proposal (#18/#43)")
       .Key("split_sampler",
-           "uniform (non-empty subset) or thesis (Algorithm 6) (docs/method.md §13 #18/#43)");
+           "uniform (non-empty subset), thesis (Algorithm 6) or one-or-uniform (one track alone "
+           "half the time) (docs/method.md §9.2, §13 #18/#43)");
 }
 
 // The model: class confusion and priors, detection and odometry noise, the solver.
@@ -154,7 +162,8 @@ void BindModel(SlamStageOptions* o, Bindings* b) {
   MotionNoiseOptions& q = g.motion;
   b->Add(&o->confusion_floor, "confusion-floor", "P", "smallest P(a | c); rows renormalised")
       .Key("confusion_floor",
-           "smallest class confusion probability P(a | c); rows renormalised (docs/method.md §13 #12)")
+           "smallest class confusion probability P(a | c); rows renormalised (docs/method.md §13 "
+           "#12)")
       .Check([o] { return o->confusion_floor > 0 && o->confusion_floor < 1; }, "must be in (0, 1)");
   b->Add(&o->location_std_xy_m, "location-std-xy", "M", "class location prior std, x and y")
       .Key("location_std_xy_m", "class location prior std in x and y, m (docs/method.md §13 #7)")
@@ -163,9 +172,11 @@ void BindModel(SlamStageOptions* o, Bindings* b) {
       .Key("location_std_z_m", "class location prior std in z, m (docs/method.md §13 #7)")
       .Check([o] { return o->location_std_z_m > 0; }, "must be > 0 m");
   b->Add(&g.pixel_std_px, "pixel-noise", "PX", "detection noise E (docs/method.md §4.2; thesis 30)")
-      .Key("pixel_noise_px", "detection noise E, px: R = diag(E^2, (E/u_r)^2) (docs/method.md §4.2, §13 #5)");
+      .Key("pixel_noise_px",
+           "detection noise E, px: R = diag(E^2, (E/u_r)^2) (docs/method.md §4.2, §13 #5)");
   b->Add(&q.additive_std[0], "motion-add-fwd", "M", "Q_add forward std (docs/method.md §13 #1)")
-      .Key("motion_add_fwd_m", "odometry noise Q_add, forward std, m (docs/method.md §4.1, §13 #1)");
+      .Key("motion_add_fwd_m",
+           "odometry noise Q_add, forward std, m (docs/method.md §4.1, §13 #1)");
   b->Add(&q.additive_std[1], "motion-add-lat", "M", "Q_add lateral std")
       .Key("motion_add_lat_m", "odometry noise Q_add, lateral std, m");
   b->Add(&q.additive_std[2], "motion-add-heading", "RAD", "Q_add heading std (1 deg)")
@@ -183,7 +194,8 @@ void BindModel(SlamStageOptions* o, Bindings* b) {
   b->AddFlag(&q.heading_scales_with_distance, "motion-heading-by-distance",
              "Q_mult heading row scales with |v_r| (#2)")
       .Key("motion_heading_by_distance",
-           "1: the heading row of Q_mult scales with |v_r| instead of |v_phi| (docs/method.md §13 #2)");
+           "1: the heading row of Q_mult scales with |v_r| instead of |v_phi| (docs/method.md §13 "
+           "#2)");
   b->AddFlag(&q.world_frame, "motion-world-frame",
              "Q_i in the world frame, not rotated from the robot's (#2)")
       .Key("motion_world_frame",
@@ -207,9 +219,11 @@ void BindFusionAndSchedule(SlamStageOptions* o, Bindings* b) {
                     "P(xi) = 1 for every object (docs/method.md §7.2 off)")
       .Key("spurious_model",
            "1: existence weighted by P(xi), the spurious-object sigmoid (docs/method.md §7.2)");
-  b->Add(&f.spurious_t0_m2, "spurious-t0", "M2", "spurious sigmoid t0 (docs/method.md §7.2: (0.4 m)^2)")
+  b->Add(&f.spurious_t0_m2, "spurious-t0", "M2",
+         "spurious sigmoid t0 (docs/method.md §7.2: (0.4 m)^2)")
       .Key("spurious_t0_m2", "spurious sigmoid t0, m^2: (0.4 m)^2 (docs/method.md §7.2, §9.8)");
-  b->Add(&f.spurious_tau_m2, "spurious-tau", "M2", "spurious sigmoid tau (docs/method.md §7.2: (0.2 m)^2)")
+  b->Add(&f.spurious_tau_m2, "spurious-tau", "M2",
+         "spurious sigmoid tau (docs/method.md §7.2: (0.2 m)^2)")
       .Key("spurious_tau_m2", "spurious sigmoid tau, m^2: (0.2 m)^2 (docs/method.md §7.2, §9.8)");
   b->AddNegatedFlag(&f.class_geometry_evidence, "no-class-geometry-evidence",
                     "P(xi) from the location uncertainty alone (docs/method.md §7.2, thesis), "
@@ -217,6 +231,12 @@ void BindFusionAndSchedule(SlamStageOptions* o, Bindings* b) {
       .Key("class_geometry_evidence",
            "1: P(xi)'s odds times the Bayes factor of the geometry under the class against a "
            "look-alike (docs/method.md §7.2)");
+  b->AddNegatedFlag(&f.existence_given_class, "no-existence-given-class",
+                    "the spurious sigmoid on the location uncertainty with every class prior "
+                    "removed (4.43), not only the horizontal location prior (docs/method.md §7.2)")
+      .Key("existence_given_class",
+           "1: the spurious sigmoid keeps the class's size and base-height priors (docs/method.md "
+           "§7.2)");
   b->Add(&f.lookalike_size_std_m, "lookalike-size-std", "M",
          "spread of a look-alike's diameter and height about the class's (docs/method.md §7.2)")
       .Key("lookalike_size_std_m", "spread of a look-alike's diameter and height, m");
@@ -246,8 +266,9 @@ void BindFusionAndSchedule(SlamStageOptions* o, Bindings* b) {
   b->AddNegatedFlag(&s.delayed_acceptance, "no-delayed-acceptance",
                     "solve every MC3 proposal (thesis) instead of screening it first with the "
                     "changed objects solved alone")
-      .Key("delayed_acceptance",
-           "1: MC3 proposals screened before they are solved, same posterior (docs/method.md §9.3)");
+      .Key(
+          "delayed_acceptance",
+          "1: MC3 proposals screened before they are solved, same posterior (docs/method.md §9.3)");
   b->AddNegatedFlag(&f.merge_identities, "no-identity-merge",
                     "keep one map object per sample identity (thesis Algorithm 3 as printed)")
       .Key("identity_merge",

@@ -349,6 +349,7 @@ EvaluationPtr LandmarkEvaluator::Refine(const AssociationState& state,
     SetReference(evaluation);
     reference_factorised_ = true;
     reference_position_keys_ = last_refine_keys_;
+    roots_.clear();  // of the factor before
   }
   Store(evaluation);
   return evaluation;
@@ -368,11 +369,8 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   if (!reference_factorised_) return false;
   const int ka = reference_position_keys_[ja], kb = reference_position_keys_[jb];
   if (ka < 0 || kb < 0) return false;
-  std::vector<Eigen::MatrixXd> blocks;
-  std::string why;
-  if (!full_.solver().MarginalCovariances({{ka, kb}}, &blocks, &why) || blocks.size() != 1 ||
-      blocks[0].rows() != 4)
-    return false;
+  Eigen::Matrix4d sigma;
+  if (!JointCovariance(ka, kb, &sigma)) return false;
   ++marginal_merges_;
   // Laplace evidence ratio of "l_a = l_b = l" (one location prior N(m, s^2 I)
   // instead of two): with the reference's Gaussian N(mu, Sigma) over
@@ -380,7 +378,6 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   //   log int N(H l; mu, Sigma) / N(l; m, s^2 I) dl
   //   = -1/2 log|Sigma| + 2 log s - 1/2 log|P| + 1/2 b'P^-1 b - 1/2 mu'Lambda mu + |m|^2 / (2 s^2)
   // with Lambda = Sigma^-1, P = H'Lambda H - I / s^2, b = H'Lambda mu - m / s^2.
-  const Eigen::Matrix4d sigma = blocks[0];
   Eigen::Vector4d mu;
   mu << reference_->locations[ja].head<2>(), reference_->locations[jb].head<2>();
   const Eigen::LLT<Eigen::Matrix4d> sigma_llt(sigma);
@@ -403,6 +400,50 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   *delta += DiameterMergeDelta(ja, jb);
   *mean = l;
   return std::isfinite(*delta);
+}
+
+void LandmarkEvaluator::PrepareMerges(const std::vector<int>& blocks) {
+  if (!reference_factorised_) return;
+  std::vector<std::vector<int>> missing;
+  for (int j : blocks) {
+    const int key = j >= 0 && j < static_cast<int>(reference_position_keys_.size())
+                        ? reference_position_keys_[j]
+                        : -1;
+    if (key >= 0 && !roots_.count(key)) missing.push_back({key});
+  }
+  std::sort(missing.begin(), missing.end());
+  missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+  // Dense columns of the whole problem's size: at most kMaxRootBytes kept.
+  constexpr size_t kChunk = 32;  // keys per batch of forward solves
+  for (size_t first = 0; first < missing.size(); first += kChunk) {
+    const std::vector<std::vector<int>> chunk(
+        missing.begin() + first, missing.begin() + std::min(missing.size(), first + kChunk));
+    std::vector<Eigen::MatrixXd> roots;
+    if (!full_.solver().CovarianceRoots(chunk, &roots)) return;  // LDL': pairwise blocks
+    const double bytes = double(roots.front().size()) * sizeof(double);
+    if (double(roots_.size() + roots.size()) * bytes > kMaxRootBytes) {
+      if (first > 0) return;  // keep what this call computed
+      roots_.clear();
+    }
+    for (size_t i = 0; i < chunk.size(); ++i) roots_[chunk[i].front()] = std::move(roots[i]);
+  }
+}
+
+bool LandmarkEvaluator::JointCovariance(int ka, int kb, Eigen::Matrix4d* sigma) {
+  const auto a = roots_.find(ka), b = roots_.find(kb);
+  if (a != roots_.end() && b != roots_.end() && a->second.cols() == 2 && b->second.cols() == 2) {
+    sigma->topLeftCorner<2, 2>() = a->second.transpose() * a->second;
+    sigma->bottomRightCorner<2, 2>() = b->second.transpose() * b->second;
+    sigma->topRightCorner<2, 2>() = a->second.transpose() * b->second;
+    sigma->bottomLeftCorner<2, 2>() = sigma->topRightCorner<2, 2>().transpose();
+    return true;
+  }
+  std::vector<Eigen::MatrixXd> blocks;
+  if (!full_.solver().MarginalCovariances({{ka, kb}}, &blocks) || blocks.size() != 1 ||
+      blocks[0].rows() != 4)
+    return false;
+  *sigma = blocks[0];
+  return true;
 }
 
 double LandmarkEvaluator::DiameterMergeDelta(int ja, int jb) const {

@@ -88,6 +88,11 @@ class LandmarkEvaluator : public StateEvaluator {
   // the reference (and so the marginal merges) alone: for trying a state far
   // from the current one, e.g. a joint re-entry merge, before Refine-ing it.
   EvaluationPtr Trial(const AssociationState& state, const StateEvaluation* from);
+  // Marginal mode: the reference's blocks `blocks` are about to be scored
+  // in merges with each other; their covariance roots are computed in one
+  // batch (a forward solve per 64 columns) so that each pair's joint
+  // covariance is a product of kept columns instead of a solve of its own.
+  void PrepareMerges(const std::vector<int>& blocks);
   // The full solution of `state` with landmark covariances, warm-started
   // from `from` when given (for the output map).
   LandmarkSlamResult Solve(const AssociationState& state, const StateEvaluation* from);
@@ -130,9 +135,16 @@ class LandmarkEvaluator : public StateEvaluator {
   // log_target(merged) - log_target(reference) for merging reference blocks
   // ja and jb, and the merged landmark's mean; false when not computable.
   bool MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean);
+  // The 4 x 4 joint covariance of the landmark positions at solver keys ka
+  // and kb at the reference: from kept roots when both are, else solved.
+  bool JointCovariance(int ka, int kb, Eigen::Matrix4d* sigma);
   // The trunk diameters' part of MergeDelta (0 unless both blocks have one).
   double DiameterMergeDelta(int ja, int jb) const;
   size_t solves_ = 0, hits_ = 0, marginal_merges_ = 0;
+  // Covariance roots (SparseSolver::CovarianceRoots) of landmark positions
+  // at the reference's factor, by solver key; at most kMaxRootBytes kept.
+  std::unordered_map<int, Eigen::MatrixXd> roots_;
+  static constexpr double kMaxRootBytes = 256e6;
 };
 
 // Squared whitened range-bearing residuals of the sightings `sightings` of a

@@ -102,7 +102,14 @@ bool SplitWeights(const StateEvaluation& s, std::vector<double>* log_w) {
 }
 
 double LogPartitionProbability(size_t n, size_t second_size, SplitSampler sampler) {
-  if (sampler == SplitSampler::kUniform) return -std::log(std::pow(2.0, double(n) - 1.0) - 1.0);
+  const double uniform = 1.0 / (std::pow(2.0, double(n) - 1.0) - 1.0);
+  if (sampler == SplitSampler::kUniform) return std::log(uniform);
+  if (sampler == SplitSampler::kOneTrackOrUniform) {
+    // The single tracks whose splitting off gives this partition: the second
+    // part itself, or the earliest track (the second part is then the rest).
+    const double singles = double(second_size == 1) + double(second_size == n - 1);
+    return std::log(0.5 * singles / double(n) + 0.5 * uniform);
+  }
   return std::log(double(second_size) / double(n - 1)) - double(n - 2) * std::log(2.0);
 }
 
@@ -143,6 +150,14 @@ Proposal ProposeMerge(const StateEvaluation& s, const ClassConfusionModel& model
 std::vector<int> SampleSecondPart(const std::vector<int>& block, SplitSampler sampler, Rng& rng) {
   std::bernoulli_distribution coin(0.5);
   std::vector<int> second;
+  if (sampler == SplitSampler::kOneTrackOrUniform) {
+    if (coin(rng)) {
+      const size_t alone = std::uniform_int_distribution<size_t>(0, block.size() - 1)(rng);
+      if (alone == 0) return std::vector<int>(block.begin() + 1, block.end());
+      return {block[alone]};
+    }
+    sampler = SplitSampler::kUniform;
+  }
   if (sampler == SplitSampler::kUniform) {
     while (second.empty())
       for (size_t k = 1; k < block.size(); ++k)

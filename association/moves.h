@@ -27,6 +27,11 @@ struct MoveProbabilities {
 enum class SplitSampler {
   kUniform,  // uniform non-empty subset of the non-earliest tracks: 1/(2^(n-1) - 1)
   kThesis,   // Algorithm 6 step 4, with its true probability |Psi2|/(n-1) 2^-(n-2)
+  // Beyond the thesis (docs/method.md §9.2): with probability 1/2 one of the
+  // n tracks, drawn uniformly, is split off alone; else kUniform. The one
+  // wrong track of an object is then proposed with probability about 1/(2n)
+  // instead of 1/(2^(n-1) - 1).
+  kOneTrackOrUniform,
 };
 
 struct MoveOptions {

@@ -188,15 +188,17 @@ double MirroredSigmoid(double t, double t0, double tau) {
   return 1.0 / (1.0 + std::exp((t - t0) / tau));
 }
 
-double PriorFreeLocationVariance(const Matrix5d& covariance, const ClassPrior& prior) {
+namespace {
+
+// The 3 x 3 location block's largest eigenvalue of the covariance whose
+// information has `removed` (per parameter, 1/variance) taken away; infinity
+// when what is left is not positive definite (docs/method.md §7.2 step 5).
+double LocationVarianceWithout(const Matrix5d& covariance, const Vector5d& removed) {
   const double infinity = std::numeric_limits<double>::infinity();
   Eigen::LDLT<Matrix5d> ldlt(covariance);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || covariance.isZero()) return infinity;
   Matrix5d information = ldlt.solve(Matrix5d::Identity());
-  // (4.43): remove the prior information diag(Gamma^-1, Sigma^-1).
-  Vector5d prior_variance;
-  prior_variance << prior.location_std_m.array().square(), prior.size_std_m.array().square();
-  information.diagonal() -= prior_variance.cwiseInverse();
+  information.diagonal() -= removed;
   information = 0.5 * (information + information.transpose());
   Eigen::SelfAdjointEigenSolver<Matrix5d> eigen(information);
   const double largest = eigen.eigenvalues().maxCoeff();
@@ -207,6 +209,21 @@ double PriorFreeLocationVariance(const Matrix5d& covariance, const ClassPrior& p
                               eigen.eigenvectors().transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> location(prior_free.topLeftCorner<3, 3>());
   return location.eigenvalues().maxCoeff();
+}
+
+}  // namespace
+
+double PriorFreeLocationVariance(const Matrix5d& covariance, const ClassPrior& prior) {
+  // (4.43): remove the prior information diag(Gamma^-1, Sigma^-1).
+  Vector5d prior_variance;
+  prior_variance << prior.location_std_m.array().square(), prior.size_std_m.array().square();
+  return LocationVarianceWithout(covariance, prior_variance.cwiseInverse());
+}
+
+double ClassConditionedLocationVariance(const Matrix5d& covariance, const ClassPrior& prior) {
+  Vector5d removed = Vector5d::Zero();
+  removed.head<2>() = prior.location_std_m.head<2>().array().square().inverse();
+  return LocationVarianceWithout(covariance, removed);
 }
 
 double NonSpuriousProbability(const Matrix5d& covariance, const ClassPrior& prior,
@@ -264,8 +281,15 @@ double ClassGeometryLogBayesFactor(const Matrix5d& covariance, const Vector5d& m
 
 double ExistenceWeight(const Matrix5d& covariance, const Vector5d& mean, const ClassPrior& prior,
                        const FusionOptions& options) {
-  const double p = NonSpuriousProbability(covariance, prior, options);
-  if (!options.spurious_model || !options.class_geometry_evidence || p <= 0.0 || p >= 1.0) return p;
+  if (!options.spurious_model || !options.class_geometry_evidence)
+    return NonSpuriousProbability(covariance, prior, options);
+  // Existence given the class (docs/method.md §7.2): the class's size and
+  // support priors locate the object; the Bayes factor judges the class.
+  const double p = options.existence_given_class
+                       ? MirroredSigmoid(ClassConditionedLocationVariance(covariance, prior),
+                                         options.spurious_t0_m2, options.spurious_tau_m2)
+                       : NonSpuriousProbability(covariance, prior, options);
+  if (p <= 0.0 || p >= 1.0) return p;
   const double log_odds =
       std::log(p) - std::log1p(-p) + ClassGeometryLogBayesFactor(covariance, mean, prior, options);
   return 1.0 / (1.0 + std::exp(-log_odds));

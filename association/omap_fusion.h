@@ -41,7 +41,16 @@ struct FusionOptions {
   bool class_geometry_evidence = true;
   double lookalike_size_std_m = 1.0;
   double lookalike_base_std_m = 2.0;  // the thesis' Gamma_z (§13 #7)
-  double min_existence = 0.0;         // identities below this pi are left out of the map
+  // Beyond the thesis (docs/method.md §7.2, existence given the class): the
+  // location uncertainty of the sigmoid keeps the class's size prior and the
+  // base-height part of its location prior and removes only the horizontal
+  // location prior: under the class hypothesis an object seen from one place
+  // (the robot turning on the spot) is located by its apparent size and the
+  // elevation of its base, and whether the class holds is judged by the class
+  // geometry evidence. Only with class_geometry_evidence. false: (4.43), every
+  // class prior removed.
+  bool existence_given_class = true;
+  double min_existence = 0.0;  // identities below this pi are left out of the map
 
   // Identity merging (docs/method.md §7.3); false = the thesis' Algorithm 3 as printed.
   bool merge_identities = true;
@@ -63,6 +72,10 @@ double MirroredSigmoid(double t, double t0, double tau);
 // covariance; infinity when the prior-free information is not positive definite.
 double PriorFreeLocationVariance(const Eigen::Matrix<double, 5, 5>& covariance,
                                  const ClassPrior& prior);
+// The same with only the horizontal location prior removed (the size prior
+// and the base height's prior kept: FusionOptions::existence_given_class).
+double ClassConditionedLocationVariance(const Eigen::Matrix<double, 5, 5>& covariance,
+                                        const ClassPrior& prior);
 
 double NonSpuriousProbability(const Eigen::Matrix<double, 5, 5>& covariance,
                               const ClassPrior& prior, const FusionOptions& options);

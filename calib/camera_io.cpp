@@ -52,10 +52,17 @@ std::unique_ptr<CameraModel> LoadCamera(const std::string& path) {
     intrinsics[i] = file.Double(intrinsics_node, names[i], "intrinsics.");
   camera->SetIntrinsics(intrinsics);
 
+  // A flag only the hyperbolic model has: elsewhere a 1 would be dropped
+  // unnoticed and every bearing mirrored.
+  const int flip = file.OptionalInt(root, "flip_image_angle", 0);
+  if (flip != 0 && flip != 1) file.Fail("flip_image_angle", "must be 0 or 1");
   if (auto* hyperbolic = dynamic_cast<HyperbolicCamera*>(camera.get())) {
     HyperbolicMirrorParameters p = hyperbolic->parameters();
-    p.flip_image_angle = file.OptionalInt(root, "flip_image_angle", 0) != 0;
+    p.flip_image_angle = flip == 1;
     hyperbolic->set_parameters(p);
+  } else if (flip == 1) {
+    file.Fail("flip_image_angle",
+              "only the hyperbolic model has it; the " + model_name + " model does not");
   }
   std::string why;
   if (!camera->Validate(&why)) throw Error::InFile(path, "invalid camera: " + why);

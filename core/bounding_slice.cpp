@@ -49,7 +49,8 @@ BoundingSlice SliceOfPixelCentres(const std::vector<double>& radii_px,
   const double pad_angle_rad = 0.5 / std::max(1.0, slice.u_r_px);
   slice.u_r_px -= 0.5;
   slice.s_r_px += 1.0;
-  slice.s_phi_rad += 2.0 * pad_angle_rad;
+  // A blob all around the centre spans at most the full circle.
+  slice.s_phi_rad = std::min(2.0 * kPi, slice.s_phi_rad + 2.0 * pad_angle_rad);
   return slice;
 }
 

@@ -455,7 +455,10 @@ FrameSource::FrameSource(const std::string& run_or_video) {
   double frame_rate = 0;
   if (!video_path_.empty()) {
     decoder_ = std::make_unique<Decoder>();
-    if (!decoder_->capture.open(video_path_))
+    // FFmpeg only (docs/formats.md, Video): with any backend allowed, OpenCV
+    // hands a file FFmpeg refused on to its camera backends, and gphoto2's
+    // probes every USB camera driver for a second, then unloads them.
+    if (!decoder_->capture.open(video_path_, cv::CAP_FFMPEG))
       throw Error::InFile(video_path_, "OpenCV cannot open this video");
     const double frames = decoder_->capture.get(cv::CAP_PROP_FRAME_COUNT);
     if (!(frames > 0)) throw Error::InFile(video_path_, "video has no frames");

@@ -106,14 +106,13 @@ bool Uses(const OpenCvOmnidirResult& result, size_t view) {
 void CompareWithOpenCv(const Views& input, const BoardPattern& pattern,
                        const CalibrationOptions& options, const CalibrationResult& result,
                        const StageOutput& output) {
-  const auto print = [&](const std::string& line) {
-    if (output.print) output.print(line);
-  };
+  // A report like the rest of the stage's: nothing under --quiet.
+  const auto print = [&](const std::string& line) { output.Print(line); };
   const std::vector<CalibrationView>& views = input.views;
   const OpenCvOmnidirResult cv_result =
       CalibrateWithOpenCvOmnidir(views, pattern, input.width, input.height, true);
   if (!cv_result.ok) {
-    print("cv::omnidir::calibrate failed: " + cv_result.error);
+    output.Warn("cv::omnidir::calibrate failed: " + cv_result.error);
     return;
   }
   int found = 0;

@@ -352,31 +352,55 @@ long LandmarkAssociation::MergeRounds(int first_new, double sweep_m) {
   return merges;
 }
 
+// The landmarks block j may merge with, (distance, block): those within
+// the targeted radius (each pair of new landmarks once), or every later one
+// within sweep_m; at most targeted_max_candidates, the nearest.
+std::vector<std::pair<double, int>> LandmarkAssociation::MergeCandidatesOf(size_t j, int first_new,
+                                                                           double sweep_m) const {
+  const AssociationState& s = current_->state;
+  std::vector<std::pair<double, int>> candidates;
+  for (size_t k = sweep_m > 0 ? j + 1 : 0; k < s.blocks.size(); ++k) {
+    if (k == j || (sweep_m <= 0 && s.blocks[k].back() >= first_new && k < j))
+      continue;  // each pair once
+    const double d = (current_->locations[j] - current_->locations[k]).norm();
+    if (d <= (sweep_m > 0 ? sweep_m : options_.targeted_radius_m))
+      candidates.push_back({d, static_cast<int>(k)});
+  }
+  const size_t cap = static_cast<size_t>(options_.targeted_max_candidates);
+  if (cap > 0 && candidates.size() > cap) {
+    std::nth_element(candidates.begin(), candidates.begin() + cap, candidates.end());
+    candidates.resize(cap);
+    std::sort(candidates.begin(), candidates.end(),
+              [](const auto& x, const auto& y) { return x.second < y.second; });
+  }
+  return candidates;
+}
+
 // The best paying merge of each landmark concerned, best first.
 std::vector<LandmarkAssociation::MergeCandidate> LandmarkAssociation::BestMerges(int first_new,
                                                                                  double sweep_m) {
   const AssociationState& s = current_->state;
   const double base = current_->log_target;
-  std::vector<MergeCandidate> best;
+  // The candidates of every landmark concerned first, so that the
+  // covariance roots of all of them are computed in one batch.
+  std::vector<std::vector<std::pair<double, int>>> candidates(s.blocks.size());
+  std::vector<int> involved;
   for (size_t j = 0; j < s.blocks.size(); ++j) {
     if (sweep_m <= 0 && s.blocks[j].back() < first_new) continue;  // no new track
+    candidates[j] = MergeCandidatesOf(j, first_new, sweep_m);
+    if (candidates[j].empty()) continue;
+    involved.push_back(static_cast<int>(j));
+    for (const auto& c : candidates[j]) involved.push_back(c.second);
+  }
+  {
+    const auto t = std::chrono::steady_clock::now();
+    evaluator_->PrepareMerges(involved);
+    result_.targeted_time_s += SecondsSince(t);
+  }
+  std::vector<MergeCandidate> best;
+  for (size_t j = 0; j < s.blocks.size(); ++j) {
     MergeCandidate c{0, -1, -1, nullptr};
-    std::vector<std::pair<double, int>> candidates;  // (distance, block)
-    for (size_t k = sweep_m > 0 ? j + 1 : 0; k < s.blocks.size(); ++k) {
-      if (k == j || (sweep_m <= 0 && s.blocks[k].back() >= first_new && k < j))
-        continue;  // each pair once
-      const double d = (current_->locations[j] - current_->locations[k]).norm();
-      if (d <= (sweep_m > 0 ? sweep_m : options_.targeted_radius_m))
-        candidates.push_back({d, static_cast<int>(k)});
-    }
-    const size_t cap = static_cast<size_t>(options_.targeted_max_candidates);
-    if (cap > 0 && candidates.size() > cap) {
-      std::nth_element(candidates.begin(), candidates.begin() + cap, candidates.end());
-      candidates.resize(cap);
-      std::sort(candidates.begin(), candidates.end(),
-                [](const auto& x, const auto& y) { return x.second < y.second; });
-    }
-    for (const auto& [distance, kk] : candidates) {
+    for (const auto& [distance, kk] : candidates[j]) {
       const size_t k = static_cast<size_t>(kk);
       AssociationState merged = s;
       merged.blocks[j].insert(merged.blocks[j].end(), s.blocks[k].begin(), s.blocks[k].end());

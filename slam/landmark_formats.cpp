@@ -18,6 +18,7 @@
 
 #include "core/angles.h"
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/error.h"
 #include "slam/landmark_data.h"
 #include "slam/landmark_factors.h"
@@ -41,6 +42,30 @@ struct Record {
   double Number(size_t i, const char* what) const {
     return ParseFiniteNumber(path, line, tokens[i], what);
   }
+  // A number within +-bound (docs/formats.md, Bounds): a finite but absurd
+  // value (a vertex at 1e300 m) would leave every later step meaningless.
+  double Bounded(size_t i, const char* what, double bound, const char* unit) const {
+    const double value = Number(i, what);
+    if (!bounds::Within(value, -bound, bound))
+      Fail(std::string(what) + ": " + bounds::OutsideMessage(value, -bound, bound, unit));
+    return value;
+  }
+  double Coordinate(size_t i, const char* what) const {
+    return Bounded(i, what, bounds::kCoordinateM, "m");
+  }
+  double Angle(size_t i, const char* what) const {
+    return Bounded(i, what, bounds::kAngleRad, "rad");
+  }
+  // A vertex's estimate (x y theta from token i on, or x y).
+  void Estimate(size_t i, bool with_angle) const {
+    Coordinate(i, "x");
+    Coordinate(i + 1, "y");
+    if (with_angle) Angle(i + 2, "theta");
+  }
+  // A relative pose (dx dy dtheta from token i on).
+  Pose2 Delta(size_t i, const char* x, const char* y, const char* theta) const {
+    return {Coordinate(i, x), Coordinate(i + 1, y), Angle(i + 2, theta)};
+  }
   long Id(size_t i, const char* what) const {
     const std::string& token = tokens[i];
     errno = 0;
@@ -48,9 +73,8 @@ struct Record {
     const long value = std::strtol(token.c_str(), &end, 10);
     if (end == token.c_str() || *end != '\0' || errno == ERANGE)
       throw Error::AtLine(path, line, std::string(what) + ": '" + token + "' is not an integer");
-    if (value < 0 || value > std::numeric_limits<int>::max())
-      throw Error::AtLine(path, line,
-                          std::string(what) + " " + token + " is outside [0, 2^31 - 1]");
+    if (value < 0 || value > bounds::kId)
+      Fail(std::string(what) + " " + bounds::OutsideMessage(double(value), 0, double(bounds::kId)));
     return value;
   }
   [[noreturn]] void Fail(const std::string& what) const { throw Error::AtLine(path, line, what); }
@@ -212,9 +236,13 @@ LandmarkDataset Builder::Finish() {
                                      "numbered by " +
                                      (poses_by_id_ ? "id" : "first mention") + ")");
     const RelativePoseMeasurement& e = data.odometry[parent_edge[i]];
-    data.dead_reckoning[i] =
+    const Pose2& p = data.dead_reckoning[i] =
         e.to == i ? ComposePose(data.dead_reckoning[parent[i]], e.delta)
                   : ComposePose(data.dead_reckoning[parent[i]], InversePose(e.delta));
+    // Each increment is bounded, their sum is not: the composed odometry
+    // must stay within the position bound too (as the GTSAM reader's).
+    if (!(std::abs(p.x) <= bounds::kCoordinateM && std::abs(p.y) <= bounds::kCoordinateM))
+      throw Error::InFile(path_, bounds::ReachMessage(p.x, p.y, "pose " + std::to_string(ids[i])));
   }
   for (const PendingSighting& p : sightings_) {
     LandmarkSighting s;
@@ -340,12 +368,12 @@ LandmarkDataset ReadG2oLandmarks(const std::string& path) {
     const Record r{path, line, t};
     if (t[0] == "VERTEX_SE2") {
       r.Expect(5, "id x y theta");
-      for (size_t i = 2; i < 5; ++i) r.Number(i, "estimate");
+      r.Estimate(2, /*with_angle=*/true);
       builder.DeclarePose(r.Id(1, "pose id"), r);
       any_vertex = true;
     } else if (t[0] == "VERTEX_XY") {
       r.Expect(4, "id x y");
-      for (size_t i = 2; i < 4; ++i) r.Number(i, "estimate");
+      r.Estimate(2, /*with_angle=*/false);
       builder.DeclareLandmark(r.Id(1, "landmark id"), r);
     } else if (!IsG2oTag(t[0])) {
       r.Fail("unknown record '" + t[0] +
@@ -357,7 +385,7 @@ LandmarkDataset ReadG2oLandmarks(const std::string& path) {
     const Record r{path, line, t};
     if (t[0] == "EDGE_SE2") {
       r.Expect(12, "i j dx dy dtheta i11 i12 i13 i22 i23 i33");
-      const Pose2 delta{r.Number(3, "dx"), r.Number(4, "dy"), r.Number(5, "dtheta")};
+      const Pose2 delta = r.Delta(3, "dx", "dy", "dtheta");
       double v[6];
       for (int k = 0; k < 6; ++k) v[k] = r.Number(6 + k, "information");
       const Eigen::Matrix3d information = Symmetric3(v[0], v[1], v[2], v[3], v[4], v[5]);
@@ -368,7 +396,7 @@ LandmarkDataset ReadG2oLandmarks(const std::string& path) {
       Eigen::Matrix2d information;
       information << r.Number(5, "i11"), r.Number(6, "i12"), r.Number(6, "i12"), r.Number(7, "i22");
       builder.AddSighting(r.Id(1, "pose i"), r.Id(2, "landmark j"),
-                          Eigen::Vector2d(r.Number(3, "x"), r.Number(4, "y")),
+                          Eigen::Vector2d(r.Coordinate(3, "x"), r.Coordinate(4, "y")),
                           CovarianceOfInformation<2>(information, r), r);
     } else if (t[0] == "FIX") {
       // The gauge: oslam holds the first pose (the lowest id) instead.
@@ -386,7 +414,7 @@ LandmarkDataset ReadToroGraph(const std::string& path) {
     const Record r{path, line, t};
     if (t[0] == "VERTEX2") {
       r.Expect(5, "id x y theta");
-      for (size_t i = 2; i < 5; ++i) r.Number(i, "estimate");
+      r.Estimate(2, /*with_angle=*/true);
       builder.DeclarePose(r.Id(1, "pose id"), r);
       any_vertex = true;
     } else if (t[0] != "EDGE2") {
@@ -398,7 +426,7 @@ LandmarkDataset ReadToroGraph(const std::string& path) {
     const Record r{path, line, t};
     if (t[0] != "EDGE2") return;
     r.Expect(12, "i j forward sideward rotate inf_ff inf_fs inf_ss inf_rr inf_fr inf_sr");
-    const Pose2 delta{r.Number(3, "forward"), r.Number(4, "sideward"), r.Number(5, "rotate")};
+    const Pose2 delta = r.Delta(3, "forward", "sideward", "rotate");
     double v[6];
     for (int k = 0; k < 6; ++k) v[k] = r.Number(6 + k, "information");
     // TORO's order: ff fs ss rr fr sr.
@@ -415,7 +443,7 @@ LandmarkDataset ReadIsamLandmarks(const std::string& path) {
     const Record r{path, line, t};
     if (t[0] == "ODOMETRY" || t[0] == "EDGE2") {
       r.Expect(12, "i j dx dy dtheta sqrt-information xx xy xt yy yt tt");
-      const Pose2 delta{r.Number(3, "dx"), r.Number(4, "dy"), r.Number(5, "dtheta")};
+      const Pose2 delta = r.Delta(3, "dx", "dy", "dtheta");
       Eigen::Matrix3d root = Eigen::Matrix3d::Zero();
       root(0, 0) = r.Number(6, "xx");
       root(0, 1) = r.Number(7, "xy");
@@ -432,7 +460,7 @@ LandmarkDataset ReadIsamLandmarks(const std::string& path) {
       root(0, 1) = r.Number(6, "xy");
       root(1, 1) = r.Number(7, "yy");
       builder.AddSighting(r.Id(1, "pose i"), r.Id(2, "landmark l"),
-                          Eigen::Vector2d(r.Number(3, "x"), r.Number(4, "y")),
+                          Eigen::Vector2d(r.Coordinate(3, "x"), r.Coordinate(4, "y")),
                           CovarianceOfSqrtInformation<2>(root, r), r);
     } else {
       r.Fail("unknown record '" + t[0] + "' (iSAM 2D: ODOMETRY or EDGE2, LANDMARK)");

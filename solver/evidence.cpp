@@ -107,6 +107,54 @@ bool CovarianceBlocks(cholmod_factor* factor, const std::vector<int>& inverse_pe
   return true;
 }
 
+bool CovarianceRoots(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
+                     cholmod_common* cc, const std::vector<std::vector<int>>& columns,
+                     std::vector<Eigen::MatrixXd>* roots, std::string* why) {
+  if (!factor->is_ll && factor->is_super) {
+    if (why) *why = "a supernodal LDL' factor";  // CHOLMOD makes none
+    return false;
+  }
+  const int n = static_cast<int>(factor->n);
+  // LDL' (simplicial): H^-1 = L^-T D^-1 L^-1, so Y = D^-1/2 L^-1 E, D the
+  // factor's diagonal (CHOLMOD_L solves with the unit-diagonal L).
+  const auto* fx = static_cast<const double*>(factor->x);
+  const auto* fp = static_cast<const int*>(factor->p);
+  roots->assign(columns.size(), Eigen::MatrixXd());
+  size_t g = 0;
+  while (g < columns.size()) {  // batches of unit columns, one forward solve each
+    size_t end = g;
+    int width = 0;
+    while (end < columns.size() &&
+           (width == 0 || width + static_cast<int>(columns[end].size()) <= kCovarianceBatch))
+      width += static_cast<int>(columns[end++].size());
+    cholmod_dense* unit = cholmod_zeros(n, width, CHOLMOD_REAL, cc);
+    auto* ux = static_cast<double*>(unit->x);
+    int c = 0;
+    for (size_t h = g; h < end; ++h)
+      for (int column : columns[h])
+        ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = 1.0;
+    cholmod_dense* x = cholmod_solve(CHOLMOD_L, factor, unit, cc);
+    cholmod_free_dense(&unit, cc);
+    if (!x) {
+      if (why) *why = "CHOLMOD solve failed";
+      return false;
+    }
+    const auto* xx = static_cast<const double*>(x->x);
+    c = 0;
+    for (size_t h = g; h < end; ++h) {
+      const int size = static_cast<int>(columns[h].size());
+      Eigen::MatrixXd& root = (*roots)[h];
+      root = Eigen::Map<const Eigen::MatrixXd>(xx + static_cast<size_t>(c) * n, n, size);
+      if (!factor->is_ll)
+        for (int i = 0; i < n; ++i) root.row(i) /= std::sqrt(std::abs(fx[fp[i]]));
+      c += size;
+    }
+    cholmod_free_dense(&x, cc);
+    g = end;
+  }
+  return true;
+}
+
 bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
                        cholmod_common* cc, const std::vector<std::vector<int>>& columns, int count,
                        unsigned long seed, std::vector<Eigen::MatrixXd>* samples,

@@ -50,6 +50,17 @@ bool CovarianceBlocks(cholmod_factor_struct* factor, const std::vector<int>& inv
                       cholmod_common_struct* cc, const std::vector<std::vector<int>>& columns,
                       std::vector<Eigen::MatrixXd>* blocks, std::string* why);
 
+// Square-root columns of the covariance: for every list of scalar columns
+// E_g, Y_g = L^{-1} P E_g (LL'; D^{-1/2} L^{-1} P E_g for LDL'), n x |g| in
+// the factor's order, so that any block of H^{-1} between two lists is
+// Y_a' Y_b. Lets a caller
+// that needs many pairwise blocks among a few variables solve once per
+// variable rather than once per pair, and a forward solve only. False with
+// `why` when CHOLMOD fails.
+bool CovarianceRoots(cholmod_factor_struct* factor, const std::vector<int>& inverse_permutation,
+                     cholmod_common_struct* cc, const std::vector<std::vector<int>>& columns,
+                     std::vector<Eigen::MatrixXd>* roots, std::string* why);
+
 // Draws from N(0, H^{-1}) for the factored matrix H: H = P' L L' P (LL') or
 // P' L D L' P (LDL'), so y = P' L^{-T} z (LL') or P' L^{-T} D^{-1/2} z, with
 // z standard normal (std::mt19937_64 seeded with `seed`), one backward

@@ -334,7 +334,12 @@ SolveResult SparseSolver::Solve(FactorGraph* graph) {
   SolverSummary& summary = result.summary;
   Impl& impl = *impl_;
   impl.linearizer.ResetCounts();
+  // The last solve's factorisation belongs to another graph: until this
+  // solve ends with a usable one, covariances and samples are refused
+  // rather than taken from it.
+  impl.normal.set_factor_is_final(false);
   auto finish = [&](TerminationType type, const std::string& message) {
+    if (type == TerminationType::kFailure) impl.normal.set_factor_is_final(false);
     summary.termination = type;
     summary.message = message;
     summary.reused_linearizations = impl.linearizer.reused();
@@ -408,6 +413,20 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
   if (!GroupColumns(normal, key_groups, &columns, why)) return false;
   return CovarianceBlocks(normal.factor(), normal.inverse_permutation(), normal.common(), columns,
                           blocks, why);
+}
+
+bool SparseSolver::CovarianceRoots(const std::vector<std::vector<int>>& key_groups,
+                                   std::vector<Eigen::MatrixXd>* roots, std::string* why) {
+  const SerialOpenMpScope serial_openmp;
+  const NormalEquations& normal = impl_->normal;
+  if (!normal.factor_is_final()) {
+    if (why) *why = "no valid final factorisation (call Solve first)";
+    return false;
+  }
+  std::vector<std::vector<int>> columns;
+  if (!GroupColumns(normal, key_groups, &columns, why)) return false;
+  return oslam::CovarianceRoots(normal.factor(), normal.inverse_permutation(), normal.common(),
+                                columns, roots, why);
 }
 
 bool SparseSolver::CovarianceSamples(const std::vector<std::vector<int>>& key_groups, int count,

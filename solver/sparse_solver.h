@@ -179,6 +179,12 @@ class SparseSolver {
   bool MarginalCovariances(const std::vector<std::vector<int>>& key_groups,
                            std::vector<Eigen::MatrixXd>* blocks, std::string* why = nullptr);
 
+  // Per group of keys, Y_g with (J^T J)^{-1} blocks Y_a^T Y_b between any
+  // two groups (evidence.h's CovarianceRoots), at the last Solve's final
+  // point. False (with `why`) as MarginalCovariances.
+  bool CovarianceRoots(const std::vector<std::vector<int>>& key_groups,
+                       std::vector<Eigen::MatrixXd>* roots, std::string* why = nullptr);
+
   // Draws from the Gaussian at the last Solve's final point, N(0, (J^T J)^{-1})
   // (evidence.h's CovarianceSamples): per group of keys, a dimension x count
   // matrix. Same failures as MarginalCovariances.

@@ -142,9 +142,12 @@ TEST(LandmarkMapCommand, UnknownAssociationComparesWithTheIds) {
   EXPECT_NE(run.out.find("window 1/1: 4 poses"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("pairwise agreement"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("landmarks"), std::string::npos) << run.out;
-  EXPECT_NE(run.out.find("trajectory vs the shipped-association solve (same noise): RMSE"),
+  EXPECT_NE(run.out.find("trajectory vs the file's association solved under the same noise: "
+                         "RMSE"),
             std::string::npos)
       << run.out;
+  EXPECT_NE(run.out.find("duplicate landmarks joined"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("without its outlier sightings"), std::string::npos) << run.out;
   const OMap map = ReadOMap(dir.Path("omap.json"));
   EXPECT_GE(map.objects.size(), 2u);  // the two trees are 5 m apart: never one
   EXPECT_EQ(map.trajectory.size(), 4u);

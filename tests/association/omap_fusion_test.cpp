@@ -7,8 +7,10 @@
 #include <memory>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 
 #include "association/omap_fusion.h"
 
@@ -251,6 +253,49 @@ TEST(ClassGeometryEvidence, ExistenceWeightMultipliesTheOddsOfTheSpuriousModel) 
   options.lookalike_size_std_m = 0;
   std::string why;
   EXPECT_FALSE(options.Validate(&why));
+}
+
+// An object seen from one place only (the robot turning on the spot): the
+// detections fix its bearing, its base height and its apparent size, i.e.
+// diameter / range and height / range, but not the range. Without any class
+// prior (4.43) the range is open and P(xi) = 0; given the class, the size
+// prior locates it: range variance x^2 / ((d/sigma_d)^2 + (h/sigma_h)^2).
+TEST(ExistenceGivenClass, AnObjectSeenFromOnePlaceIsLocatedByItsApparentSize) {
+  ClassPrior bottle;  // thesis Table 6.4
+  bottle.name = "red bottle";
+  bottle.size_mean_m = {0.1, 0.3};
+  bottle.size_std_m = {0.05, 0.1};
+  for (const double range : {1.0, 2.0}) {
+    SCOPED_TRACE(::testing::Message() << "range " << range);
+    Vector5d theta;  // seen along +x from the origin, at the class's mean size
+    theta << range, 0.0, 0.0, 0.1, 0.3;
+    // Precise measurements of y, z, d - (d/x) x and h - (h/x) x.
+    std::vector<Vector5d> rows(4, Vector5d::Zero());
+    rows[0] << 0, 1, 0, 0, 0;
+    rows[1] << 0, 0, 1, 0, 0;
+    rows[2] << -0.1 / range, 0, 0, 1, 0;
+    rows[3] << -0.3 / range, 0, 0, 0, 1;
+    Matrix5d information = Matrix5d::Zero();
+    for (const Vector5d& a : rows) information += 1e8 * a * a.transpose();
+    Vector5d prior_std;
+    prior_std << bottle.location_std_m, bottle.size_std_m;
+    Matrix5d posterior_information = information;
+    posterior_information.diagonal() += prior_std.array().square().inverse().matrix();
+    const Matrix5d covariance = posterior_information.inverse();
+    const Vector5d mean = theta;  // the class means: no prior pull on the size
+    EXPECT_TRUE(std::isinf(PriorFreeLocationVariance(covariance, bottle)));
+    const double expected = range * range / (std::pow(0.1 / 0.05, 2) + std::pow(0.3 / 0.1, 2));
+    EXPECT_NEAR(ClassConditionedLocationVariance(covariance, bottle), expected, 1e-3 * expected);
+    FusionOptions thesis;
+    thesis.existence_given_class = false;
+    EXPECT_EQ(ExistenceWeight(covariance, mean, bottle, thesis), 0.0);
+    const FusionOptions given_class;
+    const double p = MirroredSigmoid(ClassConditionedLocationVariance(covariance, bottle),
+                                     given_class.spurious_t0_m2, given_class.spurious_tau_m2);
+    const double log_bf = ClassGeometryLogBayesFactor(covariance, mean, bottle, given_class);
+    const double w = ExistenceWeight(covariance, mean, bottle, given_class);
+    EXPECT_NEAR(std::log(w / (1 - w)), std::log(p / (1 - p)) + log_bf, 1e-9);
+  }
 }
 
 TEST(OMapFusionTest, InvalidIdentityMergingOptionsAreRefused) {

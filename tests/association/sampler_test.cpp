@@ -125,6 +125,19 @@ TEST(DetailedBalanceTest, ThesisSplitSamplerWithItsTrueProbability) {
   EXPECT_LT(tv, 0.03);
 }
 
+// Splitting off one track half the time, with the mixture's partition
+// probability forward and in reverse (docs/method.md §9.2).
+TEST(DetailedBalanceTest, OneTrackOrUniformSplitSampler) {
+  const ClassConfusionModel model = TestModel();
+  SamplerOptions options = TestOptions(1, 200000);
+  options.moves.split_sampler = SplitSampler::kOneTrackOrUniform;
+  const SamplerResult result = RunTest(options, model);
+  const double tv = TotalVariation(result, model);
+  std::printf("MH (one-track-or-uniform split sampler): total variation %.4f\n", tv);
+  EXPECT_LT(tv, 0.03);
+  EXPECT_GT(result.summary.sampling[static_cast<int>(MoveType::kSplit)].accepted, 0);
+}
+
 TEST(DetailedBalanceTest, MetropolisCoupledColdChainMatchesEnumeratedPosterior) {
   const ClassConfusionModel model = TestModel();
   SamplerOptions options = TestOptions(3, 100000);

@@ -127,6 +127,30 @@ TEST(CameraYaml, HandWrittenFileWithoutYamlDirectiveLoads) {
   EXPECT_TRUE(dynamic_cast<const HyperbolicCamera&>(*flipped).parameters().flip_image_angle);
 }
 
+// flip_image_angle is the hyperbolic model's: a Mei file with it set is
+// refused (never silently unflipped); 0 is accepted; only 0 and 1 are values.
+TEST(CameraYaml, FlipImageAngleIsRefusedWhereTheModelHasNone) {
+  testing::TempDir dir;
+  std::ofstream(dir.Path("mei_flipped.yaml")) << kGoodMei << "flip_image_angle: 1\n";
+  try {
+    LoadCamera(dir.Path("mei_flipped.yaml"));
+    ADD_FAILURE() << "a mei camera with flip_image_angle: 1 was loaded";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), dir.Path("mei_flipped.yaml") +
+                                         ": flip_image_angle: only the hyperbolic model has "
+                                         "it; the mei model does not");
+  }
+  std::ofstream(dir.Path("mei_unflipped.yaml")) << kGoodMei << "flip_image_angle: 0\n";
+  EXPECT_EQ(LoadCamera(dir.Path("mei_unflipped.yaml"))->ModelName(), "mei");
+  std::ofstream(dir.Path("two.yaml")) << kGoodCamera << "flip_image_angle: 2\n";
+  try {
+    LoadCamera(dir.Path("two.yaml"));
+    ADD_FAILURE() << "flip_image_angle: 2 was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), dir.Path("two.yaml") + ": flip_image_angle: must be 0 or 1");
+  }
+}
+
 TEST(CameraYaml, HandWrittenMeiFileSetsEveryParameterByName) {
   testing::TempDir dir;
   std::ofstream(dir.Path("camera.yaml")) << kGoodMei;

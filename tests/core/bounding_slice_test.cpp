@@ -1,5 +1,7 @@
 #include "core/bounding_slice.h"
 
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "core/angles.h"
@@ -38,6 +40,22 @@ TEST(BoundingSlice, OfPolarPointsFindsTheSmallestArc) {
   EXPECT_NEAR(plain.s_phi_rad, 0.4, 1e-12);
   EXPECT_NEAR(plain.u_phi_rad, 0.1, 1e-12);
   EXPECT_EQ(SliceOfPolarPoints({}, {}).s_phi_rad, 0.0);
+}
+
+// A blob all around the image centre (the robot beside a low table) spans
+// the full circle and no more, however narrow the gaps between its pixels:
+// detections.csv's readers reject s_phi > 2 pi.
+TEST(BoundingSlice, PixelCentresAllAroundSpanAtMostTheFullCircle) {
+  std::vector<double> radii, angles;
+  for (int i = 0; i < 720; ++i) {
+    radii.push_back(40.0 + i % 7);
+    angles.push_back(-kPi + 2.0 * kPi * i / 720.0);
+  }
+  const BoundingSlice slice = SliceOfPixelCentres(radii, angles);
+  EXPECT_LE(slice.s_phi_rad, 2.0 * kPi);
+  EXPECT_GT(slice.s_phi_rad, 2.0 * kPi - 0.01);
+  EXPECT_NEAR(slice.u_r_px, 39.5, 1e-12);
+  EXPECT_NEAR(slice.s_r_px, 7.0, 1e-12);
 }
 
 TEST(BoundingSlice, ElongationIsRadialLengthOverMiddleArcWidth) {

@@ -18,6 +18,7 @@ namespace oslam {
 namespace {
 
 using testing::CopyOfRun;
+using testing::FilesLeft;
 using testing::FilesUnder;
 using testing::FixtureRun;
 using testing::Oslam;
@@ -54,28 +55,19 @@ void EditCsv(const std::string& path, int row, int column, const std::string& va
   WriteFile(path, out);
 }
 
-std::string FilesLeft(const std::string& folder) {
-  std::string list;
-  for (const std::string& f : FilesUnder(folder)) list += (list.empty() ? "" : " ") + f;
-  return list.empty() ? "none" : list;
-}
-
 // Prints the row and checks what every row needs: the exit code, exactly one
-// line on stderr holding every `parts`, and no run longer than `max_seconds`.
+// line on stderr holding every `parts`, and no hang (Oslam's time limit:
+// unbounded work is a run killed there; speed itself is not asserted).
 void Row(const std::string& name, const OslamResult& r, int exit_code,
-         const std::vector<std::string>& parts, const std::string& files_left,
-         double max_seconds = 30) {
-  std::string message = r.err;
-  if (!message.empty() && message.back() == '\n') message.pop_back();
-  std::cout << "| " << name << " | " << r.exit_code << " | " << message << " | " << files_left
-            << " |" << std::endl;
+         const std::vector<std::string>& parts, const std::string& files_left) {
+  std::cout << "| " << name << " | " << r.exit_code << " | " << testing::OneLine(r.err) << " | "
+            << files_left << " |" << std::endl;
   EXPECT_FALSE(r.timed_out) << name;
   EXPECT_EQ(r.exit_code, exit_code) << name << ": " << r.err;
   EXPECT_EQ(testing::Lines(r.err), 1) << name << ": " << r.err;
   EXPECT_EQ(r.err.find("libpng"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
   for (const std::string& part : parts) EXPECT_NE(r.err.find(part), std::string::npos) << r.err;
-  EXPECT_LT(r.seconds, max_seconds) << name;
 }
 
 class BadInput : public ::testing::Test {
@@ -189,13 +181,13 @@ TEST_F(BadInput, CameraOf60000By60000IsRefused) {
   Edit(camera, "image_height: 480", "image_height: 60000");
   const OslamResult r = Oslam("camera --from " + camera + " --quiet");
   Row("camera.yaml 60000x60000", r, 1,
-      {camera + ": invalid camera: image size 60000x60000 is beyond the image bounds"}, "none", 5);
+      {camera + ": invalid camera: image size 60000x60000 is beyond the image bounds"}, "none");
   // And a run using it stops before decoding a frame.
   const std::string run = CopyOfRun(dir_.Path("run"));
   fs::copy(camera, run + "/camera.yaml", fs::copy_options::overwrite_existing);
   const OslamResult detect = Oslam("detect " + run + " -o " + dir_.Path("d.csv") + " --quiet");
   Row("detect, camera.yaml 60000x60000", detect, 1, {run + "/camera.yaml: invalid camera"},
-      fs::exists(dir_.Path("d.csv")) ? "d.csv" : "none", 5);
+      fs::exists(dir_.Path("d.csv")) ? "d.csv" : "none");
   EXPECT_FALSE(fs::exists(dir_.Path("d.csv")));
 }
 
@@ -218,7 +210,7 @@ TEST_F(BadInput, APngDeclaring30000By30000IsRefusedBeforeDecoding) {
   const OslamResult r = Oslam("detect " + run + " -o " + out + " --quiet");
   Row("detect, PNG declaring 30000x30000", r, 1,
       {frame + ": the png header declares 30000x30000 pixels, beyond the image bounds"},
-      fs::exists(out) ? "d.csv" : "none", 10);
+      fs::exists(out) ? "d.csv" : "none");
   EXPECT_FALSE(fs::exists(out));
 }
 
@@ -227,8 +219,8 @@ TEST_F(BadInput, AFigureSizeOf100000IsAUsageErrorBeforeAnyFile) {
     const std::string out = dir_.Path(std::string("out_") + command);
     const OslamResult r = Oslam(std::string(command) + " " + run_ + "/omap.json -o " + out +
                                 " --figure-size 100000 --quiet");
-    Row(std::string(command) + " --figure-size 100000", r, 2, {"64 to 8192 pixels"}, FilesLeft(out),
-        5);
+    Row(std::string(command) + " --figure-size 100000", r, 2, {"64 to 8192 pixels"},
+        FilesLeft(out));
     EXPECT_TRUE(FilesUnder(out).empty());
   }
 }
@@ -242,7 +234,7 @@ TEST_F(BadInput, ADetectionWiderThanACircleIsRefused) {
         Oslam("overlay " + run + " " + run + "/omap.json -o " + out + " --frames 0 --quiet");
     Row(std::string("overlay, s_phi_rad ") + width, r, 1,
         {run + "/detections.csv:2: column 's_phi_rad': ", "is outside [0, 6.28319]"},
-        FilesLeft(out), 10);
+        FilesLeft(out));
     EXPECT_TRUE(FilesUnder(out).empty());
   }
 }
@@ -280,7 +272,19 @@ TEST_F(BadInput, LandmarksWithXOf1e300AreRefusedBeforeAnythingIsWritten) {
             "LANDMARK 3 2 3.0 0.0 0.4 0.1 0.9\n");
   const std::string out = dir_.Path("out");
   const OslamResult r = Oslam("map --landmarks " + data + " -o " + out + "/omap.json --quiet");
-  Row("map --landmarks, x 1e300", r, 1, {data + ":2: x: 1e+300 is outside"}, FilesLeft(out), 10);
+  Row("map --landmarks, x 1e300", r, 1, {data + ":2: x: 1e+300 is outside"}, FilesLeft(out));
+  EXPECT_TRUE(FilesUnder(out).empty());
+}
+
+TEST_F(BadInput, AG2oVertexAt1e300IsRefusedBeforeAnythingIsWritten) {
+  const std::string data = dir_.Path("landmarks.g2o");
+  WriteFile(data,
+            "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_XY 2 1e300 5\n"
+            "EDGE_SE2 0 1 1 0 0 100 0 0 100 0 1000\nEDGE_SE2_XY 0 2 3 5 10 0 10\n");
+  const std::string out = dir_.Path("out");
+  const OslamResult r = Oslam("map --landmarks " + data + " -o " + out + "/omap.json --quiet");
+  Row("map --landmarks (g2o), vertex x 1e300", r, 1, {data + ":3: x: 1e+300 is outside"},
+      FilesLeft(out));
   EXPECT_TRUE(FilesUnder(out).empty());
 }
 
@@ -297,7 +301,7 @@ TEST_F(BadInput, AnOMapFieldOfTheWrongTypeIsNamed) {
     const std::string out = dir_.Path("out" + std::to_string(i));
     const OslamResult r = Oslam("export " + omap + " -o " + out + " --quiet");
     Row("export, O-Map " + cases[i].first + " = " + cases[i].second, r, 1,
-        {omap + ": " + expected[i]}, FilesLeft(out), 10);
+        {omap + ": " + expected[i]}, FilesLeft(out));
     EXPECT_TRUE(FilesUnder(out).empty());
   }
 }
@@ -310,7 +314,7 @@ TEST_F(BadInput, ATruncatedPngIsOneLineNamingTheFrame) {
   const std::string out = dir_.Path("d.csv");
   const OslamResult r = Oslam("detect " + run + " -o " + out + " --quiet");
   Row("detect, truncated PNG", r, 1, {frame + ": corrupt PNG: the file ends early"},
-      fs::exists(out) ? "d.csv" : "none", 20);
+      fs::exists(out) ? "d.csv" : "none");
   EXPECT_FALSE(fs::exists(out));
 }
 
@@ -327,8 +331,8 @@ TEST_F(BadInput, ADamagedVideoIsOneLineNamingIt) {
   WriteFile(run + "/video.mp4", video);
   const std::string out = dir_.Path("d.csv");
   const OslamResult r = Oslam("detect " + run + " -o " + out + " --quiet");
-  Row("detect, damaged video.mp4", r, 1, {run + "/video.mp4: "}, fs::exists(out) ? "d.csv" : "none",
-      20);
+  Row("detect, damaged video.mp4", r, 1, {run + "/video.mp4: "},
+      fs::exists(out) ? "d.csv" : "none");
   EXPECT_EQ(r.err.find("moov"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
 }
@@ -343,7 +347,7 @@ TEST_F(BadInput, AMeiXiOf50IsRefused) {
             "  mount_yaw_rad: 0\n");
   const OslamResult r = Oslam("camera --from " + camera + " --quiet");
   Row("camera.yaml, mei xi 50", r, 1, {camera + ": invalid camera: xi: 50 is outside [0, 3]"},
-      "none", 5);
+      "none");
 }
 
 TEST_F(BadInput, AMirrorOfB1000TimesAIsRefused) {
@@ -355,7 +359,7 @@ TEST_F(BadInput, AMirrorOfB1000TimesAIsRefused) {
   WriteFile(camera, text);
   const OslamResult r = Oslam("camera --from " + camera + " --quiet");
   Row("camera.yaml, mirror b = 1000 a", r, 1,
-      {camera + ": invalid camera: mirror_b_m", "is outside"}, "none", 5);
+      {camera + ": invalid camera: mirror_b_m", "is outside"}, "none");
 }
 
 TEST_F(BadInput, AnIdOf1e300IsRefusedNotWrapped) {
@@ -364,8 +368,8 @@ TEST_F(BadInput, AnIdOf1e300IsRefusedNotWrapped) {
   EditFirstObject(omap, "id", "1e300");
   const std::string out = dir_.Path("out");
   const OslamResult r = Oslam("export " + omap + " -o " + out + " --quiet");
-  Row("export, O-Map id 1e300", r, 1, {omap + ": objects[0].id: 1e+300 is outside"}, FilesLeft(out),
-      10);
+  Row("export, O-Map id 1e300", r, 1, {omap + ": objects[0].id: 1e+300 is outside"},
+      FilesLeft(out));
   EXPECT_TRUE(FilesUnder(out).empty());
 }
 
@@ -376,7 +380,7 @@ TEST_F(BadInput, ANegativeDiameterIsRefused) {
   const std::string out = dir_.Path("out");
   const OslamResult r = Oslam("export " + omap + " -o " + out + " --quiet");
   Row("export, negative diameter", r, 1,
-      {omap + ": objects[0].diameter_m: -0.5 is outside [0, 100] m"}, FilesLeft(out), 10);
+      {omap + ": objects[0].diameter_m: -0.5 is outside [0, 100] m"}, FilesLeft(out));
   EXPECT_TRUE(FilesUnder(out).empty());
 }
 
@@ -392,7 +396,7 @@ TEST_F(BadInput, NoDetectionSurvivingPreAssociationNamesTheDetections) {
   Row("slam, no detection survives pre-association", r, 1,
       {run + "/detections.csv: no detection survived pre-association (1 detections, 1 of them in "
              "tracks shorter than 3 frames)"},
-      FilesLeft(out), 20);
+      FilesLeft(out));
   EXPECT_TRUE(FilesUnder(out).empty());
 }
 
@@ -405,13 +409,13 @@ TEST_F(BadInput, AnOverlaysSymlinkOutOfTheOutputFolderIsRefused) {
                               out + " --figure-size 64 --quiet");
   Row("export --overlays, overlays/ a symlink out of -o", r, 1,
       {out + "/overlays: a symlink to " + outside + ", out of the output folder"},
-      FilesLeft(out) + "; outside: " + FilesLeft(outside), 20);
+      FilesLeft(out) + "; outside: " + FilesLeft(outside));
   EXPECT_TRUE(FilesUnder(outside).empty());
   EXPECT_EQ(FilesUnder(out).size(), 0u);  // the symlink is no regular file
   const OslamResult run = Oslam("run " + run_ + " -o " + out + " --quiet");
   Row("run, overlays/ a symlink out of -o", run, 1,
       {out + "/overlays: a symlink to " + outside + ", out of the output folder"},
-      FilesLeft(out) + "; outside: " + FilesLeft(outside), 20);
+      FilesLeft(out) + "; outside: " + FilesLeft(outside));
   EXPECT_TRUE(FilesUnder(outside).empty());
 }
 

@@ -44,8 +44,7 @@ std::map<std::string, std::string> Snapshot(const std::string& folder) {
 }
 
 std::string Fast() {
-  return " --set slam.samples=60 --set slam.burn_in=10 --set slam.hill_climb=20"
-         " --set export.overlays=0 --set export.figure_size_px=200 ";
+  return testing::Joined(testing::FastRunArguments()) + " --set export.figure_size_px=200 ";
 }
 
 std::vector<Command> Commands() {
@@ -139,8 +138,7 @@ TEST_P(FullDisk, EveryFileIsWholeOrAsBeforeAndTheErrorNamesIt) {
                       << bytes.size() << " bytes)";
       }
     }
-    std::string message = r.err;
-    if (!message.empty() && message.back() == '\n') message.pop_back();
+    const std::string message = testing::OneLine(r.err);
     std::cout << "| " << command.name << " | " << limit_kib << " KiB | " << r.exit_code << " | "
               << (message.empty() ? "-" : message) << " | " << (whole.empty() ? "none" : whole)
               << " |" << std::endl;

@@ -229,6 +229,16 @@ TEST(Fuzz, GtsamLandmarks) {
       "data.txt", "map --landmarks {DIR}/data.txt -o {OUT}/omap.json --quiet");
 }
 
+TEST(Fuzz, G2oToroIsamLandmarks) {
+  for (const char* name : {"g2o_small.g2o", "toro_small.graph", "isam_small.txt"})
+    Fuzz(
+        std::string("landmarks (") + name + ")",
+        [name](const std::string& p) {
+          Standalone(p, name, Data(std::string("landmarks/") + name));
+        },
+        name, std::string("map --landmarks {DIR}/") + name + " -o {OUT}/omap.json --quiet");
+}
+
 TEST(Fuzz, VictoriaRawMeasurements) {
   const auto make = [](const std::string& p) {
     Standalone(p, "measurements.dat", Data("landmarks/raw_measurements.dat"));

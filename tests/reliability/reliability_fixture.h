@@ -72,6 +72,26 @@ inline int Lines(const std::string& text) {
   return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
 }
 
+// A one-line message without its newline, for the printed tables.
+inline std::string OneLine(std::string message) {
+  if (!message.empty() && message.back() == '\n') message.pop_back();
+  return message;
+}
+
+// Settings that make `oslam run` on the fixture take seconds: a short
+// sampler and no overlays (tests that want overlays set them again).
+inline std::vector<std::string> FastRunArguments() {
+  return {"--set", "slam.samples=60",    "--set", "slam.burn_in=10",
+          "--set", "slam.hill_climb=20", "--set", "export.overlays=0"};
+}
+
+// The arguments as one command-line string, each after a space.
+inline std::string Joined(const std::vector<std::string>& arguments) {
+  std::string text;
+  for (const std::string& a : arguments) text += " " + a;
+  return text;
+}
+
 // Every regular file under `folder` (relative paths, sorted); empty when the
 // folder does not exist.
 inline std::vector<std::string> FilesUnder(const std::string& folder) {
@@ -82,6 +102,13 @@ inline std::vector<std::string> FilesUnder(const std::string& folder) {
     if (!entry.is_directory()) files.push_back(fs::relative(entry.path(), folder).string());
   std::sort(files.begin(), files.end());
   return files;
+}
+
+// The files under `folder` on one line ("none" when there are none).
+inline std::string FilesLeft(const std::string& folder) {
+  std::string list;
+  for (const std::string& f : FilesUnder(folder)) list += (list.empty() ? "" : " ") + f;
+  return list.empty() ? "none" : list;
 }
 
 // Temp files of an atomic write (".NAME.tmp-XXXXXX.EXT").

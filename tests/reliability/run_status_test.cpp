@@ -30,17 +30,15 @@ using testing::TempDir;
 using testing::WriteFile;
 namespace fs = std::filesystem;
 
-const char* const kFast[] = {"--set",  "slam.samples=60",
-                             "--set",  "slam.burn_in=10",
-                             "--set",  "slam.hill_climb=20",
-                             "--set",  "export.overlays=0",
-                             "--seed", "3",
-                             "--quiet"};
+// The fixture's fast run, seeded and quiet.
+std::vector<std::string> Fast() {
+  std::vector<std::string> arguments = testing::FastRunArguments();
+  arguments.insert(arguments.end(), {"--seed", "3", "--quiet"});
+  return arguments;
+}
 
 std::string FastArguments() {
-  std::string text;
-  for (const char* a : kFast) text += std::string(" ") + a;
-  return text;
+  return testing::Joined(Fast());
 }
 
 nlohmann::json Status(const std::string& out) {
@@ -73,8 +71,7 @@ TEST(RunStatus, AFailedReRunLeavesNoOlderResultAndSaysWhy) {
   WriteFile(frame, "not a png");
   const OslamResult r = Oslam("run " + run + " -o " + out + FastArguments());
   std::cout << "| run, failed re-run into an earlier run's folder | " << r.exit_code << " | "
-            << r.err.substr(0, r.err.size() - 1) << " | config.yaml notes.txt run.json |"
-            << std::endl;
+            << testing::OneLine(r.err) << " | " << testing::FilesLeft(out) << " |" << std::endl;
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find(frame + ": not an image"), std::string::npos) << r.err;
   for (const char* old : {"omap.json", "map.glb", "map.gltf", "map.ply", "report.md", "eval.json",
@@ -87,6 +84,34 @@ TEST(RunStatus, AFailedReRunLeavesNoOlderResultAndSaysWhy) {
   EXPECT_EQ(status["stages"]["detect"], "failed");
   EXPECT_EQ(status["stages"]["o-slam"], "pending");
   EXPECT_NE(status["error"].get<std::string>().find("000009.png"), std::string::npos);
+}
+
+// A re-run replaces the overlays it draws: none of the earlier run's
+// frames is left beside them (a frame drawn then and not now would show an
+// older map), and files of the user's own in overlays/ are kept.
+TEST(RunStatus, AReRunClearsTheOverlaysOfTheEarlierRun) {
+  TempDir dir;
+  const std::string out = dir.Path("out"), overlays = out + "/overlays";
+  const auto run = [&](const std::string& frames) {
+    return Oslam("run " + FixtureRun() + " -o " + out + FastArguments() +
+                 " --set export.overlays=1 --set export.overlay_frames=" + frames +
+                 " --set export.figure_size_px=200");
+  };
+  const OslamResult first = run("0-5");
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  EXPECT_EQ(testing::FilesUnder(overlays),
+            (std::vector<std::string>{"000000.jpg", "000001.jpg", "000002.jpg", "000003.jpg",
+                                      "000004.jpg", "000005.jpg"}));
+  WriteFile(overlays + "/notes.txt", "the user's own file");
+  WriteFile(overlays + "/000001.jpg", "an old overlay");  // must be drawn again
+  const OslamResult second = run("1,2");
+  ASSERT_EQ(second.exit_code, 0) << second.err;
+  EXPECT_EQ(testing::FilesUnder(overlays),
+            (std::vector<std::string>{"000001.jpg", "000002.jpg", "notes.txt"}));
+  EXPECT_NE(ReadFile(overlays + "/000001.jpg"), "an old overlay");
+  EXPECT_EQ(ReadFile(overlays + "/notes.txt"), "the user's own file");
+  std::cout << "| run, re-run drawing frames 1,2 after 0-5 | " << second.exit_code
+            << " | - | overlays: " << testing::FilesLeft(overlays) << " |" << std::endl;
 }
 
 // Starts oslam with `arguments`; returns its pid.
@@ -110,7 +135,8 @@ TEST(RunStatus, AKilledRunLooksUnfinishedAndResumeReusesItsStages) {
   TempDir dir;
   const std::string out = dir.Path("out");
   std::vector<std::string> arguments = {"run", FixtureRun(), "-o", out};
-  arguments.insert(arguments.end(), std::begin(kFast), std::end(kFast));
+  const std::vector<std::string> fast = Fast();
+  arguments.insert(arguments.end(), fast.begin(), fast.end());
   const pid_t pid = Start(arguments);
   ASSERT_GT(pid, 0);
   // Killed (no chance to clean up) once the detections are done.

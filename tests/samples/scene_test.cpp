@@ -173,7 +173,7 @@ TEST(Scene, BoxGroundTruthDiameterIsTheFootprintDiagonal) {
 }
 
 TEST(Scene, ShippedScenesLoad) {
-  for (const char* name : {"lab", "long_loop", "house", "look_alike_room"}) {
+  for (const char* name : {"lab", "long_loop", "house", "look_alike_room", "look_alike_hall"}) {
     const std::string path = std::string(OSLAM_SOURCE_DIR) + "/samples/scenes/" + name + ".yaml";
     SCOPED_TRACE(path);
     const Scene scene = LoadScene(path);

@@ -185,7 +185,8 @@ TEST(LandmarkFormatTest, MalformedLinesNameFileAndLine) {
        ":3: the information matrix is not positive definite"},
       {LandmarkFormat::kG2o, "VERTEX_SE2 0 0 0 0\nEDGE_SE2 0 4 1 0 0 1 0 0 1 0 1\n",
        ":2: pose 4 has no vertex"},
-      {LandmarkFormat::kG2o, "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 0 0 x\n", ":2: estimate: 'x'"},
+      {LandmarkFormat::kG2o, "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 0 0 x\n",
+       ":2: theta: 'x' is not a number"},
       {LandmarkFormat::kG2o, "VERTEX_SE2 0 0 0 0\nEDGE_SE3:QUAT 0 1\n",
        ":2: unknown record 'EDGE_SE3:QUAT'"},
       {LandmarkFormat::kG2o, "VERTEX_SE2 0 0 0 0\nVERTEX_XY 5 1 1\nEDGE_SE2_XY 0 5 0 0 1 0 1\n",
@@ -210,6 +211,64 @@ TEST(LandmarkFormatTest, MalformedLinesNameFileAndLine) {
     EXPECT_NE(message.find(cases[i].expected), std::string::npos)
         << "case " << i << ": " << message;
   }
+}
+
+// docs/formats.md, Bounds: positions within +-1e5 m (vertices, increments,
+// point sightings, and the odometry composed), angles within +-100 rad, ids
+// up to 1e9; each error names the file and line (or the pose reached).
+TEST(LandmarkFormatTest, ValuesBeyondThePhysicalBoundsNameFileAndLine) {
+  testing::TempDir dir;
+  struct Case {
+    LandmarkFormat format;
+    std::string text, expected;
+  };
+  const std::string pose01 = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\n";
+  const std::string edge01 = "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n";
+  const std::vector<Case> cases = {
+      {LandmarkFormat::kG2o, "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1e300 0 0\n" + edge01,
+       ":2: x: 1e+300 is outside [-100000, 100000] m"},
+      {LandmarkFormat::kG2o, "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 0 -2e5 0\n" + edge01,
+       ":2: y: -200000 is outside [-100000, 100000] m"},
+      {LandmarkFormat::kG2o, "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 0 0 1e9\n" + edge01,
+       ":2: theta: 1e+09 is outside [-100, 100] rad"},
+      {LandmarkFormat::kG2o, pose01 + "VERTEX_XY 5 3e5 1\n" + edge01,
+       ":3: x: 300000 is outside [-100000, 100000] m"},
+      {LandmarkFormat::kG2o, pose01 + "EDGE_SE2 0 1 1e30 0 0 1 0 0 1 0 1\n",
+       ":3: dx: 1e+30 is outside [-100000, 100000] m"},
+      {LandmarkFormat::kG2o, pose01 + "EDGE_SE2 0 1 1 0 -1e7 1 0 0 1 0 1\n",
+       ":3: dtheta: -1e+07 is outside [-100, 100] rad"},
+      {LandmarkFormat::kG2o,
+       pose01 + "VERTEX_XY 5 1 1\n" + edge01 + "EDGE_SE2_XY 0 5 0 1e300 1 0 1\n",
+       ":5: y: 1e+300 is outside [-100000, 100000] m"},
+      {LandmarkFormat::kG2o, "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 2000000000 0 0 0\n",
+       ":2: pose id 2e+09 is outside [0, 1e+09]"},
+      {LandmarkFormat::kToro, "VERTEX2 0 0 0 0\nVERTEX2 1 -1e300 0 0\n",
+       ":2: x: -1e+300 is outside [-100000, 100000] m"},
+      {LandmarkFormat::kToro, "EDGE2 0 1 0 1e6 0 1 0 1 1 0 0\n",
+       ":1: sideward: 1e+06 is outside [-100000, 100000] m"},
+      {LandmarkFormat::kIsam, "EDGE2 0 1 1 0 300 1 0 0 1 0 1\n",
+       ":1: dtheta: 300 is outside [-100, 100] rad"},
+      {LandmarkFormat::kIsam, "EDGE2 0 1 1 0 0 1 0 0 1 0 1\nLANDMARK 1 3 1e300 1 1 0 1\n",
+       ":2: x: 1e+300 is outside [-100000, 100000] m"},
+      // Every increment within the bound, their sum beyond it.
+      {LandmarkFormat::kIsam, "EDGE2 0 1 60000 0 0 1 0 0 1 0 1\nEDGE2 1 2 60000 0 0 1 0 0 1 0 1\n",
+       ": the odometry reaches (120000, 0) m at pose 2, beyond the position bound"},
+      {LandmarkFormat::kToro, "EDGE2 0 1 0 90000 0 1 0 1 1 0 0\nEDGE2 1 2 0 90000 0 1 0 1 1 0 0\n",
+       ": the odometry reaches (0, 180000) m at pose 2, beyond the position bound"},
+  };
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const std::string path = WriteFile(dir, "case" + std::to_string(i), cases[i].text);
+    const std::string message = ErrorOf([&] { ReadLandmarkDataset(path, cases[i].format); });
+    EXPECT_EQ(message.find(path + cases[i].expected), 0u) << "case " << i << ": " << message;
+    EXPECT_NE(message.find("(docs/formats.md, Bounds)"), std::string::npos) << message;
+  }
+  // At the bounds themselves: read.
+  const std::string edge = WriteFile(
+      dir, "edge", "EDGE2 0 1 100000 -100000 100 1 0 0 1 0 1\nLANDMARK 1 3 1e5 -1e5 1 0 1\n");
+  const LandmarkDataset data = ReadLandmarkDataset(edge, LandmarkFormat::kIsam);
+  ASSERT_EQ(data.num_poses, 2);
+  EXPECT_DOUBLE_EQ(data.odometry[0].delta.x, 1e5);
+  EXPECT_DOUBLE_EQ(data.sightings[0].range_m, std::sqrt(2.0) * 1e5);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -274,6 +275,40 @@ TEST(SolverTest, ObjectCovariancesOfASupernodalFactorEqualTheDenseInverse) {
   ExpectBlocksOfDenseCovariance(graph, dense, groups, blocks, 1e-8);
 }
 
+// The square-root columns of a small (simplicial LDL') and of the same
+// supernodal factor: Y_a' Y_b is the
+// (a, b) block of the inverse (MarginalCovariances, checked against the
+// dense inverse above), within a group and across two.
+TEST(SolverTest, CovarianceRootsGiveTheBlocksOfTheDenseInverse) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  for (const int poses : {25, 120}) {  // a simplicial LDL' and a supernodal LL' factor
+    SCOPED_TRACE(poses);
+    FactorGraph graph =
+        poses == 120 ? SmallSlamGraph(camera, 4, 120, 14) : SmallSlamGraph(camera, 1, poses);
+    SolverOptions options;
+    options.apply_final_step = false;
+    SparseSolver solver(options);
+    ASSERT_TRUE(solver.Solve(&graph).summary.IsUsable());
+    const int last = graph.num_variables() - 1;
+    const std::vector<std::vector<int>> groups = {{last - 1, last}, {5}, {20, last - 2}};
+    std::vector<Eigen::MatrixXd> roots;
+    ASSERT_TRUE(solver.CovarianceRoots(groups, &roots));
+    ASSERT_EQ(roots.size(), groups.size());
+    for (size_t a = 0; a < groups.size(); ++a)
+      for (size_t b = a; b < groups.size(); ++b) {
+        std::vector<Eigen::MatrixXd> block;  // the joint block, its (a, b) part compared
+        std::vector<int> both = groups[a];
+        both.insert(both.end(), groups[b].begin(), groups[b].end());
+        ASSERT_TRUE(solver.MarginalCovariances({both}, &block));
+        const Eigen::MatrixXd product = roots[a].transpose() * roots[b];
+        const Eigen::MatrixXd expected =
+            block[0].block(0, block[0].cols() - product.cols(), product.rows(), product.cols());
+        EXPECT_LT((product - expected).cwiseAbs().maxCoeff(), 1e-8 * expected.cwiseAbs().maxCoeff())
+            << "groups " << a << ", " << b;
+      }
+  }
+}
+
 // Every fill-reducing ordering (and the QR path) must give the same
 // iterates, evidence and covariances: the permutation is bookkeeping only.
 TEST(SolverTest, EveryOrderingGivesTheSameSolutionEvidenceAndCovariance) {
@@ -401,6 +436,53 @@ TEST(SolverTest, ReportsProblemsInTheSummaryInsteadOfThrowing) {
   const SolveResult too_wide = solver.Solve(&wide);
   EXPECT_EQ(too_wide.summary.termination, TerminationType::kFailure);
   EXPECT_NE(too_wide.summary.message.find("more than 255 entries"), std::string::npos);
+}
+
+// A failed solve leaves nothing of the solve before it: covariances and
+// samples are refused until a solve succeeds again (then they are its own).
+TEST(SolverTest, AFailedSolveLeavesNoCovariancesOfTheSolveBefore) {
+  SparseSolver solver;
+  FactorGraph good;
+  const int x = good.AddVariable(Eigen::VectorXd::Zero(1));
+  AddReading(&good, x, 1.0, 0.5);
+  AddReading(&good, x, 2.0, 0.5);
+  ASSERT_TRUE(solver.Solve(&good).summary.IsUsable());
+  std::vector<Eigen::MatrixXd> blocks;
+  ASSERT_TRUE(solver.MarginalCovariances({{x}}, &blocks));
+  EXPECT_NEAR(blocks[0](0, 0), 0.125, 1e-12);  // 1 / (2 / 0.25)
+
+  FactorGraph unconstrained;  // fails in the set-up, before any factorisation
+  const int y = unconstrained.AddVariable(Eigen::VectorXd::Zero(1));
+  unconstrained.AddVariable(Eigen::VectorXd::Zero(2));
+  AddReading(&unconstrained, y, 1.0, 1.0);
+  FactorGraph bad_start;  // fails at the first evaluation
+  const int z = bad_start.AddVariable(Eigen::VectorXd::Constant(1, std::nan("")));
+  AddReading(&bad_start, z, 1.0, 1.0);
+  SolverOptions invalid;
+  invalid.initial_damping = -1;
+  const std::vector<std::function<SolveResult()>> failures = {
+      [&] { return solver.Solve(nullptr); }, [&] { return solver.Solve(&unconstrained); },
+      [&] { return solver.Solve(&bad_start); },
+      [&] {
+        const SolverOptions kept = solver.options();
+        solver.set_options(invalid);
+        const SolveResult result = solver.Solve(&good);
+        solver.set_options(kept);
+        return result;
+      }};
+  for (size_t k = 0; k < failures.size(); ++k) {
+    ASSERT_TRUE(solver.Solve(&good).summary.IsUsable());
+    ASSERT_TRUE(solver.MarginalCovariances({{x}}, &blocks));
+    EXPECT_EQ(failures[k]().summary.termination, TerminationType::kFailure) << k;
+    std::string why;
+    EXPECT_FALSE(solver.MarginalCovariances({{x}}, &blocks, &why)) << k;
+    EXPECT_NE(why.find("no valid final factorisation"), std::string::npos) << k << ": " << why;
+    std::vector<Eigen::MatrixXd> samples;
+    EXPECT_FALSE(solver.CovarianceSamples({{x}}, 4, 1, &samples)) << k;
+  }
+  ASSERT_TRUE(solver.Solve(&good).summary.IsUsable());
+  ASSERT_TRUE(solver.MarginalCovariances({{x}}, &blocks));
+  EXPECT_NEAR(blocks[0](0, 0), 0.125, 1e-12);
 }
 
 TEST(SolverTest, ReusesTheSymbolicAnalysisWhenThePatternFits) {

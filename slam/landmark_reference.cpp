@@ -1,0 +1,92 @@
+#include "slam/landmark_reference.h"
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+#include "core/error.h"
+#include "slam/landmark_factors.h"
+
+namespace oslam {
+
+std::vector<int> JoinDuplicateLandmarks(const LandmarkDataset& data, const std::vector<int>& ids,
+                                        const LandmarkSlamResult& solved, double radius_m,
+                                        int* joined) {
+  if (ids.size() != data.sightings.size())
+    throw Error("joining duplicate landmarks: " + std::to_string(ids.size()) + " ids for " +
+                std::to_string(data.sightings.size()) + " sightings");
+  std::map<int, std::set<int>> scans;  // id -> poses that see it
+  for (size_t k = 0; k < ids.size(); ++k)
+    if (ids[k] >= 0) scans[ids[k]].insert(data.sightings[k].pose);
+  auto share_a_scan = [&](int a, int b) {
+    const std::set<int>& x = scans[a];
+    const std::set<int>& y = scans[b];
+    return std::any_of(x.begin(), x.end(), [&](int pose) { return y.count(pose) > 0; });
+  };
+  std::map<int, int> into;
+  int count = 0;
+  for (size_t a = 0; a < solved.landmarks.size(); ++a)
+    for (size_t b = a + 1; b < solved.landmarks.size(); ++b) {
+      const MappedLandmark& p = solved.landmarks[a];
+      const MappedLandmark& q = solved.landmarks[b];
+      if ((p.position_m - q.position_m).norm() > radius_m || into.count(q.id)) continue;
+      if (share_a_scan(p.id, q.id)) continue;
+      into[q.id] = into.count(p.id) ? into[p.id] : p.id;
+      ++count;
+    }
+  if (joined) *joined = count;
+  std::vector<int> out = ids;
+  for (int& id : out)
+    if (into.count(id)) id = into[id];
+  return out;
+}
+
+std::vector<int> LeaveOutOutlierSightings(const LandmarkDataset& data, std::vector<int> ids,
+                                          const LandmarkSlamOptions& options, double gate,
+                                          LandmarkSlamResult* solved, int* removed, int rounds) {
+  if (!(gate > 0)) throw Error("leaving out outlier sightings: the gate must be > 0");
+  LandmarkSlam slam(options);
+  const std::vector<int> given = ids;
+  LandmarkSlamResult result = slam.Solve(data, ids);
+  for (int round = 0; round < rounds; ++round) {
+    std::map<int, Eigen::Vector2d> where;
+    for (const MappedLandmark& l : result.landmarks) where[l.id] = l.position_m;
+    // Data snooping in batches: a wrong sighting bends the solve, so the
+    // sightings near it look wrong too; only the worst of each landmark,
+    // and only those near the round's worst, go in one round, and a
+    // sighting left out that fits the new solve comes back.
+    std::map<int, std::pair<double, int>> worst;  // id -> (error, sighting)
+    double largest = 0;
+    bool changed = false;
+    for (size_t k = 0; k < ids.size(); ++k) {
+      const auto it = where.find(given[k]);
+      if (given[k] < 0 || it == where.end()) continue;
+      const LandmarkSighting& s = data.sightings[k];
+      const double e2 =
+          SightingSquaredError(s, result.trajectory[s.pose], it->second, data.sensor_offset_m);
+      if (ids[k] < 0) {
+        if (e2 <= gate) ids[k] = given[k];
+        changed |= ids[k] >= 0;
+        continue;
+      }
+      if (!(e2 > gate)) continue;
+      largest = std::max(largest, e2);
+      auto& w = worst[ids[k]];
+      if (e2 > w.first) w = {e2, static_cast<int>(k)};
+    }
+    for (const auto& [id, w] : worst)
+      if (w.first >= 0.25 * largest) {
+        ids[w.second] = -1;
+        changed = true;
+      }
+    if (!changed) break;
+    result = slam.Solve(data, ids);  // not from the bent solve
+  }
+  int count = 0;
+  for (size_t k = 0; k < ids.size(); ++k) count += given[k] >= 0 && ids[k] < 0;
+  if (removed) *removed = count;
+  if (solved) *solved = std::move(result);
+  return ids;
+}
+
+}  // namespace oslam

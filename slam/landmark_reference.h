@@ -1,0 +1,39 @@
+// What an association recovered with the ids hidden is scored against
+// (docs/method.md §16.2, docs/results.md): the file's own association, with
+// its two kinds of front-end error made explicit instead of counted against
+// the search. A file may give one tree two ids (two landmarks solved
+// centimetres apart that no scan sees together), and may tie a sighting to
+// the wrong tree (a sighting its own solve leaves many sigmas off under the
+// calibrated noise). Both are reported beside the plain comparison, never
+// instead of it.
+#pragma once
+
+#include <vector>
+
+#include "slam/landmark_data.h"
+#include "slam/landmark_slam.h"
+
+namespace oslam {
+
+// `ids` with the landmarks of `solved` (a solve of `ids`) that lie within
+// `radius_m` of each other and share no scan given one id (the lower one's).
+// `joined` (if given) receives the number of landmarks joined into another.
+std::vector<int> JoinDuplicateLandmarks(const LandmarkDataset& data, const std::vector<int>& ids,
+                                        const LandmarkSlamResult& solved, double radius_m,
+                                        int* joined = nullptr);
+
+// The sightings of `ids` whose squared whitened error at the solve of `ids`
+// exceeds `gate` (2 degrees of freedom; 25 is the noise calibration's gate)
+// set to -1, re-solved until none exceeds it (at most `rounds` times). Data
+// snooping (Baarda) in batches: each round leaves out only the worst
+// sighting of each landmark, and only those within a factor 4 of the
+// round's worst error, since a wrong sighting bends the solve around it;
+// one left out that fits a later solve is taken back. The
+// solve is returned in `solved` (if given), the sightings left out in
+// `removed` (if given).
+std::vector<int> LeaveOutOutlierSightings(const LandmarkDataset& data, std::vector<int> ids,
+                                          const LandmarkSlamOptions& options, double gate,
+                                          LandmarkSlamResult* solved = nullptr,
+                                          int* removed = nullptr, int rounds = 100);
+
+}  // namespace oslam
