@@ -1,6 +1,7 @@
 // oslam calibrate: intrinsic calibration of a catadioptric camera from a
 // folder of checkerboard images (pipeline/calibration_flow.h,
 // docs/calibration.md).
+#include <cmath>
 #include <cstdio>
 
 #include "apps/arguments.h"
@@ -14,19 +15,20 @@
 namespace oslam {
 namespace {
 
+std::string ParsePattern(const std::string& text, BoardPattern* pattern) {
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &pattern->cols, &x, &pattern->rows, &extra) != 3 ||
+      (x != 'x' && x != 'X') || pattern->cols < 2 || pattern->rows < 2)
+    return " expects COLSxROWS inner corners (e.g. 7x6), got '" + text + "'";
+  return "";
+}
+
 void BindCalibration(CalibrationFlowOptions* o, BoardPattern* pattern, Bindings* b) {
   CalibrationOptions& c = o->calibration;
   b->AddCustom(
       "pattern", "COLSxROWS", "inner corners of the checkerboard, e.g. 7x6",
       [] { return std::string(); },
-      [pattern](const std::string& text) -> std::string {
-        char x = 0, extra = 0;
-        if (std::sscanf(text.c_str(), "%d%c%d%c", &pattern->cols, &x, &pattern->rows, &extra) !=
-                3 ||
-            (x != 'x' && x != 'X') || pattern->cols < 2 || pattern->rows < 2)
-          return " expects COLSxROWS inner corners (e.g. 7x6), got '" + text + "'";
-        return "";
-      });
+      [pattern](const std::string& text) { return ParsePattern(text, pattern); });
   b->Add(&pattern->square_m, "square", "METRES", "side of one square in metres, e.g. 0.03")
       .ShowDefault("")
       .Check([pattern] { return pattern->square_m > 0 && pattern->square_m <= 10; },
@@ -44,6 +46,35 @@ void BindCalibration(CalibrationFlowOptions* o, BoardPattern* pattern, Bindings*
   b->Add(&c.mirror_b_m, "mirror-b", "METRES",
          "hyperbolic: mirror b from a data sheet (default: estimated)")
       .ShowDefault("");
+  b->Add(&o->floor_board_image, "floor-board", "IMAGE",
+         "a picture of the board lying flat on the floor at --board-at:\n"
+         "estimates the mount instead of --focus-height/--mount-yaw")
+      .ShowDefault("");
+  b->AddCustom(
+      "floor-pattern", "COLSxROWS", "the floor board's inner corners (default: --pattern)",
+      [] { return std::string(); },
+      [o](const std::string& text) { return ParsePattern(text, &o->floor_board_pattern); });
+  b->Add(&o->floor_board_pattern.square_m, "floor-square", "METRES",
+         "the floor board's square side (default: --square)")
+      .ShowDefault("")
+      .Check([o] { return o->floor_board_pattern.square_m > 0; }, "expects metres (e.g. 0.06)");
+  b->AddCustom(
+      "board-at", "X,Y[,YAW]",
+      "where the floor board lies (robot frame, metres): its corner grid's\n"
+      "centre and the direction of its rows (rad, default 0 = forward)",
+      [] { return std::string(); },
+      [o](const std::string& text) -> std::string {
+        FloorBoardPlace& place = o->floor_board;
+        char extra = 0;
+        const int n = std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &place.x_m, &place.y_m,
+                                  &place.yaw_rad, &extra);
+        if (n == 2) place.yaw_rad = 0.0;
+        if ((n != 2 && n != 3) || !std::isfinite(place.x_m) || !std::isfinite(place.y_m) ||
+            !std::isfinite(place.yaw_rad) || std::hypot(place.x_m, place.y_m) > 100)
+          return " expects X,Y or X,Y,YAW in metres and radians (e.g. 1.2,0 or 1.2,0,0), got '" +
+                 text + "'";
+        return "";
+      });
   b->Add(&o->report_dir, "report-dir", "DIR", "write one PNG per view (corners and reprojections)");
 }
 
@@ -51,13 +82,15 @@ void BindCalibration(CalibrationFlowOptions* o, BoardPattern* pattern, Bindings*
 
 int RunCalibrateCommand(const std::vector<std::string>& args) {
   Arguments arguments(
-      "oslam calibrate IMAGES_DIR --pattern COLSxROWS --square METRES --focus-height METRES "
-      "--mount-yaw RAD [--model mei|hyperbolic] [--compare-opencv] [--report-dir DIR] "
-      "-o CAMERA.yaml",
+      "oslam calibrate IMAGES_DIR --pattern COLSxROWS --square METRES "
+      "(--focus-height METRES --mount-yaw RAD | --floor-board IMAGE --board-at X,Y[,YAW]) "
+      "[--model mei|hyperbolic] [--compare-opencv] [--report-dir DIR] -o CAMERA.yaml",
       "Calibrates a catadioptric camera from checkerboard images: corners on the raw images,\n"
       "Levenberg-Marquardt over intrinsics and board poses, every found board used, outlier\n"
-      "views reported. Writes camera.yaml (mirror axis vertical at --focus-height, turned by\n"
-      "--mount-yaw: both measured on the robot, not estimated).");
+      "views reported. Writes camera.yaml with the mirror axis vertical at --focus-height,\n"
+      "turned by --mount-yaw (both measured on the robot), or at the height and yaw that a\n"
+      "picture of the board lying on the floor at a known place shows (--floor-board,\n"
+      "--board-at; docs/calibration.md, Mount).");
   arguments.AddPositional("IMAGES_DIR", "folder of checkerboard images (sorted by name)");
   CalibrationFlowOptions options;
   BoardPattern pattern;
@@ -78,15 +111,27 @@ int RunCalibrateCommand(const std::vector<std::string>& args) {
   if (!arguments.Has("pattern")) throw UsageError("missing --pattern COLSxROWS");
   if (!arguments.Has("square")) throw UsageError("missing --square METRES");
   if (!arguments.Has("output")) throw UsageError("missing -o CAMERA.yaml");
-  // The mount is not estimated here: a silent default would look calibrated.
-  if (!arguments.Has("focus-height"))
+  // The mount is measured or estimated from a floor board, never a silent
+  // default that would look calibrated.
+  const bool floor_board = arguments.Has("floor-board") || arguments.Has("board-at");
+  if (floor_board) {
+    if (!arguments.Has("floor-board")) throw UsageError("--board-at needs --floor-board IMAGE");
+    if (!arguments.Has("board-at"))
+      throw UsageError("--floor-board needs --board-at X,Y[,YAW] (where the board lies)");
+    if (arguments.Has("focus-height") || arguments.Has("mount-yaw"))
+      throw UsageError(
+          "give the mount either measured (--focus-height, --mount-yaw) or from a floor board "
+          "(--floor-board, --board-at), not both");
+  } else if (!arguments.Has("focus-height"))
     throw UsageError(
         "missing --focus-height METRES (the mirror viewpoint's height above the floor is not "
-        "estimated from boards: measure it on the robot)");
-  if (!arguments.Has("mount-yaw"))
+        "estimated from boards held around the mirror: measure it on the robot, or give "
+        "--floor-board and --board-at)");
+  if (!floor_board && !arguments.Has("mount-yaw"))
     throw UsageError(
         "missing --mount-yaw RAD (the image direction of the robot's forward axis is not "
-        "estimated from boards: measure it, docs/calibration.md)");
+        "estimated from boards held around the mirror: measure it, or give --floor-board and "
+        "--board-at; docs/calibration.md)");
   bindings.Apply(arguments);
   flags.Apply(arguments);
   std::string why;

@@ -10,6 +10,8 @@ const std::vector<Command>& Commands() {
       {"calibrate", "calibrate a catadioptric camera from checkerboard images",
        RunCalibrateCommand},
       {"train-colors", "learn class colour models from example regions", RunTrainColorsCommand},
+      {"mask", "find the pixels that show the robot itself (body, mirror rods) in a recording",
+       RunMaskCommand},
       {"detect", "detect objects by colour in every frame of a run", RunDetectCommand},
       {"eval-detect", "score a run's detections against its ground truth", RunEvalDetectCommand},
       {"eval", "score an O-Map against a run's ground truth", RunEvalCommand},

@@ -22,6 +22,7 @@ int RunConfigCommand(const std::vector<std::string>& args);
 int RunRunCommand(const std::vector<std::string>& args);
 int RunCalibrateCommand(const std::vector<std::string>& args);
 int RunDetectCommand(const std::vector<std::string>& args);
+int RunMaskCommand(const std::vector<std::string>& args);
 int RunEvalDetectCommand(const std::vector<std::string>& args);
 int RunEvalCommand(const std::vector<std::string>& args);
 int RunMapCommand(const std::vector<std::string>& args);  // apps/map_modes.h

@@ -59,6 +59,12 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
   arguments.AddOption("odometry-offset", "", "S",
                       "with --odometry-rate: the odometry clock is S seconds ahead of the video's",
                       "0");
+  arguments.AddFlag("realistic",
+                    "frames as a real rig records them: the robot's body and mirror rods in the\n"
+                    "image, motion blur, auto-exposure, vignetting, JPEG compression (seeded;\n"
+                    "the rig's true mask in RUN_DIR/ground_truth/mask.png)");
+  arguments.AddOption("jpeg-quality", "", "Q",
+                      "with --realistic: JPEG quality of every frame, 1-100 (0 = none)", "60");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
   if (!arguments.Has("output")) throw UsageError("missing -o RUN_DIR");
@@ -91,6 +97,13 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
       throw UsageError("--odometry-offset expects seconds");
   } else if (arguments.Has("odometry-offset")) {
     throw UsageError("--odometry-offset needs --odometry-rate HZ");
+  }
+  options.realism.enabled = arguments.Flag("realistic");
+  if (arguments.Has("jpeg-quality")) {
+    if (!options.realism.enabled) throw UsageError("--jpeg-quality needs --realistic");
+    const long quality = arguments.GetInt("jpeg-quality");
+    if (quality < 0 || quality > 100) throw UsageError("--jpeg-quality expects 0..100");
+    options.realism.jpeg_quality = static_cast<int>(quality);
   }
   CheckOutputFolder(run_dir);
   const bool quiet = arguments.Flag("quiet");

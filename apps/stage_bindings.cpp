@@ -55,6 +55,13 @@ void BindDetectOptions(DetectStageOptions* o, Bindings* b) {
       .Check([o] { return o->threads >= 0; }, "must be >= 0");
   b->AddFlag(&o->skip_bad_frames, "skip-bad-frames", "warn about unreadable frames and go on")
       .Key("skip_bad_frames", "1: warn about unreadable frames and go on instead of stopping");
+  b->Add(&o->mask, "mask", "FILE",
+         "static mask image (0 = ignore: robot body, mirror rods); default RUN/mask.png when "
+         "present, 'none' = no mask")
+      .Key("mask",
+           "static mask image, black = ignored (robot body, mirror rods); empty = RUN/mask.png "
+           "when present; none = no mask")
+      .ShowDefault("");
 }
 
 void BindExportOptions(ExportStageOptions* o, Bindings* b) {
@@ -101,6 +108,10 @@ void BindFrameOptions(FrameSelectionOptions* o, Bindings* b) {
            "keep a frame once the robot moved this far since the last kept one, m (or turned)");
   b->Add(&o->min_turn_rad, "", "RAD", "... or turned this much")
       .Key("min_turn_rad", "... or turned this much, rad (0.1745 = 10 deg)");
+  b->Add(&o->step_tolerance, "", "F", "a step of (1 - F) x the distance or turn counts as reached")
+      .Key("step_tolerance",
+           "a step of at least (1 - this) x min_distance_m or min_turn_rad counts as reached "
+           "(stop-and-go steps of exactly 0.2 m log a little less)");
   b->Add(&o->stride, "", "N", "keep every N-th frame instead (0: by distance and turn)")
       .Key("stride", "> 0: keep every N-th frame in the odometry's span instead; 1 = all");
 }

@@ -60,6 +60,8 @@ bool FrameSelectionOptions::Validate(std::string* why) const {
     return fail("frames.min_distance_m must be >= 0");
   if (!(min_turn_rad >= 0) || !std::isfinite(min_turn_rad))
     return fail("frames.min_turn_rad must be >= 0");
+  if (!(step_tolerance >= 0 && step_tolerance < 1))
+    return fail("frames.step_tolerance must be in [0, 1)");
   if (stride < 0) return fail("frames.stride must be >= 0 (0: by distance and turn)");
   return true;
 }
@@ -97,8 +99,9 @@ FrameSelection SelectFrames(const TimedOdometry& odometry, const std::vector<dou
       keep = in_span % options.stride == 0;
     } else if (!keep) {
       const Pose2& last = selection.poses.back();
-      keep = std::hypot(pose.x - last.x, pose.y - last.y) >= options.min_distance_m ||
-             std::abs(WrapAngle(pose.theta - last.theta)) >= options.min_turn_rad;
+      const double reach = 1.0 - options.step_tolerance;
+      keep = std::hypot(pose.x - last.x, pose.y - last.y) >= reach * options.min_distance_m ||
+             std::abs(WrapAngle(pose.theta - last.theta)) >= reach * options.min_turn_rad;
     }
     ++in_span;
     if (!keep) {

@@ -30,6 +30,11 @@ struct FrameSelectionOptions {
   // images: one every few decimetres); the first frame in the span is kept.
   double min_distance_m = 0.2;
   double min_turn_rad = 0.17453292519943295;  // 10°
+  // A step counts as reaching the distance or turn when it is at least
+  // (1 - step_tolerance) of it: a stop-and-go robot commanded 0.2 m steps
+  // logs steps of 0.2 m give or take rounding (0.19999... after integration
+  // and interpolation) and encoder ticks, which a strict >= would drop.
+  double step_tolerance = 0.05;
   // > 0: keep every stride-th frame in the span instead (1: all).
   long stride = 0;
 

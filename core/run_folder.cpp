@@ -699,7 +699,8 @@ RunFolderPaths RunFolderPaths::Of(const std::string& run_or_video) {
           (dir / "odometry.csv").string(),
           (dir / "ground_truth").string(),
           (dir / "detections.csv").string(),
-          video};
+          video,
+          (dir / "mask.png").string()};
 }
 
 }  // namespace oslam

@@ -208,6 +208,7 @@ BoundingSlice SliceAtRow(const CsvTable& table, size_t row);
 // it (then `video` is that file and `dir` its folder).
 struct RunFolderPaths {
   std::string dir, camera, classes, odometry, ground_truth, detections, video;
+  std::string mask;  // RUN/mask.png: the static mask (docs/formats.md), optional
   static RunFolderPaths Of(const std::string& run_or_video);
 };
 

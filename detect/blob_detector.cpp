@@ -43,7 +43,7 @@ bool BlobDetectorOptions::Validate(std::string* why) const {
 }
 
 BlobDetector::BlobDetector(const CameraModel& camera, const std::vector<ObjectClass>& classes,
-                           const BlobDetectorOptions& options)
+                           const BlobDetectorOptions& options, const cv::Mat& static_mask)
     : classes_(classes),
       options_(options),
       camera_(camera.Clone()),
@@ -62,6 +62,11 @@ BlobDetector::BlobDetector(const CameraModel& camera, const std::vector<ObjectCl
       angle_rad_.at<float>(y, x) = static_cast<float>(polar.angle_rad);
       mask_.at<uint8_t>(y, x) = (!options.annulus_only || camera.IsInAnnulus(pixel)) ? 255 : 0;
     }
+  }
+  if (!static_mask.empty()) {
+    if (static_mask.size() != mask_.size() || static_mask.type() != CV_8UC1)
+      throw Error("blob detector: the static mask is not an 8-bit image of the camera's size");
+    mask_.setTo(0, static_mask == 0);
   }
 }
 

@@ -89,8 +89,10 @@ class BlobDetector {
  public:
   // Keeps a copy of what it needs from the camera (polar coordinates of every
   // pixel, the annulus mask); throws oslam::Error on invalid options.
+  // `static_mask` (CV_8U, image size, 0 = ignored; empty = none) removes the
+  // rig's own pixels (detect/static_mask.h) from the annulus.
   BlobDetector(const CameraModel& camera, const std::vector<ObjectClass>& classes,
-               const BlobDetectorOptions& options = {});
+               const BlobDetectorOptions& options = {}, const cv::Mat& static_mask = cv::Mat());
 
   // Detections in a BGR frame of the camera's image size.
   std::vector<Detection> Detect(const cv::Mat& bgr, long frame) const;

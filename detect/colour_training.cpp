@@ -16,6 +16,7 @@
 #include "core/image_file.h"
 #include "core/yaml.h"
 #include "detect/colour_classifier.h"
+#include "detect/static_mask.h"
 
 namespace oslam {
 namespace fs = std::filesystem;
@@ -151,6 +152,10 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
   if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder to learn colours from");
   const std::unique_ptr<CameraModel> camera = LoadCamera(paths.camera);
   const FrameSource frames(run_dir);
+  // The rig's pixels (RUN/mask.png, detect/static_mask.h) are no object's.
+  cv::Mat rig_mask;
+  if (std::filesystem::exists(paths.mask))
+    rig_mask = ReadStaticMask(paths.mask, camera->image_width(), camera->image_height());
   std::vector<ColourExample> examples;
   for (const ObjectClass& object_class : classes) {
     std::vector<const GroundTruthSighting*> candidates;
@@ -181,6 +186,7 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
         cv::Mat mask = CentralSliceMask(*camera, *s);
         const cv::Mat frame = frames.Read(static_cast<size_t>(s->frame));
         KeepPixelsNearDisplayHue(frame, object_class, DegToRad(25.0), &mask);
+        if (!rig_mask.empty()) mask.setTo(0, rig_mask == 0);
         if (cv::countNonZero(mask) < 8) continue;  // mostly beyond the rim or another colour
         ColourExample example;
         example.image_path = frames.Name(static_cast<size_t>(s->frame));

@@ -150,6 +150,44 @@ void CompareWithOpenCv(const Views& input, const BoardPattern& pattern,
       print("cv::omnidir dropped view " + views[v].name);
 }
 
+// The camera remounted at the height and yaw the floor board shows.
+std::unique_ptr<CameraModel> MountFromFloorBoard(const CameraModel& camera,
+                                                 const BoardPattern& boards,
+                                                 const CalibrationFlowOptions& flow,
+                                                 const StageOutput& output) {
+  BoardPattern pattern = boards;
+  if (flow.floor_board_pattern.cols > 0) {
+    pattern.cols = flow.floor_board_pattern.cols;
+    pattern.rows = flow.floor_board_pattern.rows;
+  }
+  if (flow.floor_board_pattern.square_m > 0) pattern.square_m = flow.floor_board_pattern.square_m;
+  const cv::Mat image = ReadImage(flow.floor_board_image, ImageColour::kGray);
+  if (image.cols != camera.image_width() || image.rows != camera.image_height())
+    throw Error::InFile(flow.floor_board_image, "image is " + std::to_string(image.cols) + "x" +
+                                                    std::to_string(image.rows) + ", the boards " +
+                                                    std::to_string(camera.image_width()) + "x" +
+                                                    std::to_string(camera.image_height()));
+  Corners corners;
+  if (!DetectBoardCorners(image, pattern, CornerDetectionOptions(), &corners))
+    throw Error::InFile(flow.floor_board_image,
+                        "no " + std::to_string(pattern.cols) + "x" + std::to_string(pattern.rows) +
+                            " checkerboard found (the whole board must be visible)");
+  MountEstimate mount;
+  try {
+    mount = EstimateMountFromFloorBoard(camera, corners, pattern, flow.floor_board);
+  } catch (const Error& e) {
+    throw Error::InFile(flow.floor_board_image, e.what());
+  }
+  std::unique_ptr<CameraModel> mounted =
+      WithMount(camera, mount.focus_height_m, mount.yaw_change_rad, mount.mirrored);
+  output.Print(
+      Format("mount: focus height %.4f m, yaw %.4f rad from the floor board (%d corners, "
+             "RMS %.1f mm on the floor, %.2f px in the image)",
+             mount.focus_height_m, mount.yaw_change_rad, mount.corners, 1000.0 * mount.floor_rms_m,
+             mount.image_rms_px));
+  return mounted;
+}
+
 }  // namespace
 
 CalibrationResult CalibrateFromImages(const std::string& images_dir, const BoardPattern& pattern,
@@ -159,6 +197,11 @@ CalibrationResult CalibrateFromImages(const std::string& images_dir, const Board
   if (!flow.Validate(&why)) throw Error("calibration: " + why);
   if (!flow.report_dir.empty()) fs::create_directories(flow.report_dir);
   CalibrationOptions options = flow.calibration;
+  if (!flow.floor_board_image.empty()) {
+    // Calibrated unmounted (1 m, yaw 0); the floor board sets the mount.
+    options.focus_height_m = 1.0;
+    options.mount_yaw_rad = 0.0;
+  }
 
   const Views input = DetectCorners(images_dir, pattern, flow.refine_with_corner_subpix, output);
 
@@ -196,6 +239,8 @@ CalibrationResult CalibrateFromImages(const std::string& images_dir, const Board
          std::max(annulus.blind_radius_px + shift + 1.0, annulus.rim_radius_px - shift)});
   }
   ReportResult(result, input.seconds, output);
+  if (!flow.floor_board_image.empty())
+    result.camera = MountFromFloorBoard(*result.camera, pattern, flow, output);
   if (flow.compare_opencv) CompareWithOpenCv(input, pattern, options, result, output);
 
   if (!flow.report_dir.empty()) {

@@ -18,6 +18,7 @@
 #include "core/run_folder.h"
 #include "core/text.h"
 #include "detect/sift_verifier.h"
+#include "detect/static_mask.h"
 
 namespace oslam {
 namespace {
@@ -72,6 +73,18 @@ FrameResult DetectInFrame(const FrameSource& frames, size_t i, const CameraModel
   return result;
 }
 
+// The static mask the options name (or the run's mask.png); empty for none.
+cv::Mat LoadMask(const std::string& option, const RunFolderPaths& paths, const CameraModel& camera,
+                 const StageOutput& output) {
+  if (option == "none") return cv::Mat();
+  const std::string path = option.empty() ? paths.mask : option;
+  if (option.empty() && !std::filesystem::exists(path)) return cv::Mat();
+  const cv::Mat mask = ReadStaticMask(path, camera.image_width(), camera.image_height());
+  output.Print(Format("mask: %s ignores %.1f %% of the image", path.c_str(),
+                      100.0 * (1.0 - cv::countNonZero(mask) / static_cast<double>(mask.total()))));
+  return mask;
+}
+
 }  // namespace
 
 bool DetectStageOptions::Validate(std::string* why) const {
@@ -95,7 +108,8 @@ DetectStageResult RunDetectStage(const std::string& run_dir, const std::string& 
                    [](const auto& c) { return c.colour.has_value(); }))
     throw Error::InFile(paths.classes,
                         "no class has a colour model (run 'oslam train-colors' first)");
-  const BlobDetector detector(*camera, classes, options.detector);
+  const cv::Mat mask = LoadMask(options.mask, paths, *camera, output);
+  const BlobDetector detector(*camera, classes, options.detector, mask);
   std::optional<SiftVerifier> verifier;
   if (!options.sift_templates.empty())
     verifier.emplace(ReadSiftTemplates(options.sift_templates, classes));

@@ -16,6 +16,9 @@ struct DetectStageOptions {
   int threads = 2;               // frames decoded and searched at once, 0 = one per core
   bool skip_bad_frames = false;  // warn about unreadable frames and go on
   std::string debug_images_dir;  // "" = none; else each frame with its slices drawn
+  // Static mask image (detect/static_mask.h: 0 = ignored): "" = RUN/mask.png
+  // when the run has one, "none" = no mask, else this file.
+  std::string mask;
 
   bool Validate(std::string* why) const;
 };

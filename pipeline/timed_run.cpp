@@ -94,6 +94,8 @@ TimedRunResult PrepareTimedRun(const std::string& run_or_video, const std::strin
 
   for (const std::string* file : {&paths.camera, &paths.classes})
     WriteTextFileAtomically((dir / fs::path(*file).filename()).string(), ReadTextFile(*file));
+  if (fs::exists(paths.mask))  // the static mask applies to the kept frames as well
+    WriteTextFileAtomically((dir / "mask.png").string(), ReadTextFile(paths.mask));
   if (const auto truth = ReadGroundTruth(run_or_video))
     WriteGroundTruth(KeptGroundTruth(*truth, selection, paths.ground_truth), out_run_dir);
   WriteFrameTable(selection, out_run_dir);

@@ -18,8 +18,8 @@ struct TimedRunResult {
 
 // Writes `out_run_dir` (created; must not hold a run): frames/ (the kept
 // frames as PNG), odometry.csv (one pose per kept frame), frame_times.csv,
-// frames.csv (kept frame -> source frame, time, pose), camera.yaml and
-// classes.yaml (copied) and, when the source has ground truth, its
+// frames.csv (kept frame -> source frame, time, pose), camera.yaml,
+// classes.yaml and mask.png when present (copied) and, when the source has ground truth, its
 // trajectory and sightings of the kept frames. Throws oslam::Error naming the
 // file when the frames have no times or the odometry is not by time.
 TimedRunResult PrepareTimedRun(const std::string& run_or_video, const std::string& out_run_dir,

@@ -15,6 +15,7 @@
 
 #include "calib/camera_io.h"
 #include "calib/observation_model.h"
+#include "core/angles.h"
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
@@ -198,6 +199,13 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
   // do not depend on the timing.
   std::future<void> pending_write;
   std::optional<VideoOutput> video_output;
+  std::mt19937_64 effects_rng = StreamFor(options.seed, 3);
+  std::optional<CameraEffects> effects;
+  if (options.realism.enabled) {
+    effects.emplace(*scene.camera, options.realism, effects_rng);
+    fs::create_directories(fs::path(run_dir) / "ground_truth");
+    WriteImage((fs::path(run_dir) / "ground_truth" / "mask.png").string(), effects->rig_mask());
+  }
   if (video)
     video_output.emplace(run_dir, options.video_frame_rate_hz,
                          cv::Size(scene.camera->image_width(), scene.camera->image_height()));
@@ -210,6 +218,12 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
     renderer.Render(path.true_poses[frame], conditions, &render);
     AddSightings(scene, renderer, path.true_poses[frame], frame, render, truth.objects,
                  &truth.sightings, &visible_rows);
+    if (effects)
+      effects->Apply(
+          &render.image,
+          frame > 0 ? WrapAngle(path.true_poses[frame].theta - path.true_poses[frame - 1].theta)
+                    : 0.0,
+          scene.sensor.noise_std, effects_rng);
     summary.render_seconds += SecondsSince(frame_start);
     if (pending_write.valid()) pending_write.get();  // rethrows a failed write
     if (video_output)

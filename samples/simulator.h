@@ -7,6 +7,7 @@
 #include <functional>
 #include <string>
 
+#include "samples/camera_effects.h"
 #include "samples/scene.h"
 
 namespace oslam {
@@ -24,6 +25,11 @@ struct SimulationOptions {
   // per-frame odometry poses interpolated in SE(2) at the rows' times.
   double odometry_rate_hz = 0.0;
   double odometry_offset_s = 0.0;
+  // realism.enabled: the frames as a real rig records them (the robot's body
+  // and mirror rods, motion blur, auto-exposure, vignetting, JPEG;
+  // samples/camera_effects.h), with the rig's true mask in
+  // ground_truth/mask.png. Off by default: the ideal renders.
+  RealismOptions realism;
   // Called with one line per stage and, during rendering, with progress
   // updates (final = true for the stage's last line).
   std::function<void(const std::string& line, bool final)> progress;

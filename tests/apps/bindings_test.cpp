@@ -162,6 +162,8 @@ std::vector<KeyCase> Cases() {
       {"frames.min_distance_m", "0.5", [](O o) { return o.frames.min_distance_m == 0.5; }},
       {"frames.min_turn_rad", "0.3", [](O o) { return o.frames.min_turn_rad == 0.3; }},
       {"frames.stride", "3", [](O o) { return o.frames.stride == 3; }},
+      {"frames.step_tolerance", "0.1", [](O o) { return o.frames.step_tolerance == 0.1; }},
+      {"detect.mask", "m.png", [](O o) { return o.detect.mask == "m.png"; }},
   };
 }
 

@@ -9,6 +9,7 @@
 
 #include "core/angles.h"
 #include "core/error.h"
+#include "core/motion_model.h"
 
 namespace oslam {
 namespace {
@@ -121,7 +122,8 @@ TEST(OdometrySync, FramesAreKeptByDistanceOrTurn) {
   }
   std::vector<double> frame_times;
   for (int i = 0; i <= 240; ++i) frame_times.push_back(i / 30.0);
-  const FrameSelectionOptions options;  // 0.2 m or 10°
+  FrameSelectionOptions options;  // 0.2 m or 10°
+  options.step_tolerance = 0.0;   // strict: this test checks the thresholds themselves
   const FrameSelection selection = SelectFrames(odometry, frame_times, options);
   // 2 m straight: a frame every 0.2 m (the first frame past each 0.2 m step);
   // 2 rad on the spot: a frame every 10°.
@@ -144,6 +146,56 @@ TEST(OdometrySync, FramesAreKeptByDistanceOrTurn) {
   EXPECT_GE(by_turn, 10);
   EXPECT_LE(by_turn, 11);
   EXPECT_EQ(selection.frames.size() + selection.thinned, 241u);
+}
+
+// A stop-and-go robot like the thesis': steps of exactly 0.2 m or 10°, the
+// odometry integrated from the commanded increments and logged at each stop
+// on a clock 0.3 s ahead, one frame per stop. Integration leaves about half
+// of the steps a hair short of 0.2 m (0.19999...), which a strict threshold
+// dropped; with the default tolerance every stop is kept, and steps clearly
+// shorter are still thinned.
+TimedOdometry StopAndGo(double step_m, double turn_rad, int stops, double frame_period_s) {
+  TimedOdometry odometry;
+  Pose2 pose{-1.8, -1.8, 0.0};
+  for (int k = 0; k < stops; ++k) {
+    if (k > 0) {
+      const bool turn = k % 5 == 4;  // four steps forward, one turn
+      pose = ApplyIncrement(pose, {turn ? 0.0 : step_m, turn ? turn_rad : 0.0});
+    }
+    odometry.stamps_s.push_back(k * frame_period_s + 0.3);
+    odometry.poses.push_back(pose);
+  }
+  return odometry;
+}
+
+TEST(OdometrySync, StopAndGoStepsOfExactlyTheThresholdAreAllKept) {
+  const double period = 1.0 / 30.0;
+  const int stops = 200;
+  std::vector<double> frame_times;
+  for (int i = 0; i < stops; ++i) frame_times.push_back(i * period);
+  FrameSelectionOptions options;  // 0.2 m or 10°, default tolerance
+  options.time_offset_s = 0.3;
+  const TimedOdometry exact = StopAndGo(0.2, DegToRad(10.0), stops, period);
+  const FrameSelection kept = SelectFrames(exact, frame_times, options);
+  EXPECT_EQ(kept.frames.size(), static_cast<size_t>(stops)) << kept.Summary();
+  EXPECT_EQ(kept.thinned, 0);
+  // Steps a little short of the threshold, as encoders log them: kept too.
+  const TimedOdometry short_steps = StopAndGo(0.197, DegToRad(9.8), stops, period);
+  EXPECT_EQ(SelectFrames(short_steps, frame_times, options).frames.size(),
+            static_cast<size_t>(stops));
+  // Half-size steps are no stops of the selection: of every five stops (four
+  // half steps and a half turn) two are kept, where two half steps add up to
+  // the distance.
+  const FrameSelection halves =
+      SelectFrames(StopAndGo(0.1, DegToRad(5.0), stops, period), frame_times, options);
+  EXPECT_EQ(halves.frames.size(), static_cast<size_t>(2 * stops / 5));
+  // Strict thresholds (no tolerance) show the rounding this guards against.
+  options.step_tolerance = 0.0;
+  EXPECT_LT(SelectFrames(exact, frame_times, options).frames.size(), static_cast<size_t>(stops));
+  options.step_tolerance = 1.0;
+  std::string why;
+  EXPECT_FALSE(options.Validate(&why));
+  EXPECT_NE(why.find("frames.step_tolerance"), std::string::npos) << why;
 }
 
 }  // namespace

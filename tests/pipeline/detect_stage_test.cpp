@@ -9,7 +9,11 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/core.hpp>
+
+#include "calib/camera_io.h"
 #include "core/error.h"
+#include "core/image_file.h"
 #include "simulated_run.h"
 
 namespace oslam {
@@ -70,6 +74,50 @@ TEST(DetectStage, UnreadableFrameIsNamedUnlessSkipped) {
   EXPECT_EQ(result.skipped_frames, 1u);
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_EQ(warnings[0].rfind("skipping frame 4: ", 0), 0u) << warnings[0];
+}
+
+// RUN/mask.png: black pixels are not searched. Masking the image's left half
+// leaves only detections whose every pixel is on the right; a mask of
+// another size is named; detect.mask=none ignores it.
+TEST(DetectStage, MaskedPixelsAreNotSearched) {
+  const std::string run = testing::SimulatedRun();
+  ASSERT_FALSE(run.empty());
+  testing::TempDir dir;
+  const std::string masked = testing::CopyOfRun(run, dir.Path("masked"));
+  const std::unique_ptr<CameraModel> camera = LoadCamera(masked + "/camera.yaml");
+  const int width = camera->image_width(), height = camera->image_height();
+  const DetectStageResult all = RunDetectStage(masked, dir.Path("all.csv"), {}, {});
+  cv::Mat mask(height, width, CV_8UC1, cv::Scalar(255));
+  mask(cv::Rect(0, 0, width / 2, height)).setTo(0);
+  WriteImage(masked + "/mask.png", mask);
+  std::vector<std::string> printed;
+  StageOutput output;
+  output.print = [&](const std::string& line) { printed.push_back(line); };
+  const DetectStageResult right = RunDetectStage(masked, dir.Path("right.csv"), {}, output);
+  ASSERT_FALSE(printed.empty());
+  EXPECT_NE(printed[0].find("mask.png ignores 50.0 % of the image"), std::string::npos)
+      << printed[0];
+  EXPECT_GT(right.detections.size(), 0u);
+  EXPECT_LT(right.detections.size(), all.detections.size());
+  for (const Detection& d : right.detections) {
+    // Every pixel of the blob lies right of the middle: so do the slice's
+    // corners (its outline).
+    for (const cv::Point& p : SliceOutline(*camera, d.slice))
+      EXPECT_GE(p.x, width / 2 - 1) << d.frame << " " << d.class_name;
+  }
+  DetectStageOptions none;
+  none.mask = "none";
+  EXPECT_EQ(RunDetectStage(masked, dir.Path("none.csv"), none, {}).detections.size(),
+            all.detections.size());
+
+  WriteImage(masked + "/mask.png", cv::Mat(height / 2, width / 2, CV_8UC1, cv::Scalar(255)));
+  try {
+    RunDetectStage(masked, dir.Path("never.csv"), {}, {});
+    ADD_FAILURE() << "a mask of the wrong size passed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("mask.png: mask is"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.Path("never.csv")));
 }
 
 }  // namespace
