@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include <cholmod.h>
@@ -55,12 +56,16 @@ double LogDetOfFactor(const cholmod_factor* factor) {
   return log_det;
 }
 
-bool CovarianceBlocks(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
-                      cholmod_common* cc, const std::vector<std::vector<int>>& columns,
-                      std::vector<Eigen::MatrixXd>* blocks, std::string* why) {
+namespace {
+
+// Solves with the factor (`system`: CHOLMOD_A or CHOLMOD_L) for the unit
+// columns of every group, kCovarianceBatch columns per solve, and hands each
+// group the n x size slice of the solution that belongs to it.
+bool SolveUnitColumnsInBatches(
+    cholmod_factor* factor, const std::vector<int>& inverse_permutation, cholmod_common* cc,
+    const std::vector<std::vector<int>>& columns, int system,
+    const std::function<void(size_t group, const double* solution)>& take, std::string* why) {
   const int n = static_cast<int>(factor->n);
-  blocks->assign(columns.size(), Eigen::MatrixXd());
-  // Solve H X = E for batches of unit columns; pick the groups' rows.
   size_t g = 0;
   while (g < columns.size()) {
     size_t end = g;
@@ -74,11 +79,7 @@ bool CovarianceBlocks(cholmod_factor* factor, const std::vector<int>& inverse_pe
     for (size_t h = g; h < end; ++h)
       for (int column : columns[h])
         ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = 1.0;
-    // With H = L L' (the permuted matrix is factored in its natural order),
-    // H^-1 = L^-T L^-1, so a block is Y' Y with Y = L^-1 E: a forward solve
-    // only, half the work of solving with H. An LDL' factor solves with H.
-    const bool forward_only = factor->is_ll;
-    cholmod_dense* x = cholmod_solve(forward_only ? CHOLMOD_L : CHOLMOD_A, factor, unit, cc);
+    cholmod_dense* x = cholmod_solve(system, factor, unit, cc);
     cholmod_free_dense(&unit, cc);
     if (!x) {
       if (why) *why = "CHOLMOD solve failed";
@@ -87,24 +88,42 @@ bool CovarianceBlocks(cholmod_factor* factor, const std::vector<int>& inverse_pe
     const auto* xx = static_cast<const double*>(x->x);
     c = 0;
     for (size_t h = g; h < end; ++h) {
-      const int size = static_cast<int>(columns[h].size());
-      Eigen::MatrixXd& block = (*blocks)[h];
-      if (forward_only) {
-        const Eigen::Map<const Eigen::MatrixXd> y(xx + static_cast<size_t>(c) * n, n, size);
-        block = y.transpose() * y;
-      } else {
-        block.resize(size, size);
-        for (int q = 0; q < size; ++q)
-          for (int r = 0; r < size; ++r)
-            block(r, q) = xx[static_cast<size_t>(c + q) * n + inverse_permutation[columns[h][r]]];
-        block = 0.5 * (block + block.transpose()).eval();
-      }
-      c += size;
+      take(h, xx + static_cast<size_t>(c) * n);
+      c += static_cast<int>(columns[h].size());
     }
     cholmod_free_dense(&x, cc);
     g = end;
   }
   return true;
+}
+
+}  // namespace
+
+bool CovarianceBlocks(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
+                      cholmod_common* cc, const std::vector<std::vector<int>>& columns,
+                      std::vector<Eigen::MatrixXd>* blocks, std::string* why) {
+  const int n = static_cast<int>(factor->n);
+  blocks->assign(columns.size(), Eigen::MatrixXd());
+  // With H = L L' (the permuted matrix is factored in its natural order),
+  // H^-1 = L^-T L^-1, so a block is Y' Y with Y = L^-1 E: a forward solve
+  // only, half the work of solving with H. An LDL' factor solves with H.
+  const bool forward_only = factor->is_ll;
+  const auto take_block = [&](size_t h, const double* solution) {
+    const int size = static_cast<int>(columns[h].size());
+    Eigen::MatrixXd& block = (*blocks)[h];
+    if (forward_only) {
+      const Eigen::Map<const Eigen::MatrixXd> y(solution, n, size);
+      block = y.transpose() * y;
+      return;
+    }
+    block.resize(size, size);
+    for (int q = 0; q < size; ++q)
+      for (int r = 0; r < size; ++r)
+        block(r, q) = solution[static_cast<size_t>(q) * n + inverse_permutation[columns[h][r]]];
+    block = 0.5 * (block + block.transpose()).eval();
+  };
+  return SolveUnitColumnsInBatches(factor, inverse_permutation, cc, columns,
+                                   forward_only ? CHOLMOD_L : CHOLMOD_A, take_block, why);
 }
 
 bool CovarianceRoots(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
@@ -120,39 +139,14 @@ bool CovarianceRoots(cholmod_factor* factor, const std::vector<int>& inverse_per
   const auto* fx = static_cast<const double*>(factor->x);
   const auto* fp = static_cast<const int*>(factor->p);
   roots->assign(columns.size(), Eigen::MatrixXd());
-  size_t g = 0;
-  while (g < columns.size()) {  // batches of unit columns, one forward solve each
-    size_t end = g;
-    int width = 0;
-    while (end < columns.size() &&
-           (width == 0 || width + static_cast<int>(columns[end].size()) <= kCovarianceBatch))
-      width += static_cast<int>(columns[end++].size());
-    cholmod_dense* unit = cholmod_zeros(n, width, CHOLMOD_REAL, cc);
-    auto* ux = static_cast<double*>(unit->x);
-    int c = 0;
-    for (size_t h = g; h < end; ++h)
-      for (int column : columns[h])
-        ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = 1.0;
-    cholmod_dense* x = cholmod_solve(CHOLMOD_L, factor, unit, cc);
-    cholmod_free_dense(&unit, cc);
-    if (!x) {
-      if (why) *why = "CHOLMOD solve failed";
-      return false;
-    }
-    const auto* xx = static_cast<const double*>(x->x);
-    c = 0;
-    for (size_t h = g; h < end; ++h) {
-      const int size = static_cast<int>(columns[h].size());
-      Eigen::MatrixXd& root = (*roots)[h];
-      root = Eigen::Map<const Eigen::MatrixXd>(xx + static_cast<size_t>(c) * n, n, size);
-      if (!factor->is_ll)
-        for (int i = 0; i < n; ++i) root.row(i) /= std::sqrt(std::abs(fx[fp[i]]));
-      c += size;
-    }
-    cholmod_free_dense(&x, cc);
-    g = end;
-  }
-  return true;
+  const auto take_root = [&](size_t h, const double* solution) {
+    Eigen::MatrixXd& root = (*roots)[h];
+    root = Eigen::Map<const Eigen::MatrixXd>(solution, n, static_cast<int>(columns[h].size()));
+    if (!factor->is_ll)
+      for (int i = 0; i < n; ++i) root.row(i) /= std::sqrt(std::abs(fx[fp[i]]));
+  };
+  return SolveUnitColumnsInBatches(factor, inverse_permutation, cc, columns, CHOLMOD_L, take_root,
+                                   why);
 }
 
 bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
