@@ -207,17 +207,17 @@ double LocationVarianceWithout(const Matrix5d& covariance, const Vector5d& remov
   // semi-definite matrix and is marginalised by the pseudo-inverse; a
   // direction mixing range and size (one sighting) leaves the complement
   // singular, and the variance infinite (§7.2 guard).
-  const double largest = Eigen::SelfAdjointEigenSolver<Matrix5d>(information).eigenvalues().maxCoeff();
+  const double largest =
+      Eigen::SelfAdjointEigenSolver<Matrix5d>(information).eigenvalues().maxCoeff();
   const double tiny = 1e-12 * largest;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> size(information.bottomRightCorner<2, 2>());
   Eigen::Vector2d size_inverse = Eigen::Vector2d::Zero();
   for (int k = 0; k < 2; ++k)
     if (size.eigenvalues()[k] > tiny) size_inverse[k] = 1.0 / size.eigenvalues()[k];
   const Eigen::Matrix<double, 3, 2> coupling = information.topRightCorner<3, 2>();
-  const Eigen::Matrix3d schur =
-      information.topLeftCorner<3, 3>() -
-      coupling * size.eigenvectors() * size_inverse.asDiagonal() *
-          size.eigenvectors().transpose() * coupling.transpose();
+  const Eigen::Matrix3d schur = information.topLeftCorner<3, 3>() -
+                                coupling * size.eigenvectors() * size_inverse.asDiagonal() *
+                                    size.eigenvectors().transpose() * coupling.transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> location(0.5 * (schur + schur.transpose()));
   if (!(location.eigenvalues().minCoeff() > tiny)) return infinity;  // §7.2 guard
   return 1.0 / location.eigenvalues().minCoeff();

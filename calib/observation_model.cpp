@@ -69,8 +69,7 @@ bool SilhouetteEnds(const CameraModel& camera, const Eigen::Vector3d& base_robot
     // d(point)/d(base point): the horizontal part scales with the range.
     Eigen::Matrix3d point_wrt_base = Eigen::Matrix3d::Zero();
     point_wrt_base.topLeftCorner<2, 2>() =
-        scale * Eigen::Matrix2d::Identity() -
-        side * delta / range * along * along.transpose();
+        scale * Eigen::Matrix2d::Identity() - side * delta / range * along * along.transpose();
     point_wrt_base(2, 2) = 1.0;
     const Eigen::Vector3d point_wrt_diameter(side * depth_half_extent * along.x(),
                                              side * depth_half_extent * along.y(), 0.0);
@@ -160,8 +159,8 @@ SliceCensoring CensoringOf(const CameraModel& camera, const BoundingSlice& measu
     for (const double offset : {-0.5, 0.0, 0.5}) {
       const Eigen::Vector2d pixel =
           camera.PolarToPixel({outer_radius, measured.u_phi_rad + offset * measured.s_phi_rad});
-      const double clearance = std::min({pixel.x() + 0.5, width - 0.5 - pixel.x(), pixel.y() + 0.5,
-                                         height - 0.5 - pixel.y()});
+      const double clearance = std::min(
+          {pixel.x() + 0.5, width - 0.5 - pixel.x(), pixel.y() + 0.5, height - 0.5 - pixel.y()});
       if (clearance <= margin_px) censoring.outer = true;
     }
   }
@@ -169,9 +168,8 @@ SliceCensoring CensoringOf(const CameraModel& camera, const BoundingSlice& measu
 }
 
 bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
-                  const CylinderGeometry& object, BoundingSlice* slice,
-                  SliceJacobians* jacobians, const SilhouetteModel& silhouette,
-                  bool* top_beyond_view) {
+                  const CylinderGeometry& object, BoundingSlice* slice, SliceJacobians* jacobians,
+                  const SilhouetteModel& silhouette, bool* top_beyond_view) {
   // Pose2::WorldToRobot, with cos and sin kept for the Jacobians below (one
   // sincos per prediction instead of two).
   const double c = std::cos(robot_pose_world.theta), s = std::sin(robot_pose_world.theta);

@@ -33,9 +33,9 @@ struct CylinderGeometry {
 // 0.5 for a cylinder (the thesis' angular width), the mean over yaw for a box
 // or a panel; a ball's ends are its tangent rays.
 struct SilhouetteModel {
-  bool enabled = false;             // false: the thesis' section, A.7-A.10
-  double depth_half_extent = 0.5;   // along the line of sight, per unit diameter
-  double width_half_extent = 0.5;   // across it, per unit diameter
+  bool enabled = false;            // false: the thesis' section, A.7-A.10
+  double depth_half_extent = 0.5;  // along the line of sight, per unit diameter
+  double width_half_extent = 0.5;  // across it, per unit diameter
   // A ball: the radial ends are its tangent rays from the camera's
   // viewpoint (at this height), the ball's centre at half its height and
   // its vertical radius half its height.

@@ -53,9 +53,9 @@ constexpr double kMaxSigmas = 100.0;
 constexpr double kMaxElongation = 1000.0;
 
 const std::vector<std::string> kClassKeys = {
-    "name",          "display_rgb",  "shape",  "diameter_mean_m", "diameter_std_m",
-    "height_mean_m", "height_std_m", "footprint_aspect", "base_height_m", "base_height_std_m",
-    "colour",        "image_shape"};
+    "name",           "display_rgb",       "shape",        "diameter_mean_m",
+    "diameter_std_m", "height_mean_m",     "height_std_m", "footprint_aspect",
+    "base_height_m",  "base_height_std_m", "colour",       "image_shape"};
 
 // The optional footprint aspect and support prior of a class.
 void ParseClassGeometry(const YamlFile& file, const cv::FileNode& node, const std::string& key,

@@ -159,7 +159,8 @@ std::vector<VisibleSlice> ReadVisibleSlices(const std::string& run_dir) {
   if (!std::filesystem::exists(path)) return rows;
   const CsvTable table = CsvTable::Read(path);
   const int frame = table.ColumnIndex("frame"), object = table.ColumnIndex("object_id"),
-            visible = table.ColumnIndex("visible_px"), footprint = table.ColumnIndex("footprint_px");
+            visible = table.ColumnIndex("visible_px"),
+            footprint = table.ColumnIndex("footprint_px");
   for (size_t row = 0; row < table.num_rows(); ++row)
     rows.push_back({table.Integer(row, frame, 0, 1L << 40),
                     static_cast<int>(table.Integer(row, object, 0, 1L << 30)),
@@ -198,10 +199,12 @@ ObjectShape ShapeOfTruth(const GroundTruthObject& object) {
 
 }  // namespace
 
-std::vector<ClassSliceErrors> SignedSliceErrorsPerClass(
-    const std::vector<Detection>& detections, const GroundTruth& truth,
-    const std::vector<VisibleSlice>& visible, const std::vector<ObjectClass>& classes,
-    const CameraModel& camera, const DetectionEvaluationOptions& options) {
+std::vector<ClassSliceErrors> SignedSliceErrorsPerClass(const std::vector<Detection>& detections,
+                                                        const GroundTruth& truth,
+                                                        const std::vector<VisibleSlice>& visible,
+                                                        const std::vector<ObjectClass>& classes,
+                                                        const CameraModel& camera,
+                                                        const DetectionEvaluationOptions& options) {
   std::map<int, const GroundTruthObject*> objects;
   for (const GroundTruthObject& o : truth.objects) objects[o.id] = &o;
   std::map<long, std::vector<const Detection*>> detections_by_frame;
@@ -221,10 +224,10 @@ std::vector<ClassSliceErrors> SignedSliceErrorsPerClass(
       continue;
     const CylinderGeometry geometry{object.base_world, object.diameter_m, object.height_m};
     BoundingSlice thesis, shaped;
-    const double aspect = object.length_m > 0 && object.width_m > 0
-                              ? std::min(object.length_m, object.width_m) /
-                                    std::max(object.length_m, object.width_m)
-                              : 1.0;
+    const double aspect =
+        object.length_m > 0 && object.width_m > 0
+            ? std::min(object.length_m, object.width_m) / std::max(object.length_m, object.width_m)
+            : 1.0;
     if (!PredictSlice(camera, pose, geometry, &thesis) ||
         !PredictSlice(camera, pose, geometry, &shaped, nullptr,
                       SilhouetteOf(camera, ShapeOfTruth(object), aspect)))
@@ -274,9 +277,9 @@ std::string SignedSliceErrorsTable(const std::vector<ClassSliceErrors>& errors) 
 std::string SignedSliceErrorsJson(const std::vector<ClassSliceErrors>& errors) {
   std::ostringstream out;
   auto block = [&](const char* name, const SignedSliceErrors& e) {
-    out << "\"" << name << "\": {\"count\": " << e.count << ", \"mean_px\": [" << e.mean[0]
-        << ", " << e.mean[1] << ", " << e.mean[2] << ", " << e.mean[3] << "], \"std_px\": ["
-        << e.std[0] << ", " << e.std[1] << ", " << e.std[2] << ", " << e.std[3] << "]}";
+    out << "\"" << name << "\": {\"count\": " << e.count << ", \"mean_px\": [" << e.mean[0] << ", "
+        << e.mean[1] << ", " << e.mean[2] << ", " << e.mean[3] << "], \"std_px\": [" << e.std[0]
+        << ", " << e.std[1] << ", " << e.std[2] << ", " << e.std[3] << "]}";
   };
   out << "[";
   for (size_t i = 0; i < errors.size(); ++i) {

@@ -250,7 +250,8 @@ std::vector<ObjectClass> ParseClasses(const Reader& r, const cv::FileNode& root)
     for (int k = 0; k < 3; ++k) c.display_rgb[k] = static_cast<int>(std::lround(rgb[k]));
     // The class's shape and box footprint, for the silhouette model (docs/method.md §4.2).
     if (r.Has(node, "shape")) {
-      const std::optional<ObjectShape> shape = ParseObjectShape(r.file.String(node, "shape", prefix));
+      const std::optional<ObjectShape> shape =
+          ParseObjectShape(r.file.String(node, "shape", prefix));
       if (!shape) r.file.Fail(prefix + "shape", "must be one of cylinder, box, sphere, panel");
       c.shape = *shape;
     }

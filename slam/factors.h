@@ -8,8 +8,8 @@
 #include <Eigen/Core>
 
 #include "calib/camera_model.h"
-#include "core/bounding_slice.h"
 #include "calib/observation_model.h"
+#include "core/bounding_slice.h"
 #include "core/motion_model.h"
 #include "solver/factor.h"
 

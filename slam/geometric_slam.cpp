@@ -83,8 +83,7 @@ bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
     candidate.diameter_m = d;
     candidate.height_m = h;
     BoundingSlice predicted;
-    if (!PredictSlice(camera, pose, candidate, &predicted, nullptr,
-                      prior.slice_model.silhouette))
+    if (!PredictSlice(camera, pose, candidate, &predicted, nullptr, prior.slice_model.silhouette))
       return false;
     const double sigma_sr = std::sqrt(2.0) * sigma_ur + std::abs(slice.s_r_px) * rel_h;
     const double sigma_sphi =
@@ -150,8 +149,7 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
   std::vector<SliceCensoring> censoring(detections.size());
   if (prior.slice_model.censor_at_image_limits)
     for (size_t k = 0; k < detections.size(); ++k)
-      censoring[k] =
-          CensoringOf(camera, detections[k]->slice, prior.slice_model.censor_margin_px);
+      censoring[k] = CensoringOf(camera, detections[k]->slice, prior.slice_model.censor_margin_px);
   // Cost, gradient and Gauss-Newton matrix of the object's own factors.
   auto evaluate = [&](const Vector5d& theta, double* cost, Vector5d* gradient, Matrix5d* hessian) {
     CylinderGeometry candidate;
@@ -171,8 +169,9 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
         return false;
       const Eigen::Vector4d inverse_sigma =
           BoundingSliceFactor::NoiseSigma(z, pixel_std_px).cwiseInverse();
-      const Eigen::Vector4d error = inverse_sigma.cwiseProduct(BoundingSliceFactor::CensoredResidual(
-          predicted, z, censoring[k], gradient ? &jacobians : nullptr));
+      const Eigen::Vector4d error =
+          inverse_sigma.cwiseProduct(BoundingSliceFactor::CensoredResidual(
+              predicted, z, censoring[k], gradient ? &jacobians : nullptr));
       sum += error.squaredNorm();
       if (gradient) {
         Eigen::Matrix<double, 4, 5> j;
@@ -460,10 +459,9 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
   for (auto& object : objects) {
     object.first_factor = graph.factors().size();
     for (const SliceObservation* observation : by_object[object.id]) {
-      Factor* slice = graph.Emplace<BoundingSliceFactor>(&camera_, pose_keys[observation->frame],
-                                                         object.base, object.size,
-                                                         observation->slice, options_.pixel_std_px,
-                                                         problem.classes[object.class_index].slice_model);
+      Factor* slice = graph.Emplace<BoundingSliceFactor>(
+          &camera_, pose_keys[observation->frame], object.base, object.size, observation->slice,
+          options_.pixel_std_px, problem.classes[object.class_index].slice_model);
       if (slots && observation->detection_id >= 0)
         slice->set_linearization_slot(DetectionSlot(observation->detection_id));
     }

@@ -97,8 +97,8 @@ TEST(ObservationModel, JacobiansMatchCentralDifferences) {
 Eigen::VectorXd SilhouetteVector(const CameraModel& camera, const SilhouetteModel& model,
                                  const Eigen::VectorXd& x) {
   BoundingSlice slice;
-  EXPECT_TRUE(
-      PredictSlice(camera, {x[0], x[1], x[2]}, {x.segment<3>(3), x[6], x[7]}, &slice, nullptr, model));
+  EXPECT_TRUE(PredictSlice(camera, {x[0], x[1], x[2]}, {x.segment<3>(3), x[6], x[7]}, &slice,
+                           nullptr, model));
   return Eigen::Vector4d(slice.u_r_px, slice.u_phi_rad, slice.s_r_px, slice.s_phi_rad);
 }
 
@@ -118,8 +118,8 @@ TEST(SilhouetteModel, JacobiansMatchCentralDifferences) {
       for (const auto& x : cases) {
         BoundingSlice slice;
         SliceJacobians analytic;
-        ASSERT_TRUE(PredictSlice(camera, {x[0], x[1], x[2]}, {x.segment<3>(3), x[6], x[7]},
-                                 &slice, &analytic, model));
+        ASSERT_TRUE(PredictSlice(camera, {x[0], x[1], x[2]}, {x.segment<3>(3), x[6], x[7]}, &slice,
+                                 &analytic, model));
         const Eigen::MatrixXd numeric = testing::NumericJacobian(
             [&](const Eigen::VectorXd& v) { return SilhouetteVector(camera, model, v); }, x);
         Eigen::Matrix<double, 4, 8> combined;
@@ -149,7 +149,7 @@ TEST(SilhouetteModel, EndsAreTheFootprintEdges) {
     EXPECT_NEAR(silhouette.u_r_px, near_base, 1e-9);
     EXPECT_NEAR(silhouette.u_r_px + silhouette.s_r_px, top, 1e-9);
     EXPECT_LT(silhouette.u_r_px, section.u_r_px - 2.0);  // the near edge is well inside
-    EXPECT_GT(silhouette.s_r_px, section.s_r_px);       // and the top face adds length
+    EXPECT_GT(silhouette.s_r_px, section.s_r_px);        // and the top face adds length
     EXPECT_NEAR(silhouette.s_phi_rad, section.s_phi_rad, 1e-12);
   }
 }
@@ -198,8 +198,8 @@ TEST(SilhouetteModel, BoxAndPanelExtentsAreMeansOverYaw) {
     const double yaw = (i + 0.5) * kPi / steps;
     mean += 0.5 * (length * std::abs(std::cos(yaw)) + width * std::abs(std::sin(yaw))) / steps;
   }
-  EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kBox, width / length).depth_half_extent, mean / diagonal,
-              1e-6);
+  EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kBox, width / length).depth_half_extent,
+              mean / diagonal, 1e-6);
   EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kPanel).width_half_extent, 1 / kPi, 1e-12);
   EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kSphere).viewpoint_height_m,
               camera.parameters().focus_height_m, 1e-9);
@@ -222,7 +222,8 @@ TEST(SliceCensoring, EndsAtTheImageLimitsAreBounds) {
   // The image border: towards the short side (y), a slice reaching the border.
   const double to_border = camera.image_height() / 2.0;
   BoundingSlice at_border{to_border - 40, kPi / 2, 39.8, 0.05};
-  if (to_border - 0.5 < annulus.rim_radius_px) EXPECT_TRUE(CensoringOf(camera, at_border, 0.5).outer);
+  if (to_border - 0.5 < annulus.rim_radius_px)
+    EXPECT_TRUE(CensoringOf(camera, at_border, 0.5).outer);
 }
 
 TEST(ObservationModel, ObjectOnTheCameraAxisHasNoSlice) {

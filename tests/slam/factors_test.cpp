@@ -139,7 +139,8 @@ TEST(BoundingSliceFactorTest, CensoredJacobiansMatchCentralDifferences) {
           values.Add(Eigen::Vector2d(0.4 + 0.1 * u(rng), tall && trial % 2 == 0 ? 2.0 : 0.4));
       model.censor_margin_px = tall ? 2.0 : 400.0;
       const BoundingSlice measured =
-          tall ? BoundingSlice{150.0 + 10 * u(rng), u(rng), annulus.rim_radius_px - 150.0 - 10 * u(rng), 0.2}
+          tall ? BoundingSlice{150.0 + 10 * u(rng), u(rng),
+                               annulus.rim_radius_px - 150.0 - 10 * u(rng), 0.2}
                : BoundingSlice{120.0 + 60 * u(rng), u(rng), 60.0 + 40 * u(rng), 0.2};
       // Keep the end at the limit: re-derive s_r from the rim for tall ones.
       BoundingSlice at_limit = measured;
@@ -153,11 +154,12 @@ TEST(BoundingSliceFactorTest, CensoredJacobiansMatchCentralDifferences) {
       const double bound_row = tall ? error[2] : error[0];
       BoundingSlice predicted;
       bool beyond = false;  // a tall top may be beyond the mirror's view: bound met
-      ASSERT_TRUE(PredictSlice(camera, p, {values.Get(base_key), values.Data(size_key)[0],
-                                           values.Data(size_key)[1]},
-                               &predicted, nullptr, model.silhouette, tall ? &beyond : nullptr));
-      const double gap = tall ? predicted.u_r_px + predicted.s_r_px - (at_limit.u_r_px + at_limit.s_r_px)
-                              : predicted.u_r_px - at_limit.u_r_px;
+      ASSERT_TRUE(PredictSlice(
+          camera, p, {values.Get(base_key), values.Data(size_key)[0], values.Data(size_key)[1]},
+          &predicted, nullptr, model.silhouette, tall ? &beyond : nullptr));
+      const double gap =
+          tall ? predicted.u_r_px + predicted.s_r_px - (at_limit.u_r_px + at_limit.s_r_px)
+               : predicted.u_r_px - at_limit.u_r_px;
       if (std::abs(gap) < 0.5) continue;
       ExpectJacobianMatchesNumeric(factor, values, 1e-5);
       // A prediction beyond the bound costs nothing in that row.
