@@ -222,8 +222,9 @@ TEST(SliceCensoring, EndsAtTheImageLimitsAreBounds) {
   // The image border: towards the short side (y), a slice reaching the border.
   const double to_border = camera.image_height() / 2.0;
   BoundingSlice at_border{to_border - 40, kPi / 2, 39.8, 0.05};
-  if (to_border - 0.5 < annulus.rim_radius_px)
+  if (to_border - 0.5 < annulus.rim_radius_px) {  // the border cuts the mirror's image
     EXPECT_TRUE(CensoringOf(camera, at_border, 0.5).outer);
+  }
 }
 
 TEST(ObservationModel, ObjectOnTheCameraAxisHasNoSlice) {
