@@ -250,9 +250,9 @@ void BindFusionAndSchedule(SlamStageOptions* o, Bindings* b) {
       .Key("class_geometry_evidence",
            "1: P(xi)'s odds times the Bayes factor of the geometry under the class against a "
            "look-alike (docs/method.md §7.2)");
-  b->AddNegatedFlag(&f.existence_given_class, "no-existence-given-class",
-                    "the spurious sigmoid on the location uncertainty with every class prior "
-                    "removed (4.43), not only the horizontal location prior (docs/method.md §7.2)")
+  b->AddFlag(&f.existence_given_class, "existence-given-class",
+             "the spurious sigmoid keeps the class's size and base-height priors and removes only "
+             "the horizontal location prior (docs/method.md §7.2)")
       .Key("existence_given_class",
            "1: the spurious sigmoid keeps the class's size and base-height priors (docs/method.md "
            "§7.2)");

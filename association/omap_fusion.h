@@ -49,7 +49,7 @@ struct FusionOptions {
   // elevation of its base, and whether the class holds is judged by the class
   // geometry evidence. Only with class_geometry_evidence. false: (4.43), every
   // class prior removed.
-  bool existence_given_class = true;
+  bool existence_given_class = false;
   double min_existence = 0.0;  // identities below this pi are left out of the map
 
   // Identity merging (docs/method.md §7.3); false = the thesis' Algorithm 3 as printed.

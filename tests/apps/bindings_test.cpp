@@ -50,7 +50,7 @@ std::vector<KeyCase> Cases() {
       {"detect.skip_bad_frames", "1", [](O o) { return o.detect.skip_bad_frames; }},
       {"slam.class_geometry_evidence", "0",
        [](O o) { return !o.slam.fusion.class_geometry_evidence; }},
-      {"slam.existence_given_class", "0", [](O o) { return !o.slam.fusion.existence_given_class; }},
+      {"slam.existence_given_class", "1", [](O o) { return o.slam.fusion.existence_given_class; }},
       {"slam.split_sampler", "one-or-uniform",
        [](O o) { return o.slam.sampler.moves.split_sampler == SplitSampler::kOneTrackOrUniform; }},
       {"slam.lookalike_size_std_m", "0.7",
