@@ -289,7 +289,8 @@ TEST(ExistenceGivenClass, AnObjectSeenFromOnePlaceIsLocatedByItsApparentSize) {
     FusionOptions thesis;
     thesis.existence_given_class = false;
     EXPECT_EQ(ExistenceWeight(covariance, mean, bottle, thesis), 0.0);
-    const FusionOptions given_class;
+    FusionOptions given_class;
+    given_class.existence_given_class = true;
     const double p = MirroredSigmoid(ClassConditionedLocationVariance(covariance, bottle),
                                      given_class.spurious_t0_m2, given_class.spurious_tau_m2);
     const double log_bf = ClassGeometryLogBayesFactor(covariance, mean, bottle, given_class);
