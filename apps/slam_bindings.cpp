@@ -11,11 +11,13 @@
 namespace oslam {
 namespace {
 
-// "merge,split,switch" probabilities, e.g. 0.4,0.4,0.2.
+// "merge,split,switch[,reassign]" probabilities, e.g. 0.4,0.4,0.2 or
+// 0.3,0.3,0.2,0.2 (reassign 0 when left out).
 Binding& AddMoves(MoveProbabilities* p, const std::string& flag, const std::string& help,
                   Bindings* b) {
   auto get = [p] {
-    return Number(p->merge) + "," + Number(p->split) + "," + Number(p->switch_class);
+    std::string text = Number(p->merge) + "," + Number(p->split) + "," + Number(p->switch_class);
+    return p->reassign != 0 ? text + "," + Number(p->reassign) : text;
   };
   auto set = [p](const std::string& text) -> std::string {
     std::stringstream items(text);
@@ -30,12 +32,14 @@ Binding& AddMoves(MoveProbabilities* p, const std::string& flag, const std::stri
       }
       values.push_back(value);
     }
-    if (values.size() != 3)
-      return ": '" + text + "' is not three probabilities merge,split,switch like 0.4,0.4,0.2";
-    *p = {values[0], values[1], values[2]};
+    if (values.size() != 3 && values.size() != 4)
+      return ": '" + text +
+             "' is not three or four probabilities merge,split,switch[,reassign] like "
+             "0.4,0.4,0.2";
+    *p = {values[0], values[1], values[2], values.size() == 4 ? values[3] : 0.0};
     return "";
   };
-  return b->AddCustom(flag, "M,S,W", help, get, set).Quoted();
+  return b->AddCustom(flag, "M,S,W[,R]", help, get, set).Quoted();
 }
 
 // Method, seed and the sampler's schedule.
@@ -72,13 +76,16 @@ void BindSampling(SlamStageOptions* o, Bindings* b) {
       .Key("refine_every",
            "K_NL: full re-optimisation every N hill-climbing steps (docs/method.md §9.7)");
   AddMoves(&s.hill_climb_moves, "hill-climb-moves",
-           "merge,split,switch probabilities in hill climbing", b)
+           "merge,split,switch[,reassign] probabilities in hill climbing", b)
       .Key("hill_climb_moves",
-           "merge,split,switch probabilities in hill climbing (docs/method.md §9.8)");
+           "merge,split,switch[,reassign] probabilities in hill climbing (docs/method.md §9.8)");
   AddMoves(&s.sampling_moves, "sampling-moves",
-           "merge,split,switch probabilities in MC3 (--known-classes: switch 0, rest rescaled)", b)
+           "merge,split,switch[,reassign] probabilities in MC3 (--known-classes: switch 0, rest "
+           "rescaled)",
+           b)
       .Key("sampling_moves",
-           "merge,split,switch probabilities in MC3; known_classes: switch 0, rest rescaled");
+           "merge,split,switch[,reassign] probabilities in MC3; known_classes: switch 0, rest "
+           "rescaled");
   b->Add(&s.num_chains, "chains", "N", "MC3 chains (1 = Metropolis-Hastings)")
       .Key("chains", "MC3 chains, 1 = Metropolis-Hastings (docs/method.md §9.4)");
   b->Add(&s.delta_temperature, "delta-t", "DT", "temperature step between chains")

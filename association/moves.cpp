@@ -74,11 +74,12 @@ bool MergeFirstWeights(const StateEvaluation& s, const MoveOptions& options,
   return NormaliseLog(log_d);
 }
 
-// log eps_j normalised over j != j1 (Algorithm 5 steps 4 and 6).
-bool MergePartnerWeights(const StateEvaluation& s, int j1, const MoveOptions& options,
-                         std::vector<double>* log_e) {
+// log eps_j = -e_j / 2 for j != j1 (Algorithm 5 step 4), unnormalised;
+// -infinity for j1 itself and across classes with an infinite penalty.
+std::vector<double> LogPartnerWeights(const StateEvaluation& s, int j1,
+                                      const MoveOptions& options) {
   const size_t n = s.state.blocks.size();
-  log_e->assign(n, kNegInf);
+  std::vector<double> log_e(n, kNegInf);
   const double sigma2 = options.merge_sigma_m * options.merge_sigma_m;
   for (size_t j = 0; j < n; ++j) {
     if (static_cast<int>(j) == j1) continue;
@@ -87,9 +88,29 @@ bool MergePartnerWeights(const StateEvaluation& s, int j1, const MoveOptions& op
       if (std::isinf(options.class_mismatch_penalty)) continue;
       e *= options.class_mismatch_penalty;
     }
-    (*log_e)[j] = -0.5 * e;
+    log_e[j] = -0.5 * e;
   }
+  return log_e;
+}
+
+// log eps_j normalised over j != j1 (Algorithm 5 steps 4 and 6).
+bool MergePartnerWeights(const StateEvaluation& s, int j1, const MoveOptions& options,
+                         std::vector<double>* log_e) {
+  *log_e = LogPartnerWeights(s, j1, options);
   return NormaliseLog(log_e);
+}
+
+// Where a track of object `from` may go (reassign, docs/method.md §9.2): the
+// other objects with the merge partner weights eps_j seen from `from`, and
+// last (index = number of objects) alone, weighted as an object at d_thr
+// would be. Alone is no move for a track alone already. Normalised; false
+// when the track can go nowhere.
+bool ReassignWeights(const StateEvaluation& s, int from, const MoveOptions& options,
+                     std::vector<double>* log_w) {
+  *log_w = LogPartnerWeights(s, from, options);
+  const double alone = options.merge_distance_m / options.merge_sigma_m;
+  log_w->push_back(s.state.blocks[from].size() > 1 ? -0.5 * alone * alone : kNegInf);
+  return NormaliseLog(log_w);
 }
 
 // Split weights r^2(j), zero for single-track objects (#19).
@@ -223,6 +244,52 @@ Proposal ProposeSwitch(const StateEvaluation& s, const ClassConfusionModel& mode
   return p;
 }
 
+// Reassign (beyond the thesis): a track drawn uniformly leaves its object
+// (which keeps its class, or goes if the track was all of it) for a nearby
+// object (which keeps its class) or becomes an object alone, of a class
+// drawn from the class proposal.
+Proposal ProposeReassign(const StateEvaluation& s, const ClassConfusionModel& model,
+                         const MoveOptions& options, const MoveProbabilities& probabilities,
+                         Rng& rng) {
+  Proposal p;
+  p.type = MoveType::kReassign;
+  const size_t num_tracks = s.state.num_tracks();
+  if (num_tracks == 0 || !(probabilities.reassign > 0)) return p;
+  size_t k = std::uniform_int_distribution<size_t>(0, num_tracks - 1)(rng);
+  int from = 0;
+  while (k >= s.state.blocks[from].size()) k -= s.state.blocks[from++].size();
+  const int track = s.state.blocks[from][k];
+  std::vector<double> log_w;
+  if (!ReassignWeights(s, from, options, &log_w)) return p;
+  const int target = SampleLog(log_w, rng);
+  const bool alone = target == static_cast<int>(s.state.blocks.size());
+  p.track = track;
+  p.old_class_a = s.state.classes[from];
+  const std::vector<int>& block = s.state.blocks[from];
+  std::copy_if(block.begin(), block.end(), std::back_inserter(p.part_a),
+               [track](int t) { return t != track; });
+  int alone_class = 0;
+  p.state = s.state;
+  if (alone) {
+    alone_class = SampleLog(LogClassProposal(model, {track}, options), rng);
+    p.state.blocks.push_back({track});
+    p.state.classes.push_back(alone_class);
+  } else {
+    p.part_b = s.state.blocks[target];
+    p.state.blocks[target].push_back(track);
+  }
+  p.state.blocks[from] = p.part_a;
+  if (p.part_a.empty()) {
+    p.state.blocks.erase(p.state.blocks.begin() + from);
+    p.state.classes.erase(p.state.classes.begin() + from);
+  }
+  p.state.Canonicalize();
+  p.log_q_forward = LogReassignProbability(s, track, alone ? -1 : target, alone_class, model,
+                                           options, probabilities);
+  p.self_transition = false;
+  return p;
+}
+
 // The forward and the reverse probability of a move are the probabilities
 // of a merge or a split given by the track sets involved, evaluated on the
 // state the move starts from or on the state it proposed.
@@ -260,6 +327,8 @@ const char* MoveName(MoveType type) {
       return "split";
     case MoveType::kSwitch:
       return "switch";
+    case MoveType::kReassign:
+      return "reassign";
   }
   return "?";
 }
@@ -316,13 +385,30 @@ double LogSwitchProbability(const StateEvaluation& s, int block, int new_class,
          LogClassProposal(model, s.state.blocks[block], options)[new_class];
 }
 
+double LogReassignProbability(const StateEvaluation& s, int track, int target_block,
+                              int alone_class, const ClassConfusionModel& model,
+                              const MoveOptions& options, const MoveProbabilities& probabilities) {
+  const int from = s.state.BlockOf(track);
+  std::vector<double> log_w;
+  if (from < 0 || target_block == from || !ReassignWeights(s, from, options, &log_w))
+    return kNegInf;
+  const double log_where =
+      target_block >= 0 ? log_w[target_block]
+                        : log_w.back() + LogClassProposal(model, {track}, options)[alone_class];
+  return LogOf(probabilities.reassign) - std::log(static_cast<double>(s.state.num_tracks())) +
+         log_where;
+}
+
 Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& model,
                      const MoveOptions& options, const MoveProbabilities& probabilities, Rng& rng) {
   const double u = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
   if (u < probabilities.merge) return ProposeMerge(current, model, options, probabilities, rng);
   if (u < probabilities.merge + probabilities.split)
     return ProposeSplit(current, model, options, probabilities, rng);
-  return ProposeSwitch(current, model, options, probabilities, rng);
+  if (u < probabilities.merge + probabilities.split + probabilities.switch_class ||
+      !(probabilities.reassign > 0))
+    return ProposeSwitch(current, model, options, probabilities, rng);
+  return ProposeReassign(current, model, options, probabilities, rng);
 }
 
 double LogReverseProbability(const Proposal& p, const StateEvaluation& proposed,
@@ -338,6 +424,10 @@ double LogReverseProbability(const Proposal& p, const StateEvaluation& proposed,
     case MoveType::kSwitch:
       return LogSwitchProbability(proposed, proposed.state.BlockOf(p.track), p.old_class_a, model,
                                   options, probabilities);
+    case MoveType::kReassign:  // back to what its object kept, or alone at the old class
+      return LogReassignProbability(
+          proposed, p.track, p.part_a.empty() ? -1 : proposed.state.BlockOf(p.part_a.front()),
+          p.old_class_a, model, options, probabilities);
   }
   return kNegInf;
 }
@@ -357,6 +447,10 @@ double LogForwardProbability(const Proposal& p, const StateEvaluation& from,
     case MoveType::kSwitch:
       return LogSwitchProbability(from, from.state.BlockOf(p.track), new_class(p.track), model,
                                   options, probabilities);
+    case MoveType::kReassign:
+      return LogReassignProbability(from, p.track,
+                                    p.part_b.empty() ? -1 : from.state.BlockOf(p.part_b.front()),
+                                    new_class(p.track), model, options, probabilities);
   }
   return kNegInf;
 }

@@ -2,7 +2,8 @@
 // fixes (docs/method.md §9.2-9.3, §13 #16-#19, #40-#45): merge (class-aware and
 // distance-based, forward probability summed over both orders), split
 // (residual-based; the partition probability is the one of the sampler
-// actually used) and switch class. Each move's probability is a function of
+// actually used) and switch class; beyond the thesis, reassign (one track
+// moved to a nearby object or alone). Each move's probability is a function of
 // (state, evaluation) so that the reverse probability is computed by the same
 // code as the forward one.
 #pragma once
@@ -15,12 +16,17 @@
 
 namespace oslam {
 
-enum class MoveType { kMerge = 0, kSplit = 1, kSwitch = 2 };
+enum class MoveType { kMerge = 0, kSplit = 1, kSwitch = 2, kReassign = 3 };
+constexpr int kNumMoveTypes = 4;
 const char* MoveName(MoveType type);
 
-// P_merge, P_split, P_switch (must sum to 1).
+// P_merge, P_split, P_switch, P_reassign (must sum to 1). Reassign is beyond
+// the thesis (docs/method.md §9.2): one track leaves its object for a nearby
+// object or becomes an object alone, in one step instead of a split and a
+// merge through an improbable intermediate state.
 struct MoveProbabilities {
   double merge = 0.4, split = 0.4, switch_class = 0.2;
+  double reassign = 0.0;
 };
 
 // How a split partitions an object's tracks (docs/method.md §13 #18/#43).
@@ -55,9 +61,14 @@ struct Proposal {
   AssociationState state;       // the proposed state (canonical)
   double log_q_forward = 0;
   // What the reverse move needs: the affected track sets and the old classes.
-  std::vector<int> part_a, part_b;       // merge: the two merged blocks; split: the two halves
-  int old_class_a = 0, old_class_b = 0;  // merge: classes of part_a/b; split/switch: old class
-  int track = 0;                         // switch: a track of the switched object
+  // merge: the two merged blocks; split: the two halves; reassign: what the
+  // moved track's object keeps (part_a) and the object it joins (part_b;
+  // empty: it becomes an object alone).
+  std::vector<int> part_a, part_b;
+  // merge: classes of part_a/b; split/switch/reassign: old class (of the
+  // object the moved track left).
+  int old_class_a = 0, old_class_b = 0;
+  int track = 0;  // switch: a track of the switched object; reassign: the moved track
 };
 
 using Rng = std::mt19937_64;
@@ -90,5 +101,10 @@ double LogSplitProbability(const StateEvaluation& s, int block, const std::vecto
 double LogSwitchProbability(const StateEvaluation& s, int block, int new_class,
                             const ClassConfusionModel& model, const MoveOptions& options,
                             const MoveProbabilities& probabilities);
+// Moving `track` into the object `target_block` (which keeps its class), or
+// alone (target_block = -1) as a new object of class `alone_class`.
+double LogReassignProbability(const StateEvaluation& s, int track, int target_block,
+                              int alone_class, const ClassConfusionModel& model,
+                              const MoveOptions& options, const MoveProbabilities& probabilities);
 
 }  // namespace oslam

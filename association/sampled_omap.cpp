@@ -16,9 +16,9 @@ Json Number(double v) {
 
 // Per move type: `timing` picks the run-time members (evaluation time, time
 // per proposal) or all the others.
-Json MoveJson(const std::array<MoveStatistics, 3>& stats, bool timing) {
+Json MoveJson(const std::array<MoveStatistics, kNumMoveTypes>& stats, bool timing) {
   Json moves = Json::object();
-  for (int m = 0; m < 3; ++m) {
+  for (int m = 0; m < kNumMoveTypes; ++m) {
     const MoveStatistics& s = stats[m];
     const std::string name = MoveName(static_cast<MoveType>(m));
     if (timing) {

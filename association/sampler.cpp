@@ -30,8 +30,8 @@ std::string WhyInvalid(const StateEvaluation* start, size_t objects) {
 }
 
 bool ValidProbabilities(const MoveProbabilities& p) {
-  return p.merge >= 0 && p.split >= 0 && p.switch_class >= 0 &&
-         std::abs(p.merge + p.split + p.switch_class - 1.0) < 1e-9;
+  return p.merge >= 0 && p.split >= 0 && p.switch_class >= 0 && p.reassign >= 0 &&
+         std::abs(p.merge + p.split + p.switch_class + p.reassign - 1.0) < 1e-9;
 }
 
 // One random stream per chain, derived from the seed and the chain index.
@@ -60,7 +60,7 @@ struct Chain {
   EvaluationPtr state;
   double beta = 1.0;
   Rng rng;
-  std::array<MoveStatistics, 3> stats{};
+  std::array<MoveStatistics, kNumMoveTypes> stats{};
   StateEvaluator* evaluator = nullptr;
 };
 
@@ -68,7 +68,7 @@ struct Chain {
 struct ChainCheckpoint {
   EvaluationPtr state;
   Rng rng;
-  std::array<MoveStatistics, 3> stats{};
+  std::array<MoveStatistics, kNumMoveTypes> stats{};
   size_t mark = 0;                         // the evaluator's
   std::vector<EvaluationPtr> cold_states;  // chain 0: its state after each iteration
 };
@@ -371,7 +371,7 @@ bool SamplerOptions::Validate(std::string* why) const {
 EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
                              StateEvaluator& evaluator, const ClassConfusionModel& model,
                              const MoveOptions& options, const MoveProbabilities& probabilities,
-                             Rng& rng, std::array<MoveStatistics, 3>* stats) {
+                             Rng& rng, std::array<MoveStatistics, kNumMoveTypes>* stats) {
   const double beta = rule.beta;
   const bool greedy = rule.greedy;
   const Proposal proposal = ProposeMove(*current, model, options, probabilities, rng);

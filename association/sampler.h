@@ -74,7 +74,7 @@ struct MoveStatistics {
 };
 
 struct SamplerSummary {
-  std::array<MoveStatistics, 3> hill_climb{}, sampling{};  // by MoveType, cold chain
+  std::array<MoveStatistics, kNumMoveTypes> hill_climb{}, sampling{};  // by MoveType, cold chain
   long swaps_proposed = 0, swaps_accepted = 0;
   // Solves done ahead of a swap that was then accepted, and undone (depend on
   // the threads' timing; not in num_solves).
@@ -139,7 +139,7 @@ struct StepRule {
 EvaluationPtr MetropolisStep(const EvaluationPtr& current, const StepRule& rule,
                              StateEvaluator& evaluator, const ClassConfusionModel& model,
                              const MoveOptions& options, const MoveProbabilities& probabilities,
-                             Rng& rng, std::array<MoveStatistics, 3>* stats);
+                             Rng& rng, std::array<MoveStatistics, kNumMoveTypes>* stats);
 
 // Integrated-autocorrelation effective sample size (initial positive sequence).
 double EffectiveSampleSize(const std::vector<double>& series);

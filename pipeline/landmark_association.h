@@ -298,7 +298,7 @@ class LandmarkAssociation {
   EvaluationPtr previous_;  // the last window's final full solve
   EvaluationPtr current_;
   int tracks_before_ = 0, tracks_now_ = 0;  // tracks of the earlier windows, and with this one
-  std::array<MoveStatistics, 3> stats_{};
+  std::array<MoveStatistics, kNumMoveTypes> stats_{};
   // The window's data, kept alive as long as its evaluator.
   std::unique_ptr<LandmarkDataset> window_dataset_;
   std::unique_ptr<LandmarkTargetData> window_data_;

@@ -35,7 +35,8 @@ void InputSection(const std::string& run_dir, const RunPipelineOptions& options,
 
   md << "## Input and configuration\n\n| | |\n|---|---|\n";
   if (result.selection)
-    md << "| odometry by time | " << result.selection->Summary() << ", as the run folder `run/` |\n";
+    md << "| odometry by time | " << result.selection->Summary()
+       << ", as the run folder `run/` |\n";
   md << "| frames | " << result.detect.frames;
   if (result.detect.skipped_frames > 0)
     md << " (" << result.detect.skipped_frames << " unreadable, skipped)";
@@ -99,9 +100,9 @@ void ObjectSection(const RunPipelineOptions& options, const RunPipelineResult& r
   md << "\n";
 }
 
-void MoveRows(const char* phase, const std::array<MoveStatistics, 3>& moves,
+void MoveRows(const char* phase, const std::array<MoveStatistics, kNumMoveTypes>& moves,
               std::ostringstream& md) {
-  for (int type = 0; type < 3; ++type) {
+  for (int type = 0; type < kNumMoveTypes; ++type) {
     const MoveStatistics& s = moves[type];
     if (s.proposed == 0) continue;
     md << "| " << phase << " | " << MoveName(static_cast<MoveType>(type)) << " | " << s.proposed

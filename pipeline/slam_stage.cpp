@@ -77,9 +77,9 @@ LoadedInput Load(const SlamStageInput& input, const SlamStageOptions& options) {
   return loaded;
 }
 
-void ReportMoves(const char* phase, const std::array<MoveStatistics, 3>& stats,
+void ReportMoves(const char* phase, const std::array<MoveStatistics, kNumMoveTypes>& stats,
                  const StageOutput& output) {
-  for (int m = 0; m < 3; ++m) {
+  for (int m = 0; m < kNumMoveTypes; ++m) {
     const MoveStatistics& s = stats[m];
     output.Print(Format(
         "  %s %-6s proposed %5ld  self %5ld  cached %5ld  screened out %5ld  accepted %5ld "
@@ -147,8 +147,8 @@ SamplerOptions SlamStageOptions::EffectiveSampler() const {
   if (known_classes) {
     // Sec. 6.2: no switch moves (0.4/0.4/0.2 becomes 0.5/0.5/0), never merge across classes.
     MoveProbabilities& p = effective.sampling_moves;
-    const double rest = p.merge + p.split;
-    if (rest > 0) p = {p.merge / rest, p.split / rest, 0.0};
+    const double rest = p.merge + p.split + p.reassign;
+    if (rest > 0) p = {p.merge / rest, p.split / rest, 0.0, p.reassign / rest};
     effective.moves.class_mismatch_penalty = std::numeric_limits<double>::infinity();
   }
   return effective;

@@ -1,4 +1,4 @@
-// The merge, split and switch proposals (moves.h) on the enumerable 4-track,
+// The merge, split, switch and reassign proposals (moves.h) on the enumerable 4-track,
 // 2-class problem: how often each state is proposed, counted over many
 // draws, must match the move's forward probability, and the reverse
 // probability must be the forward probability of the move that undoes it.
@@ -30,14 +30,45 @@ AssociationState State(std::vector<std::vector<int>> blocks, std::vector<int> cl
   return state;
 }
 
-// What drawing `n` proposals from one state gave: per distinct proposed
-// state how often it came and one proposal that led there.
+// A proposed state and the path that proposed it: merge and reassign (a
+// track alone joining an object), split and reassign (one track leaving
+// alone) can propose the same state, and so can two reassigns that move
+// different tracks ({0} {1} -> {0, 1}), each with its own probability. A
+// reassign's reverse is the path that moves the same track back.
+struct MoveKey {
+  MoveType type;
+  AssociationState state;
+  int moved_track = -1;  // reassign only
+  bool operator==(const MoveKey& other) const {
+    return type == other.type && state == other.state && moved_track == other.moved_track;
+  }
+};
+MoveKey KeyOf(const Proposal& p, const AssociationState& state) {
+  return {p.type, state, p.type == MoveType::kReassign ? p.track : -1};
+}
+// The path back: a split undoes a merge and a merge a split; switch and
+// reassign undo themselves.
+MoveKey ReverseKeyOf(const Proposal& p, const AssociationState& state) {
+  MoveKey key = KeyOf(p, state);
+  if (p.type == MoveType::kMerge) key.type = MoveType::kSplit;
+  if (p.type == MoveType::kSplit) key.type = MoveType::kMerge;
+  return key;
+}
+struct MoveKeyHash {
+  size_t operator()(const MoveKey& key) const {
+    return (AssociationStateHash()(key.state) * 31 + static_cast<size_t>(key.type)) * 31 +
+           static_cast<size_t>(key.moved_track + 1);
+  }
+};
+
+// What drawing `n` proposals from one state gave: per move and distinct
+// proposed state how often it came and one proposal that led there.
 struct Tally {
   struct Outcome {
     long count = 0;
     Proposal proposal;
   };
-  std::unordered_map<AssociationState, Outcome, AssociationStateHash> outcomes;
+  std::unordered_map<MoveKey, Outcome, MoveKeyHash> outcomes;
   long self_transitions = 0;
   long n = 0;
 };
@@ -54,7 +85,7 @@ Tally Draw(const StateEvaluation& from, const ClassConfusionModel& model,
       ++tally.self_transitions;
       continue;
     }
-    Tally::Outcome& outcome = tally.outcomes[p.state];
+    Tally::Outcome& outcome = tally.outcomes[KeyOf(p, p.state)];
     // The same proposed state must always come with the same probability
     // (a merge's two orders are summed in either order: equal to rounding).
     if (outcome.count > 0) {
@@ -101,7 +132,7 @@ std::vector<Case> Cases() {
 // left is the self-transitions.
 TEST(MovesTest, ProposalFrequenciesMatchTheForwardProbability) {
   const ClassConfusionModel model = TestModel();
-  const MoveProbabilities probabilities{0.4, 0.4, 0.2};
+  const MoveProbabilities probabilities{0.3, 0.3, 0.2, 0.2};
   constexpr long kDraws = 200000;
   for (const Case& c : Cases()) {
     SCOPED_TRACE(c.name);
@@ -109,7 +140,8 @@ TEST(MovesTest, ProposalFrequenciesMatchTheForwardProbability) {
     const Tally tally = Draw(*from, model, c.options, probabilities, kDraws, 11);
     EXPECT_GT(tally.outcomes.size(), 2u);
     double total = 0;
-    for (const auto& [state, outcome] : tally.outcomes) {
+    for (const auto& [key, outcome] : tally.outcomes) {
+      const AssociationState& state = key.state;
       const double q = std::exp(outcome.proposal.log_q_forward);
       ExpectFrequency(outcome.count, kDraws, q, state.ToString());
       total += q;
@@ -122,16 +154,16 @@ TEST(MovesTest, ProposalFrequenciesMatchTheForwardProbability) {
 // computes on the state's own evaluation (delayed acceptance relies on it).
 TEST(MovesTest, ForwardProbabilityOnTheOwnEvaluationIsTheProposals) {
   const ClassConfusionModel model = TestModel();
-  const MoveProbabilities probabilities{0.4, 0.4, 0.2};
+  const MoveProbabilities probabilities{0.3, 0.3, 0.2, 0.2};
   for (const Case& c : Cases()) {
     SCOPED_TRACE(c.name);
     const EvaluationPtr from = TestEvaluation(c.state, model);
     const Tally tally = Draw(*from, model, c.options, probabilities, 5000, 12);
-    for (const auto& [state, outcome] : tally.outcomes)
+    for (const auto& [key, outcome] : tally.outcomes)
       EXPECT_DOUBLE_EQ(
           LogForwardProbability(outcome.proposal, *from, model, c.options, probabilities),
           outcome.proposal.log_q_forward)
-          << state.ToString();
+          << key.state.ToString();
   }
 }
 
@@ -140,19 +172,20 @@ TEST(MovesTest, ForwardProbabilityOnTheOwnEvaluationIsTheProposals) {
 // of the proposal y -> x, and y proposes x as often as it says.
 TEST(MovesTest, ReverseProbabilityIsTheForwardProbabilityOfTheMoveBack) {
   const ClassConfusionModel model = TestModel();
-  const MoveProbabilities probabilities{0.4, 0.4, 0.2};
-  std::array<int, 3> checked{};
+  const MoveProbabilities probabilities{0.3, 0.3, 0.2, 0.2};
+  std::array<int, kNumMoveTypes> checked{};
   for (const Case& c : Cases()) {
     SCOPED_TRACE(c.name);
     const EvaluationPtr x = TestEvaluation(c.state, model);
     const Tally forward = Draw(*x, model, c.options, probabilities, 20000, 13);
-    for (const auto& [state, outcome] : forward.outcomes) {
+    for (const auto& [key, outcome] : forward.outcomes) {
+      const AssociationState& state = key.state;
       const EvaluationPtr y = TestEvaluation(state, model);
       const double log_reverse =
           LogReverseProbability(outcome.proposal, *y, model, c.options, probabilities);
       if (log_reverse == kNegInf) continue;  // checked in ImpossibleReverseMoves
       const Tally back = Draw(*y, model, c.options, probabilities, 10000, 14);
-      const auto found = back.outcomes.find(c.state);
+      const auto found = back.outcomes.find(ReverseKeyOf(outcome.proposal, c.state));
       if (found == back.outcomes.end()) {  // then the way back must be rare
         EXPECT_LT(std::exp(log_reverse) * back.n, 3.0) << state.ToString();
         continue;
@@ -162,20 +195,22 @@ TEST(MovesTest, ReverseProbabilityIsTheForwardProbabilityOfTheMoveBack) {
       ++checked[static_cast<int>(outcome.proposal.type)];
     }
   }
-  for (int m = 0; m < 3; ++m) EXPECT_GT(checked[m], 2) << MoveName(static_cast<MoveType>(m));
+  for (int m = 0; m < kNumMoveTypes; ++m)
+    EXPECT_GT(checked[m], 2) << MoveName(static_cast<MoveType>(m));
 }
 
 // Proposed states are canonical and differ from the current one exactly as
 // the move says; the parts and old classes the reverse move needs are right.
 TEST(MovesTest, ProposalsAreCanonicalAndChangeWhatTheMoveSays) {
   const ClassConfusionModel model = TestModel();
-  const MoveProbabilities probabilities{0.4, 0.4, 0.2};
+  const MoveProbabilities probabilities{0.3, 0.3, 0.2, 0.2};
   for (const Case& c : Cases()) {
     SCOPED_TRACE(c.name);
     const EvaluationPtr from = TestEvaluation(c.state, model);
     const AssociationState& x = c.state;
     const Tally tally = Draw(*from, model, c.options, probabilities, 5000, 15);
-    for (const auto& [state, outcome] : tally.outcomes) {
+    for (const auto& [key, outcome] : tally.outcomes) {
+      const AssociationState& state = key.state;
       const Proposal& p = outcome.proposal;
       SCOPED_TRACE(std::string(MoveName(p.type)) + " to " + state.ToString());
       AssociationState canonical = p.state;
@@ -218,6 +253,32 @@ TEST(MovesTest, ProposalsAreCanonicalAndChangeWhatTheMoveSays) {
           EXPECT_NE(p.state.classes[p.state.BlockOf(p.track)], p.old_class_a);
           break;
         }
+        case MoveType::kReassign: {
+          // The track left its object (which keeps its class if anything is
+          // left) for part_b's object (same class) or alone; nothing else moved.
+          const int from = x.BlockOf(p.track);
+          EXPECT_EQ(x.classes[from], p.old_class_a);
+          std::vector<int> rest = x.blocks[from];
+          rest.erase(std::find(rest.begin(), rest.end(), p.track));
+          EXPECT_EQ(p.part_a, rest);
+          if (!rest.empty()) {
+            const int kept = p.state.BlockOf(rest.front());
+            EXPECT_EQ(p.state.blocks[kept], rest);
+            EXPECT_EQ(p.state.classes[kept], p.old_class_a);
+          }
+          const int to = p.state.BlockOf(p.track);
+          std::vector<int> joined = p.part_b;
+          joined.push_back(p.track);
+          std::sort(joined.begin(), joined.end());
+          EXPECT_EQ(p.state.blocks[to], joined);
+          if (!p.part_b.empty()) {
+            EXPECT_EQ(x.blocks[x.BlockOf(p.part_b.front())], p.part_b);
+            EXPECT_EQ(p.state.classes[to], x.classes[x.BlockOf(p.part_b.front())]);
+          }
+          EXPECT_EQ(p.state.blocks.size(),
+                    x.blocks.size() + (p.part_b.empty() ? 1 : 0) - (rest.empty() ? 1 : 0));
+          break;
+        }
       }
     }
   }
@@ -247,6 +308,24 @@ TEST(MovesTest, ImpossibleMovesAreSelfTransitions) {
   for (int k = 0; k < 20; ++k)
     EXPECT_TRUE(
         ProposeMove(*TestEvaluation(two, model), model, strict, {1, 0, 0}, rng).self_transition);
+  // Reassign: a track alone has nowhere to go when every other object is of
+  // another class and merging across classes is forbidden.
+  const AssociationState lone = State({{0}, {1, 2, 3}}, {0, 1});
+  const EvaluationPtr lone_evaluation = TestEvaluation(lone, model);
+  int lone_track_drawn = 0;
+  for (int k = 0; k < 200; ++k) {
+    const Proposal p = ProposeMove(*lone_evaluation, model, strict, {0, 0, 0, 1}, rng);
+    EXPECT_EQ(p.type, MoveType::kReassign);
+    if (p.self_transition) {
+      ++lone_track_drawn;
+      continue;
+    }
+    EXPECT_NE(p.track, 0);  // tracks of the big object may go alone
+    EXPECT_TRUE(p.part_b.empty());
+  }
+  EXPECT_GT(lone_track_drawn, 20);  // about 1 in 4
+  EXPECT_EQ(LogReassignProbability(*lone_evaluation, 0, 1, 0, model, strict, {0, 0, 0, 1}),
+            kNegInf);
 }
 
 // A split whose halves get different classes cannot be undone when merging
@@ -259,7 +338,8 @@ TEST(MovesTest, ImpossibleReverseMoves) {
   const AssociationState one = State({{0, 1, 2, 3}}, {0});
   const Tally tally = Draw(*TestEvaluation(one, model), model, strict, probabilities, 5000, 17);
   int impossible = 0, possible = 0;
-  for (const auto& [state, outcome] : tally.outcomes) {
+  for (const auto& [key, outcome] : tally.outcomes) {
+    const AssociationState& state = key.state;
     if (outcome.proposal.type != MoveType::kSplit) continue;
     const double log_reverse = LogReverseProbability(
         outcome.proposal, *TestEvaluation(state, model), model, strict, probabilities);
@@ -325,6 +405,7 @@ TEST(MovesTest, MoveNames) {
   EXPECT_STREQ(MoveName(MoveType::kMerge), "merge");
   EXPECT_STREQ(MoveName(MoveType::kSplit), "split");
   EXPECT_STREQ(MoveName(MoveType::kSwitch), "switch");
+  EXPECT_STREQ(MoveName(MoveType::kReassign), "reassign");
 }
 
 }  // namespace

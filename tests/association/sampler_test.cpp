@@ -56,6 +56,8 @@ SamplerOptions TestOptions(int chains, int iterations) {
   options.num_iterations = iterations;
   options.burn_in = 1000;
   options.seed = 7;
+  // Every move, the reassign move beyond the thesis included.
+  options.sampling_moves = {0.3, 0.3, 0.2, 0.2};
   return options;
 }
 
@@ -84,7 +86,7 @@ TEST(DetailedBalanceTest, MetropolisHastingsMatchesEnumeratedPosterior) {
   RecordProperty("total_variation", std::to_string(tv));
   std::printf("MH: %zu samples, total variation %.4f\n", result.samples.size(), tv);
   EXPECT_LT(tv, 0.03);
-  for (int m = 0; m < 3; ++m) EXPECT_GT(result.summary.sampling[m].accepted, 0) << m;
+  for (int m = 0; m < kNumMoveTypes; ++m) EXPECT_GT(result.summary.sampling[m].accepted, 0) << m;
 }
 
 // Delayed acceptance with a deliberately poor screen (target off by up to
@@ -101,7 +103,7 @@ TEST(DetailedBalanceTest, DelayedAcceptanceKeepsTheEnumeratedPosterior) {
   std::printf("MH with delayed acceptance: total variation %.4f, %ld screened out\n", tv, screened);
   EXPECT_LT(tv, 0.03);
   EXPECT_GT(screened, 10000);
-  for (int m = 0; m < 3; ++m) EXPECT_GT(result.summary.sampling[m].accepted, 0) << m;
+  for (int m = 0; m < kNumMoveTypes; ++m) EXPECT_GT(result.summary.sampling[m].accepted, 0) << m;
 }
 
 TEST(DetailedBalanceTest, MetropolisCoupledWithDelayedAcceptance) {
@@ -194,7 +196,7 @@ TEST(SamplerTest, SpeculativeChainsGiveTheSequentialResult) {
       EXPECT_EQ(result.summary.swaps_accepted, reference.summary.swaps_accepted);
       EXPECT_EQ(result.summary.num_solves, reference.summary.num_solves);
       EXPECT_EQ(result.summary.num_cache_hits, reference.summary.num_cache_hits);
-      for (int m = 0; m < 3; ++m) {
+      for (int m = 0; m < kNumMoveTypes; ++m) {
         EXPECT_EQ(result.summary.sampling[m].accepted, reference.summary.sampling[m].accepted);
         EXPECT_EQ(result.summary.sampling[m].screened_out,
                   reference.summary.sampling[m].screened_out);
@@ -327,6 +329,10 @@ TEST(SamplerTest, OptionsValidationNamesTheBadValue) {
          o->sampling_moves = {1.2, 0.0, -0.2};
        },
        "move probabilities"},
+      {[](SamplerOptions* o) {
+         o->sampling_moves = {0.4, 0.4, 0.3, -0.1};
+       },
+       "move probabilities"},
       {[](SamplerOptions* o) { o->num_chains = 0; }, "chain"},
       {[](SamplerOptions* o) { o->swap_every = 0; }, "swap"},
       {[](SamplerOptions* o) { o->speculation_depth = -1; }, "speculation depth"},
@@ -379,7 +385,7 @@ TEST(SamplerTest, DeterministicFromTheSeed) {
       EXPECT_EQ(a.summary.swaps_accepted, b.summary.swaps_accepted);
       EXPECT_EQ(a.summary.num_solves, b.summary.num_solves);
       EXPECT_EQ(a.summary.effective_sample_size, b.summary.effective_sample_size);
-      for (int m = 0; m < 3; ++m)
+      for (int m = 0; m < kNumMoveTypes; ++m)
         EXPECT_EQ(a.summary.sampling[m].accepted, b.summary.sampling[m].accepted);
     }
   }
@@ -508,7 +514,7 @@ TEST(MetropolisStepTest, GreedyAcceptsOnlyIncreases) {
     TestEvaluator evaluator(model);
     const EvaluationPtr current = evaluator.Evaluate(state, nullptr);
     for (unsigned long seed = 0; seed < 20; ++seed) {
-      std::array<MoveStatistics, 3> stats{};
+      std::array<MoveStatistics, kNumMoveTypes> stats{};
       Rng rng(seed);
       const EvaluationPtr next =
           MetropolisStep(current, greedy, evaluator, model, moves, probabilities, rng, &stats);
@@ -545,7 +551,7 @@ TEST(MetropolisStepTest, RejectsAnInvalidEvaluation) {
   const ClassConfusionModel model = TestModel();
   Invalid evaluator(model);
   const EvaluationPtr current = testing::TestEvaluation(SeparateTracksState(kTrackClass), model);
-  std::array<MoveStatistics, 3> stats{};
+  std::array<MoveStatistics, kNumMoveTypes> stats{};
   Rng rng(5);
   for (int k = 0; k < 50; ++k)
     EXPECT_EQ(MetropolisStep(current, StepRule{}, evaluator, model, MoveOptions{}, {0.4, 0.4, 0.2},
