@@ -88,6 +88,10 @@ void BindSampling(SlamStageOptions* o, Bindings* b) {
            "rescaled");
   b->Add(&s.num_chains, "chains", "N", "MC3 chains (1 = Metropolis-Hastings)")
       .Key("chains", "MC3 chains, 1 = Metropolis-Hastings (docs/method.md §9.4)");
+  b->Add(&s.cold_chain_steps, "cold-chain-steps", "K",
+         "Metropolis-Hastings steps of the cold chain per MC3 iteration (1 = thesis)")
+      .Key("cold_chain_steps",
+           "steps of the cold chain per MC3 iteration, 1 = thesis (docs/method.md §9.4)");
   b->Add(&s.delta_temperature, "delta-t", "DT", "temperature step between chains")
       .Key("delta_t", "temperature step between chains (docs/method.md §9.4)");
   b->AddFlag(&o->known_classes, "known-classes",
@@ -143,6 +147,9 @@ void BindProposals(SlamStageOptions* o, Bindings* b) {
       .Key("merge_distance_m", "merge proposal distance threshold d_thr, m (docs/method.md §9.8)");
   b->Add(&m.merge_sigma_m, "merge-sigma", "M", "merge proposal sigma_E (docs/method.md §13 #14)")
       .Key("merge_sigma_m", "merge proposal sigma_E, m (docs/method.md §13 #14)");
+  b->Add(&m.reassign_sigma_m, "reassign-sigma", "M",
+         "reassign move sigma_R: how far a track looks for an object (docs/method.md §9.2)")
+      .Key("reassign_sigma_m", "reassign move sigma_R, m (docs/method.md §9.2)");
   b->Add(&m.class_proposal_uniform, "class-proposal-uniform", "U",
          "uniform share of the class drawn by merge/split/switch (0 = thesis)")
       .Key("class_proposal_uniform");

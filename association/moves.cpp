@@ -76,11 +76,11 @@ bool MergeFirstWeights(const StateEvaluation& s, const MoveOptions& options,
 
 // log eps_j = -e_j / 2 for j != j1 (Algorithm 5 step 4), unnormalised;
 // -infinity for j1 itself and across classes with an infinite penalty.
-std::vector<double> LogPartnerWeights(const StateEvaluation& s, int j1,
+std::vector<double> LogPartnerWeights(const StateEvaluation& s, int j1, double sigma_m,
                                       const MoveOptions& options) {
   const size_t n = s.state.blocks.size();
   std::vector<double> log_e(n, kNegInf);
-  const double sigma2 = options.merge_sigma_m * options.merge_sigma_m;
+  const double sigma2 = sigma_m * sigma_m;
   for (size_t j = 0; j < n; ++j) {
     if (static_cast<int>(j) == j1) continue;
     double e = (s.locations[j] - s.locations[j1]).squaredNorm() / sigma2;
@@ -96,19 +96,20 @@ std::vector<double> LogPartnerWeights(const StateEvaluation& s, int j1,
 // log eps_j normalised over j != j1 (Algorithm 5 steps 4 and 6).
 bool MergePartnerWeights(const StateEvaluation& s, int j1, const MoveOptions& options,
                          std::vector<double>* log_e) {
-  *log_e = LogPartnerWeights(s, j1, options);
+  *log_e = LogPartnerWeights(s, j1, options.merge_sigma_m, options);
   return NormaliseLog(log_e);
 }
 
 // Where a track of object `from` may go (reassign, docs/method.md §9.2): the
-// other objects with the merge partner weights eps_j seen from `from`, and
-// last (index = number of objects) alone, weighted as an object at d_thr
-// would be. Alone is no move for a track alone already. Normalised; false
-// when the track can go nowhere.
+// other objects with the merge partner weights eps_j seen from `from`, with
+// sigma_R for sigma_E (wider: an object of one or two tracks is often placed
+// far along its viewing rays), and last (index = number of objects) alone,
+// weighted as an object at d_thr would be. Alone is no move for a track
+// alone already. Normalised; false when the track can go nowhere.
 bool ReassignWeights(const StateEvaluation& s, int from, const MoveOptions& options,
                      std::vector<double>* log_w) {
-  *log_w = LogPartnerWeights(s, from, options);
-  const double alone = options.merge_distance_m / options.merge_sigma_m;
+  *log_w = LogPartnerWeights(s, from, options.reassign_sigma_m, options);
+  const double alone = options.merge_distance_m / options.reassign_sigma_m;
   log_w->push_back(s.state.blocks[from].size() > 1 ? -0.5 * alone * alone : kNegInf);
   return NormaliseLog(log_w);
 }
@@ -244,7 +245,15 @@ Proposal ProposeSwitch(const StateEvaluation& s, const ClassConfusionModel& mode
   return p;
 }
 
-// Reassign (beyond the thesis): a track drawn uniformly leaves its object
+// log of the probability that reassign moves `track`: an object drawn
+// uniformly, then one of its tracks (so that the objects of one track, the
+// likeliest to belong elsewhere, are not drowned by the large ones).
+double LogReassignTrackProbability(const StateEvaluation& s, int block) {
+  return -std::log(static_cast<double>(s.state.blocks.size())) -
+         std::log(static_cast<double>(s.state.blocks[block].size()));
+}
+
+// Reassign (beyond the thesis): a track (LogReassignTrackProbability) leaves its object
 // (which keeps its class, or goes if the track was all of it) for a nearby
 // object (which keeps its class) or becomes an object alone, of a class
 // drawn from the class proposal.
@@ -253,19 +262,17 @@ Proposal ProposeReassign(const StateEvaluation& s, const ClassConfusionModel& mo
                          Rng& rng) {
   Proposal p;
   p.type = MoveType::kReassign;
-  const size_t num_tracks = s.state.num_tracks();
-  if (num_tracks == 0 || !(probabilities.reassign > 0)) return p;
-  size_t k = std::uniform_int_distribution<size_t>(0, num_tracks - 1)(rng);
-  int from = 0;
-  while (k >= s.state.blocks[from].size()) k -= s.state.blocks[from++].size();
-  const int track = s.state.blocks[from][k];
+  if (s.state.blocks.empty() || !(probabilities.reassign > 0)) return p;
+  const int from =
+      std::uniform_int_distribution<int>(0, static_cast<int>(s.state.blocks.size()) - 1)(rng);
+  const std::vector<int>& block = s.state.blocks[from];
+  const int track = block[std::uniform_int_distribution<size_t>(0, block.size() - 1)(rng)];
   std::vector<double> log_w;
   if (!ReassignWeights(s, from, options, &log_w)) return p;
   const int target = SampleLog(log_w, rng);
   const bool alone = target == static_cast<int>(s.state.blocks.size());
   p.track = track;
   p.old_class_a = s.state.classes[from];
-  const std::vector<int>& block = s.state.blocks[from];
   std::copy_if(block.begin(), block.end(), std::back_inserter(p.part_a),
                [track](int t) { return t != track; });
   int alone_class = 0;
@@ -343,6 +350,8 @@ bool MoveOptions::Validate(std::string* why) const {
   if (!(class_mismatch_penalty >= 1)) return fail("the class-mismatch penalty must be >= 1");
   if (!(merge_count_smoothing >= 0) || std::isinf(merge_count_smoothing))
     return fail("the merge count smoothing must be >= 0");
+  if (!(reassign_sigma_m > 0) || std::isinf(reassign_sigma_m))
+    return fail("sigma_R of the reassign move must be > 0 m");
   if (!(class_proposal_uniform >= 0) || !(class_proposal_uniform < 1))
     return fail("the uniform share of the class proposal must be in [0, 1)");
   return true;
@@ -395,8 +404,7 @@ double LogReassignProbability(const StateEvaluation& s, int track, int target_bl
   const double log_where =
       target_block >= 0 ? log_w[target_block]
                         : log_w.back() + LogClassProposal(model, {track}, options)[alone_class];
-  return LogOf(probabilities.reassign) - std::log(static_cast<double>(s.state.num_tracks())) +
-         log_where;
+  return LogOf(probabilities.reassign) + LogReassignTrackProbability(s, from) + log_where;
 }
 
 Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& model,

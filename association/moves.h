@@ -51,6 +51,9 @@ struct MoveOptions {
   // switch, q(c) = (1 - u) prod P(a | c) / Z + u / |classes| (0 = thesis).
   // Without it a class the detector seldom reports is never proposed.
   double class_proposal_uniform = 0.1;
+  // sigma_R: the reassign move's sigma_E for where a track goes (beyond the
+  // thesis, docs/method.md §9.2).
+  double reassign_sigma_m = 1.0;
 
   bool Validate(std::string* why) const;
 };

@@ -94,12 +94,16 @@ ChainCheckpoint StepBlock(Chain* chain, bool cold, int block, const ClassConfusi
                           const SamplerOptions& options) {
   const BlockIterations iterations = IterationsOf(block, options);
   ChainCheckpoint done;
+  StepRule sample;
+  sample.beta = chain->beta;
+  sample.delayed_acceptance = options.delayed_acceptance;
+  // The cold chain may take several steps per iteration (thinning): any
+  // number of steps between swaps keeps its target invariant.
+  const int steps = cold ? options.cold_chain_steps : 1;
   for (int t = iterations.first; t <= iterations.last; ++t) {
-    StepRule sample;
-    sample.beta = chain->beta;
-    sample.delayed_acceptance = options.delayed_acceptance;
-    chain->state = MetropolisStep(chain->state, sample, *chain->evaluator, model, options.moves,
-                                  options.sampling_moves, chain->rng, &chain->stats);
+    for (int k = 0; k < steps; ++k)
+      chain->state = MetropolisStep(chain->state, sample, *chain->evaluator, model, options.moves,
+                                    options.sampling_moves, chain->rng, &chain->stats);
     if (cold) done.cold_states.push_back(chain->state);
   }
   done.state = chain->state;
@@ -358,6 +362,7 @@ bool SamplerOptions::Validate(std::string* why) const {
   if (!ValidProbabilities(hill_climb_moves) || !ValidProbabilities(sampling_moves))
     return fail("move probabilities must be >= 0 and sum to 1");
   if (num_chains < 1) return fail("at least one chain is needed");
+  if (cold_chain_steps < 1) return fail("the cold chain's steps per iteration must be >= 1");
   if (swap_every < 1) return fail("chains swap every >= 1 iterations");
   if (speculation_depth < 0) return fail("the speculation depth must be >= 0 swap intervals");
   if (!(delta_temperature >= 0) || std::isinf(delta_temperature))

@@ -34,7 +34,12 @@ struct SamplerOptions {
   MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
   MoveProbabilities sampling_moves{0.4, 0.4, 0.2};  // 0.5/0.5/0 with known classes
   MoveOptions moves;
-  int num_chains = 3;               // N_c; 1 = plain Metropolis-Hastings
+  int num_chains = 3;  // N_c; 1 = plain Metropolis-Hastings
+  // Metropolis-Hastings steps of the cold chain per iteration (1: Algorithm
+  // 8); the others take one. Beyond the thesis (docs/method.md §9.4): the
+  // cold chain's proposals are mostly screened out cheaply, so thinning it
+  // buys effective samples for less than more iterations of every chain.
+  int cold_chain_steps = 1;
   double delta_temperature = 3.33;  // beta_i = 1 / (1 + dT (i - 1))
   // Adjacent chains may swap after every `swap_every` iterations (1: after
   // each, Algorithm 8); any schedule keeps the tempered targets invariant.

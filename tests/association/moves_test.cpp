@@ -386,6 +386,8 @@ TEST(MovesTest, OptionsValidationNamesTheBadValue) {
       {[](MoveOptions* o) { o->merge_count_smoothing = -0.1; }, "merge count smoothing"},
       {[&](MoveOptions* o) { o->merge_count_smoothing = inf; }, "merge count smoothing"},
       {[](MoveOptions* o) { o->class_proposal_uniform = 1; }, "uniform share"},
+      {[](MoveOptions* o) { o->reassign_sigma_m = 0; }, "sigma_R"},
+      {[&](MoveOptions* o) { o->reassign_sigma_m = inf; }, "sigma_R"},
       {[](MoveOptions* o) { o->class_proposal_uniform = -0.1; }, "uniform share"},
   };
   for (const auto& [change, name] : bad) {

@@ -140,6 +140,25 @@ TEST(DetailedBalanceTest, OneTrackOrUniformSplitSampler) {
   EXPECT_GT(result.summary.sampling[static_cast<int>(MoveType::kSplit)].accepted, 0);
 }
 
+// Several steps of the cold chain per iteration (thinning, docs/method.md
+// §9.4) leave its posterior unchanged: same tolerance, with delayed
+// acceptance and the reassign move in the mix.
+TEST(DetailedBalanceTest, ColdChainStepsKeepTheEnumeratedPosterior) {
+  const ClassConfusionModel model = TestModel();
+  SamplerOptions options = TestOptions(3, 40000);
+  options.parallel_chains = false;
+  options.delayed_acceptance = true;
+  options.cold_chain_steps = 3;
+  const SamplerResult result = RunTest(options, model, 1.0);
+  const double tv = TotalVariation(result, model);
+  long proposed = 0;
+  for (const MoveStatistics& m : result.summary.sampling) proposed += m.proposed;
+  std::printf("MC3, 3 cold-chain steps per iteration: total variation %.4f\n", tv);
+  EXPECT_LT(tv, 0.03);
+  EXPECT_EQ(proposed, 3L * options.num_iterations);  // the cold chain's statistics
+  EXPECT_EQ(result.summary.cold_trace.size(), static_cast<size_t>(options.num_iterations));
+}
+
 TEST(DetailedBalanceTest, MetropolisCoupledColdChainMatchesEnumeratedPosterior) {
   const ClassConfusionModel model = TestModel();
   SamplerOptions options = TestOptions(3, 100000);
@@ -179,6 +198,7 @@ TEST(SamplerTest, SpeculativeChainsGiveTheSequentialResult) {
     options.burn_in = 100;
     options.delta_temperature = 0.3;
     options.swap_every = swap_every;
+    options.cold_chain_steps = swap_every;  // and a thinned cold chain
     options.parallel_chains = false;
     const SamplerResult reference = RunTest(options, model, 1.0);
     EXPECT_GT(reference.summary.swaps_accepted, reference.summary.swaps_proposed / 4);
@@ -334,6 +354,7 @@ TEST(SamplerTest, OptionsValidationNamesTheBadValue) {
        },
        "move probabilities"},
       {[](SamplerOptions* o) { o->num_chains = 0; }, "chain"},
+      {[](SamplerOptions* o) { o->cold_chain_steps = 0; }, "cold chain's steps"},
       {[](SamplerOptions* o) { o->swap_every = 0; }, "swap"},
       {[](SamplerOptions* o) { o->speculation_depth = -1; }, "speculation depth"},
       {[](SamplerOptions* o) { o->delta_temperature = -1; }, "dT"},
