@@ -71,9 +71,13 @@ std::vector<KeyCase> Cases() {
       {"slam.refine_every", "7", [](O o) { return o.slam.sampler.refine_every == 7; }},
       {"slam.hill_climb_moves", "0.5,0.5,0",
        [](O o) { return o.slam.sampler.hill_climb_moves.merge == 0.5; }},
-      {"slam.sampling_moves", "0.5,0.3,0.2",
-       [](O o) { return o.slam.sampler.sampling_moves.split == 0.3; }},
+      {"slam.sampling_moves", "0.4,0.3,0.2,0.1",
+       [](O o) {
+         return o.slam.sampler.sampling_moves.split == 0.3 &&
+                o.slam.sampler.sampling_moves.reassign == 0.1;
+       }},
       {"slam.chains", "2", [](O o) { return o.slam.sampler.num_chains == 2; }},
+      {"slam.cold_chain_steps", "2", [](O o) { return o.slam.sampler.cold_chain_steps == 2; }},
       {"slam.delta_t", "1.5", [](O o) { return o.slam.sampler.delta_temperature == 1.5; }},
       {"slam.known_classes", "1", [](O o) { return o.slam.known_classes; }},
       {"slam.min_track_length", "4", [](O o) { return o.slam.tracks.min_length == 4; }},
@@ -94,6 +98,8 @@ std::vector<KeyCase> Cases() {
       {"slam.merge_distance_m", "0.7",
        [](O o) { return o.slam.sampler.moves.merge_distance_m == 0.7; }},
       {"slam.merge_sigma_m", "0.8", [](O o) { return o.slam.sampler.moves.merge_sigma_m == 0.8; }},
+      {"slam.reassign_sigma_m", "1.5",
+       [](O o) { return o.slam.sampler.moves.reassign_sigma_m == 1.5; }},
       {"slam.class_proposal_uniform", "0",
        [](O o) { return o.slam.sampler.moves.class_proposal_uniform == 0; }},
       {"slam.merge_count_smoothing", "0.2",
