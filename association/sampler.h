@@ -39,8 +39,8 @@ struct SamplerOptions {
   // 8); the others take one. Beyond the thesis (docs/method.md §9.4): the
   // cold chain's proposals are mostly screened out cheaply, so thinning it
   // buys effective samples for less than more iterations of every chain
-  // (lab: ESS 74-218 -> 265-431, long_loop 11-44 -> 23-133, +3-6 % CPU).
-  int cold_chain_steps = 4;
+  // (lab: ESS 74-218 -> 193-346, long_loop 11-44 -> 35-105, +2-11 % CPU).
+  int cold_chain_steps = 3;
   double delta_temperature = 3.33;  // beta_i = 1 / (1 + dT (i - 1))
   // Adjacent chains may swap after every `swap_every` iterations (1: after
   // each, Algorithm 8); any schedule keeps the tempered targets invariant.
