@@ -232,8 +232,8 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
                     jacobians != nullptr, &inner, &outer, top_beyond_view ? &beyond : nullptr))
       return false;
   } else if (silhouette.enabled) {
-    if (!SilhouetteEnds(camera, base_robot, range, object, depth_half_extent,
-                        jacobians != nullptr, &inner, &outer, top_beyond_view ? &beyond : nullptr))
+    if (!SilhouetteEnds(camera, base_robot, range, object, depth_half_extent, jacobians != nullptr,
+                        &inner, &outer, top_beyond_view ? &beyond : nullptr))
       return false;
   } else {
     inner.radius_px = base_polar.radius_px;

@@ -68,9 +68,9 @@ inline constexpr double kPanelSmoothing = 0.03;
 
 // d(u_r, u_phi, s_r, s_phi) / d(variables).
 struct SliceJacobians {
-  Eigen::Matrix<double, 4, 3> wrt_pose;  // (x, y, theta)
-  Eigen::Matrix<double, 4, 3> wrt_base;  // (x, y, z) of the base point
-  Eigen::Matrix<double, 4, 2> wrt_size;  // (diameter, height)
+  Eigen::Matrix<double, 4, 3> wrt_pose;               // (x, y, theta)
+  Eigen::Matrix<double, 4, 3> wrt_base;               // (x, y, z) of the base point
+  Eigen::Matrix<double, 4, 2> wrt_size;               // (diameter, height)
   Eigen::Vector4d wrt_yaw = Eigen::Vector4d::Zero();  // a panel's orientation; else zero
 };
 

@@ -6,9 +6,9 @@
 
 #include <Eigen/Cholesky>
 
+#include "calib/observation_model.h"
 #include "core/angles.h"
 #include "core/error.h"
-#include "calib/observation_model.h"
 
 namespace oslam {
 
@@ -70,8 +70,7 @@ bool OdometryFactor::Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd>
 
 BoundingSliceFactor::BoundingSliceFactor(const CameraModel* camera, int pose_key, int base_key,
                                          int size_key, const BoundingSlice& measured,
-                                         double pixel_std_px, const SliceModel& model,
-                                         int yaw_key)
+                                         double pixel_std_px, const SliceModel& model, int yaw_key)
     : Factor(yaw_key >= 0 ? std::vector<int>{pose_key, base_key, size_key, yaw_key}
                           : std::vector<int>{pose_key, base_key, size_key}),
       camera_(camera),

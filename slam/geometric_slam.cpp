@@ -129,9 +129,9 @@ namespace {
 struct ObjectFit {
   bool improved = false;
   bool information_valid = false;  // `information` is J'J at the result
-  double cost = 0;  // 1/2 sum of squared whitened errors at the result
-  double prior_squared = 0;  // the class priors' share of 2 cost
-  int num_parameters = 5;    // 6 for a panel
+  double cost = 0;                 // 1/2 sum of squared whitened errors at the result
+  double prior_squared = 0;        // the class priors' share of 2 cost
+  int num_parameters = 5;          // 6 for a panel
   // J'J at the result, the leading num_parameters block (else unit).
   Eigen::Matrix<double, 6, 6> information;
   double log_det_noise = 0;  // sum of log|covariance| of the factors
@@ -255,9 +255,9 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
   fit->information = hessian;
   fit->num_parameters = panel ? 6 : 5;
   fit->num_rows = 4 * static_cast<int>(detections.size()) + fit->num_parameters;
-  fit->log_det_noise = 2.0 * (prior.location_std_m.array().log().sum() +
-                               prior.size_std_m.array().log().sum()) +
-                       (panel ? PanelYawPrior::kLogDet : 0.0);
+  fit->log_det_noise =
+      2.0 * (prior.location_std_m.array().log().sum() + prior.size_std_m.array().log().sum()) +
+      (panel ? PanelYawPrior::kLogDet : 0.0);
   for (const SliceObservation* detection : detections)
     fit->log_det_noise +=
         2.0 * BoundingSliceFactor::NoiseSigma(detection->slice, pixel_std_px).array().log().sum();
@@ -473,7 +473,7 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     for (const auto& object : warm_start->objects) previous[object.id] = &object;
   struct ObjectKeys {
     int id, class_index, base, size, yaw, count;  // yaw: a panel's, else -1
-    size_t first_factor = 0, end_factor = 0;  // its detections' factors
+    size_t first_factor = 0, end_factor = 0;      // its detections' factors
   };
   std::vector<ObjectKeys> objects;
   for (const auto& [id, list] : by_object) {

@@ -22,11 +22,11 @@
 #include <functional>
 #include <map>
 
-#include "solver/factor_graph.h"
 #include "slam/factors.h"
 #include "slam/geometric_slam.h"
 #include "slam/keyframe_start.h"
 #include "slam/landmark_factors.h"
+#include "solver/factor_graph.h"
 
 namespace oslam {
 namespace {
