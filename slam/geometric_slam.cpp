@@ -543,6 +543,7 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     mapped.geometry.diameter_m = values.Data(object.size)[0];
     mapped.geometry.height_m = values.Data(object.size)[1];
     if (object.yaw >= 0) mapped.geometry.yaw_rad = values.Data(object.yaw)[0];
+    mapped.oriented = object.yaw >= 0;
     mapped.num_observations = object.count;
     if (!solved.squared_errors.empty())
       for (size_t f = object.first_factor; f < object.end_factor; ++f)
