@@ -104,6 +104,9 @@ struct SliceModel {
   SilhouetteModel silhouette;
   bool censor_at_image_limits = false;
   double censor_margin_px = 2.0;  // CensoringOf's margin
+  // The bearing's noise E_phi (px at the slice's radius: sigma(u_phi) =
+  // E_phi / u_r); 0: the detection noise E, as in the thesis (A.11).
+  double bearing_noise_px = 0.0;
 };
 
 }  // namespace oslam

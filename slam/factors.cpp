@@ -85,18 +85,23 @@ BoundingSliceFactor::BoundingSliceFactor(const CameraModel* camera, int pose_key
     throw Error("a bounding slice needs a positive radius u_r");
   if (model.censor_at_image_limits)
     censoring_ = CensoringOf(*camera, measured, model.censor_margin_px);
-  const Eigen::Vector4d sigma = NoiseSigma(measured, pixel_std_px);
+  if (!(model.bearing_noise_px >= 0.0) || !std::isfinite(model.bearing_noise_px))
+    throw Error("the bearing noise must be >= 0 px");
+  const Eigen::Vector4d sigma = NoiseSigma(measured, pixel_std_px, model.bearing_noise_px);
   inverse_sigma_ = sigma.cwiseInverse();
-  // log |R| |W| = 2 sum log sigma, sigma = (E, E/u_r, sqrt2 E, sqrt2 E/u_r),
-  // with two logs instead of four (O-SLAM builds these per proposal).
-  log_det_ = 8.0 * std::log(pixel_std_px) + 2.0 * std::log(2.0) - 4.0 * std::log(measured.u_r_px);
+  // log |R| |W| = 2 sum log sigma, sigma = (E, E_phi/u_r, sqrt2 E, sqrt2 E/u_r),
+  // with few logs (O-SLAM builds these per proposal).
+  const double bearing = model.bearing_noise_px > 0.0 ? model.bearing_noise_px : pixel_std_px;
+  log_det_ = 6.0 * std::log(pixel_std_px) + 2.0 * std::log(bearing) + 2.0 * std::log(2.0) -
+             4.0 * std::log(measured.u_r_px);
 }
 
-Eigen::Vector4d BoundingSliceFactor::NoiseSigma(const BoundingSlice& measured,
-                                                double pixel_std_px) {
+Eigen::Vector4d BoundingSliceFactor::NoiseSigma(const BoundingSlice& measured, double pixel_std_px,
+                                                double bearing_std_px) {
   // sigma of (u_r, u_phi, s_r, s_phi): R = diag(E^2, (E/u_r)^2), W = 2R.
   const double e = pixel_std_px, sqrt2 = std::sqrt(2.0);
-  return {e, e / measured.u_r_px, sqrt2 * e, sqrt2 * e / measured.u_r_px};
+  const double bearing = bearing_std_px > 0.0 ? bearing_std_px : e;
+  return {e, bearing / measured.u_r_px, sqrt2 * e, sqrt2 * e / measured.u_r_px};
 }
 
 Eigen::Vector4d BoundingSliceFactor::Residual(const BoundingSlice& predicted,

@@ -76,7 +76,10 @@ class BoundingSliceFactor final : public Factor {
   // The model's pieces, for code that fits one object outside a graph
   // (object initialisation): the noise sigmas (E, E/u_r, sqrt(2)E,
   // sqrt(2)E/u_r) and the unwhitened residual, u_phi wrapped.
-  static Eigen::Vector4d NoiseSigma(const BoundingSlice& measured, double pixel_std_px);
+  // With `bearing_std_px` > 0 the u_phi row's is bearing_std_px / u_r
+  // (SliceModel::bearing_noise_px).
+  static Eigen::Vector4d NoiseSigma(const BoundingSlice& measured, double pixel_std_px,
+                                    double bearing_std_px = 0.0);
   static Eigen::Vector4d Residual(const BoundingSlice& predicted, const BoundingSlice& measured);
   // The residual with censored ends applied (see the class comment); when
   // `jacobians` is given its rows are changed to match.

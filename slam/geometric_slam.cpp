@@ -183,7 +183,8 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
                         censoring[k].outer ? &beyond : nullptr))
         return false;
       const Eigen::Vector4d inverse_sigma =
-          BoundingSliceFactor::NoiseSigma(z, pixel_std_px).cwiseInverse();
+          BoundingSliceFactor::NoiseSigma(z, pixel_std_px, prior.slice_model.bearing_noise_px)
+              .cwiseInverse();
       const Eigen::Vector4d error =
           inverse_sigma.cwiseProduct(BoundingSliceFactor::CensoredResidual(
               predicted, z, censoring[k], gradient ? &jacobians : nullptr));
@@ -259,8 +260,11 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
       2.0 * (prior.location_std_m.array().log().sum() + prior.size_std_m.array().log().sum()) +
       (panel ? PanelYawPrior::kLogDet : 0.0);
   for (const SliceObservation* detection : detections)
-    fit->log_det_noise +=
-        2.0 * BoundingSliceFactor::NoiseSigma(detection->slice, pixel_std_px).array().log().sum();
+    fit->log_det_noise += 2.0 * BoundingSliceFactor::NoiseSigma(detection->slice, pixel_std_px,
+                                                                prior.slice_model.bearing_noise_px)
+                                    .array()
+                                    .log()
+                                    .sum();
   return true;
 }
 
