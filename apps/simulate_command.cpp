@@ -49,7 +49,12 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
   arguments.AddPositional("scene", "scene file (e.g. samples/scenes/lab.yaml)");
   arguments.AddOption("output", "-o", "RUN_DIR", "run folder to write (new or empty)");
   arguments.AddOption("seed", "", "N", "random seed (default: the scene's seed)");
-  arguments.AddOption("frames", "", "N", "render at most N frames (default: the whole path)");
+  arguments.AddOption("frames", "", "N",
+                      "drive at most N steps, one frame each (default: the whole path)");
+  arguments.AddOption("frames-per-step", "", "N",
+                      "film each step with N frames, the robot moving between its stops\n"
+                      "(a video at the robot's own speed; runs keep frames by distance)",
+                      "1");
   arguments.AddOption("video", "", "FPS",
                       "write the frames as one video, RUN_DIR/video.mp4 at FPS frames/s,\n"
                       "instead of PNGs in RUN_DIR/frames/");
@@ -81,6 +86,11 @@ int RunSimulateCommand(const std::vector<std::string>& args) {
   if (arguments.Has("frames")) {
     options.max_frames = arguments.GetInt("frames");
     if (options.max_frames < 1) throw UsageError("--frames must be at least 1");
+  }
+  if (arguments.Has("frames-per-step")) {
+    const long per_step = arguments.GetInt("frames-per-step");
+    if (per_step < 1 || per_step > 100) throw UsageError("--frames-per-step expects 1..100");
+    options.frames_per_step = static_cast<int>(per_step);
   }
   if (arguments.Has("video")) {
     options.video_frame_rate_hz = arguments.GetDouble("video");

@@ -47,6 +47,15 @@ void BindDetectOptions(DetectStageOptions* o, Bindings* b) {
   b->Add(&d.fragment_gap_px, "fragment-gap", "PX",
          "same-class blobs this close in one frame are checked together as one view")
       .Key("fragment_gap_px", "same-class blobs this close in one frame are checked as one view");
+  b->AddNegatedFlag(&d.drop_fragments, "keep-fragments",
+                    "keep same-class pieces that fail their class together (e.g. two objects "
+                    "side by side)")
+      .Key("drop_fragments",
+           "1: drop same-class pieces that fail their class together (an occluded larger thing)");
+  b->AddNegatedFlag(&d.join_fragments, "no-join-fragments",
+                    "keep the pieces of a blob cut by stripes or a rod as separate detections")
+      .Key("join_fragments",
+           "1: report same-class pieces that fit their class better together as one detection");
   b->Add(&o->sift_templates, "sift-templates", "FILE.yaml",
          "keep a detection of a class with templates only if SIFT verifies it")
       .Key("sift_templates", "templates.yaml for SIFT verification; empty = colour only");

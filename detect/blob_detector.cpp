@@ -193,23 +193,58 @@ void BlobDetector::VerifyViews(std::vector<Detection>* detections) const {
         root[find(j)] = find(i);
   std::vector<BoundingSlice> group_slice(n);
   std::vector<double> worst_member(n, 0.0);
+  std::vector<double> best_member(n, std::numeric_limits<double>::infinity());
   std::vector<int> members(n, 0);
   for (size_t i = 0; i < n; ++i) {
     const size_t g = find(i);
     group_slice[g] = members[g] == 0 ? kept[i].slice : UnionSlice(group_slice[g], kept[i].slice);
     worst_member[g] = std::max(worst_member[g], kept[i].view_distance2);
+    best_member[g] = std::min(best_member[g], kept[i].view_distance2);
     ++members[g];
   }
-  std::vector<char> fragments(n, 0);
+  enum class Verdict : char { kKeepEach, kDropAll, kJoin };
+  std::vector<Verdict> verdict(n, Verdict::kKeepEach);
+  std::vector<double> together(n, 0.0);
   for (size_t g = 0; g < n; ++g) {
     if (members[g] < 2) continue;
-    const double together = ViewSquaredDistance(*camera_, classes_[kept[g].class_index],
-                                                group_slice[g], options_.view_checks);
-    fragments[g] = together > max2 && together > worst_member[g];
+    together[g] = ViewSquaredDistance(*camera_, classes_[kept[g].class_index], group_slice[g],
+                                      options_.view_checks);
+    if (options_.drop_fragments && together[g] > max2 && together[g] > worst_member[g])
+      verdict[g] = Verdict::kDropAll;
+    else if (options_.join_fragments && together[g] <= max2 && together[g] < best_member[g])
+      verdict[g] = Verdict::kJoin;
   }
   detections->clear();
-  for (size_t i = 0; i < n; ++i)
-    if (!fragments[find(i)]) detections->push_back(kept[i]);
+  std::vector<int> joined_at(n, -1);  // a joined group's index in *detections
+  for (size_t i = 0; i < n; ++i) {
+    const size_t g = find(i);
+    if (verdict[g] == Verdict::kDropAll) continue;
+    if (verdict[g] == Verdict::kKeepEach) {
+      detections->push_back(kept[i]);
+    } else if (joined_at[g] < 0) {
+      joined_at[g] = static_cast<int>(detections->size());
+      detections->push_back(kept[i]);
+    } else {
+      JoinInto(&(*detections)[joined_at[g]], kept[i]);
+    }
+  }
+  for (size_t g = 0; g < n; ++g) {
+    if (joined_at[g] < 0) continue;
+    Detection& joined = (*detections)[joined_at[g]];
+    joined.slice = group_slice[g];
+    joined.view_distance2 = together[g];
+    joined.score = std::exp(
+        -0.5 * classifier_.SquaredDistance(*classes_[joined.class_index].colour, joined.mean_yuv));
+  }
+}
+
+void BlobDetector::JoinInto(Detection* joined, const Detection& piece) {
+  const double total = joined->area_px + piece.area_px;
+  for (int ch = 0; ch < 3; ++ch)
+    joined->mean_yuv[ch] =
+        (joined->mean_yuv[ch] * joined->area_px + piece.mean_yuv[ch] * piece.area_px) / total;
+  joined->area_px += piece.area_px;
+  joined->look_alike_classes |= piece.look_alike_classes;
 }
 
 void BlobDetector::SeparateLookAlikes(std::vector<Detection>* detections) const {

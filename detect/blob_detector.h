@@ -66,6 +66,16 @@ struct BlobDetectorOptions {
   // bottles). inf = off (the thesis' detector).
   double max_view_distance = 3.0;
   double fragment_gap_px = 15.0;
+  // ... and when a group of fragments that each pass the check fits its
+  // class better together than its best member does (and passes), report
+  // it as one detection of the union slice: an object cut apart by its own
+  // pattern (vertical stripes) or by a thin occluder in front of it (a
+  // mirror support rod). docs/method.md §10.5.
+  bool join_fragments = true;
+  // Drop every member of a group that fails together (above). Two objects
+  // of one class side by side also fail together, so this loses both in
+  // the frames where they look close.
+  bool drop_fragments = true;
   ViewCheckOptions view_checks;
   bool Validate(std::string* why) const;
 };
@@ -108,8 +118,11 @@ class BlobDetector {
   // and explains better (lower colour plus shape distance).
   void SeparateLookAlikes(std::vector<Detection>* detections) const;
   // BlobDetectorOptions::max_view_distance: the check of each detection,
-  // then of groups of fragments.
+  // then of groups of fragments (dropped, joined or kept each).
   void VerifyViews(std::vector<Detection>* detections) const;
+  // Adds a piece's pixels (area, mean colour, look-alike bits) to a joined
+  // detection; the caller sets the union slice and the score.
+  static void JoinInto(Detection* joined, const Detection& piece);
 
   std::vector<ObjectClass> classes_;
   BlobDetectorOptions options_;

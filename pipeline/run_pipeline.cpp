@@ -6,7 +6,6 @@
 #include <functional>
 #include <optional>
 
-
 #include "calib/camera_io.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -153,17 +152,20 @@ std::vector<RunStage> RunStages(const std::string& run_dir, const RunPipelineOpt
   std::vector<std::string> exported = {
       "map.glb",      "map.gltf",     "map.ply",      "trajectory.ply", "trajectory_estimated.txt",
       "birdseye.png", "birdseye.svg", "birdseye.csv", "perspective.png"};
-  if (fs::exists(RunFolderPaths::Of(run_dir).odometry)) exported.push_back("trajectory_odometry.txt");
-  if (truth)
-    for (const char* file :
-         {"trajectory_truth.txt", "trajectories.png", "trajectories.svg", "trajectories.csv"})
-      exported.push_back(file);
-  if (options.export_.overlays) exported.push_back("overlays/");
+  if (fs::exists(RunFolderPaths::Of(run_dir).odometry))
+    exported.push_back("trajectory_odometry.txt");
+  std::vector<std::string> stale_exports, stale_eval;
+  for (const char* file :
+       {"trajectory_truth.txt", "trajectories.png", "trajectories.svg", "trajectories.csv"})
+    (truth ? exported : stale_exports).push_back(file);
+  (options.export_.overlays ? exported : stale_exports).push_back("overlays/");
+  if (!truth) stale_eval.push_back("eval.json");
   return {{"configuration", {"config.yaml"}},
           {"detect", {"detections.csv"}},
           {"o-slam", {"omap.json"}},
-          {"export", exported},
-          {"eval", truth ? std::vector<std::string>{"eval.json"} : std::vector<std::string>{}},
+          {"export", exported, stale_exports},
+          {"eval", truth ? std::vector<std::string>{"eval.json"} : std::vector<std::string>{},
+           stale_eval},
           {"report", {"report.md", "sampler_trace.png", "sampler_trace.svg", "sampler_trace.csv"}}};
 }
 

@@ -146,6 +146,7 @@ void RunStatus::Start(const std::vector<std::string>& keep) {
   for (size_t i = 0; i < stages_.size(); ++i) {
     if (std::find(keep.begin(), keep.end(), stages_[i].name) != keep.end()) continue;
     for (const std::string& file : stages_[i].files) Remove(out_dir_, file);
+    for (const std::string& file : stages_[i].stale) Remove(out_dir_, file);
   }
   Write("running", "");
 }

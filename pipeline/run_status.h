@@ -18,6 +18,10 @@ namespace oslam {
 struct RunStage {
   std::string name;
   std::vector<std::string> files;
+  // What an earlier run with other settings may have left for this stage
+  // and this run will not write (overlays/ when overlays are off): removed
+  // with the stage's files so the folder shows only this run's results.
+  std::vector<std::string> stale = {};
 };
 
 // A fingerprint of a run's inputs (the names, sizes and modification times

@@ -8,6 +8,7 @@
 
 #include "core/bounds.h"
 #include "core/error.h"
+#include "core/odometry_sync.h"
 
 namespace oslam {
 
@@ -131,6 +132,35 @@ DrivenPath DrivePath(const PathSpec& spec, const OdometryNoise& noise, long max_
   else
     RunCommands(spec, noise, max_frames, rng, &path);
   return path;
+}
+
+DrivenPath FilmedAtFramesPerStep(const DrivenPath& path, int frames_per_step) {
+  if (frames_per_step <= 1 || path.true_poses.size() < 2) return path;
+  TimedOdometry truth, odometry;  // stamped by stop index
+  for (size_t i = 0; i < path.true_poses.size(); ++i) {
+    truth.stamps_s.push_back(static_cast<double>(i));
+    odometry.stamps_s.push_back(static_cast<double>(i));
+  }
+  truth.poses = path.true_poses;
+  odometry.poses = path.odometry_poses;
+  DrivenPath filmed;
+  filmed.true_poses.push_back(path.true_poses.front());
+  filmed.odometry_poses.push_back(path.odometry_poses.front());
+  filmed.increments.push_back(path.increments.front());
+  for (size_t i = 1; i < path.true_poses.size(); ++i) {
+    const OdometryIncrement part = {path.increments[i].distance_m / frames_per_step,
+                                    path.increments[i].turn_rad / frames_per_step};
+    for (int k = 1; k <= frames_per_step; ++k) {
+      const double t = static_cast<double>(i - 1) + static_cast<double>(k) / frames_per_step;
+      // The stop itself is copied, not interpolated: bit for bit the same poses.
+      filmed.true_poses.push_back(k == frames_per_step ? path.true_poses[i]
+                                                       : InterpolateOdometry(truth, t));
+      filmed.odometry_poses.push_back(k == frames_per_step ? path.odometry_poses[i]
+                                                           : InterpolateOdometry(odometry, t));
+      filmed.increments.push_back(part);
+    }
+  }
+  return filmed;
 }
 
 }  // namespace oslam

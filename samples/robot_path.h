@@ -27,6 +27,14 @@ struct DrivenPath {
 DrivenPath DrivePath(const PathSpec& spec, const OdometryNoise& noise, long max_frames,
                      std::mt19937_64& rng);
 
+// The same drive filmed at `frames_per_step` frames per command, as a video
+// of the robot moving at its own speed records it: frame k·n is the k-th stop
+// of `path`, and the n − 1 frames before it lie on the motion from the stop
+// before (a constant twist: a straight step, a turn on the spot or an arc),
+// for the true and the odometry poses alike; each increment is split into n
+// equal parts. frames_per_step = 1 returns the path unchanged.
+DrivenPath FilmedAtFramesPerStep(const DrivenPath& path, int frames_per_step);
+
 // One draw of e_i ~ N(0, Q_i) scaled by noise.scale (zero when the scale is 0).
 Eigen::Vector3d SampleMotionError(double previous_heading_rad, const OdometryIncrement& increment,
                                   const OdometryNoise& noise, std::mt19937_64& rng);

@@ -167,7 +167,8 @@ SimulationSummary Simulate(const Scene& scene, const std::string& run_dir,
   const long max_frames = options.max_frames > 0 ? options.max_frames : scene.max_frames;
 
   std::mt19937_64 path_rng = StreamFor(options.seed, 1);
-  const DrivenPath path = DrivePath(scene.path_spec, scene.odometry, max_frames, path_rng);
+  const DrivenPath path = FilmedAtFramesPerStep(
+      DrivePath(scene.path_spec, scene.odometry, max_frames, path_rng), options.frames_per_step);
   summary.frames = static_cast<long>(path.true_poses.size());
   summary.path_length_m = PathLength(path.true_poses);
   const Pose2& last_truth = path.true_poses.back();

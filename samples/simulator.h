@@ -25,6 +25,11 @@ struct SimulationOptions {
   // per-frame odometry poses interpolated in SE(2) at the rows' times.
   double odometry_rate_hz = 0.0;
   double odometry_offset_s = 0.0;
+  // Frames per command of the path (FilmedAtFramesPerStep): 1 = one frame per
+  // stop (the thesis' stop-and-go images); more = a video of the robot moving
+  // between the stops, from which a run keeps frames by distance and turn.
+  // max_frames counts stops.
+  int frames_per_step = 1;
   // realism.enabled: the frames as a real rig records them (the robot's body
   // and mirror rods, motion blur, auto-exposure, vignetting, JPEG;
   // samples/camera_effects.h), with the rig's true mask in

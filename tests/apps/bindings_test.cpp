@@ -45,6 +45,8 @@ std::vector<KeyCase> Cases() {
       {"detect.max_view_distance", "inf",
        [](O o) { return std::isinf(o.detect.detector.max_view_distance); }},
       {"detect.fragment_gap_px", "7", [](O o) { return o.detect.detector.fragment_gap_px == 7.0; }},
+      {"detect.join_fragments", "0", [](O o) { return !o.detect.detector.join_fragments; }},
+      {"detect.drop_fragments", "0", [](O o) { return !o.detect.detector.drop_fragments; }},
       {"detect.sift_templates", "t.yaml", [](O o) { return o.detect.sift_templates == "t.yaml"; }},
       {"detect.threads", "3", [](O o) { return o.detect.threads == 3; }},
       {"detect.skip_bad_frames", "1", [](O o) { return o.detect.skip_bad_frames; }},

@@ -88,7 +88,8 @@ TEST(RunStatus, AFailedReRunLeavesNoOlderResultAndSaysWhy) {
 
 // A re-run replaces the overlays it draws: none of the earlier run's
 // frames is left beside them (a frame drawn then and not now would show an
-// older map), and files of the user's own in overlays/ are kept.
+// older map), also when it draws none, and files of the user's own in
+// overlays/ are kept.
 TEST(RunStatus, AReRunClearsTheOverlaysOfTheEarlierRun) {
   TempDir dir;
   const std::string out = dir.Path("out"), overlays = out + "/overlays";
@@ -111,6 +112,14 @@ TEST(RunStatus, AReRunClearsTheOverlaysOfTheEarlierRun) {
   EXPECT_NE(ReadFile(overlays + "/000001.jpg"), "an old overlay");
   EXPECT_EQ(ReadFile(overlays + "/notes.txt"), "the user's own file");
   std::cout << "| run, re-run drawing frames 1,2 after 0-5 | " << second.exit_code
+            << " | - | overlays: " << testing::FilesLeft(overlays) << " |" << std::endl;
+  // With overlays off, the earlier overlays would show a map this run did
+  // not make: they go too.
+  const OslamResult third =
+      Oslam("run " + FixtureRun() + " -o " + out + FastArguments() + " --set export.overlays=0");
+  ASSERT_EQ(third.exit_code, 0) << third.err;
+  EXPECT_EQ(testing::FilesUnder(overlays), (std::vector<std::string>{"notes.txt"}));
+  std::cout << "| run, re-run with overlays off | " << third.exit_code
             << " | - | overlays: " << testing::FilesLeft(overlays) << " |" << std::endl;
 }
 

@@ -119,5 +119,45 @@ TEST(RobotPath, WaypointsAreReachedDespiteNoiseAndStepsAreStopAndGo) {
   EXPECT_EQ(DrivePath(spec, noise, 10, capped_rng).true_poses.size(), 10u);
 }
 
+// Filmed at n frames per step: the stops are the same poses at every n-th
+// frame, the frames between move steadily from one stop to the next (a step
+// forward in equal parts, a turn in equal angles), and the odometry's
+// increments add up to the step's.
+TEST(RobotPath, FilmedAtFramesPerStepKeepsTheStopsAndMovesBetweenThem) {
+  OdometryNoise noise;
+  std::mt19937_64 rng(5);
+  PathSpec spec;
+  spec.start = {0, 0, 0};
+  spec.waypoints = {{1, 0}, {1, 1}};
+  const DrivenPath stops = DrivePath(spec, noise, -1, rng);
+  const int n = 4;
+  const DrivenPath filmed = FilmedAtFramesPerStep(stops, n);
+  ASSERT_EQ(filmed.true_poses.size(), (stops.true_poses.size() - 1) * n + 1);
+  ASSERT_EQ(filmed.odometry_poses.size(), filmed.true_poses.size());
+  ASSERT_EQ(filmed.increments.size(), filmed.true_poses.size());
+  for (size_t i = 0; i < stops.true_poses.size(); ++i) {
+    EXPECT_EQ(filmed.true_poses[i * n].Vector(), stops.true_poses[i].Vector()) << i;
+    EXPECT_EQ(filmed.odometry_poses[i * n].Vector(), stops.odometry_poses[i].Vector()) << i;
+  }
+  for (size_t i = 1; i < stops.true_poses.size(); ++i) {
+    const Pose2 &from = stops.true_poses[i - 1], &to = stops.true_poses[i];
+    const double step_m = std::hypot(to.x - from.x, to.y - from.y);
+    const double turn_rad = WrapAngle(to.theta - from.theta);
+    double distance_sum = 0, turn_sum = 0;
+    for (int k = 1; k <= n; ++k) {
+      const Pose2 &a = filmed.true_poses[(i - 1) * n + k - 1],
+                  &b = filmed.true_poses[(i - 1) * n + k];
+      // Equal parts of the motion (a line or an arc: chords of equal length).
+      EXPECT_NEAR(std::hypot(b.x - a.x, b.y - a.y), step_m / n, 1e-3 * step_m + 1e-12) << i;
+      EXPECT_NEAR(WrapAngle(b.theta - a.theta), turn_rad / n, 1e-9) << i;
+      distance_sum += filmed.increments[(i - 1) * n + k].distance_m;
+      turn_sum += filmed.increments[(i - 1) * n + k].turn_rad;
+    }
+    EXPECT_NEAR(distance_sum, stops.increments[i].distance_m, 1e-12) << i;
+    EXPECT_NEAR(turn_sum, stops.increments[i].turn_rad, 1e-12) << i;
+  }
+  EXPECT_EQ(FilmedAtFramesPerStep(stops, 1).true_poses.size(), stops.true_poses.size());
+}
+
 }  // namespace
 }  // namespace oslam
