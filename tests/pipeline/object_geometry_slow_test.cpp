@@ -55,8 +55,9 @@ TEST(ObjectGeometry, LabHeightsAreUnbiasedAndBasesOnTheFloor) {
     // The door, a flat panel seen from its front only: with its orientation
     // estimated its width is within 10 % (the mean extent over the half
     // space gave 1.34 m for 1.04).
-    if (object.shape == "panel")
+    if (object.shape == "panel") {
       EXPECT_LT(std::abs(match.diameter_error_m), 0.1 * object.diameter_m) << object.class_name;
+    }
   }
   // The bias: today's noise averages to within 3 cm over the seven objects.
   EXPECT_LT(std::abs(signed_height), 0.03);
