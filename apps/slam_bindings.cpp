@@ -204,6 +204,12 @@ void BindModel(SlamStageOptions* o, Bindings* b) {
       .Key("support_prior",
            "1: base height from the class's support prior (classes.yaml base_height_m, "
            "base_height_std_m; docs/method.md §5.1)");
+  b->Add(&o->bearing_noise_px, "bearing-noise", "PX",
+         "bearing noise E_phi: sigma(u_phi) = E_phi / u_r (default 5; 0: E, thesis)")
+      .Key("bearing_noise_px",
+           "bearing noise E_phi, px: sigma(u_phi) = E_phi / u_r; 0: the detection noise E "
+           "(thesis; docs/method.md §4.2)")
+      .Check([o] { return o->bearing_noise_px >= 0; }, "must be >= 0 px");
   b->Add(&g.pixel_std_px, "pixel-noise", "PX", "detection noise E (docs/method.md §4.2; thesis 30)")
       .Key("pixel_noise_px",
            "detection noise E, px: R = diag(E^2, (E/u_r)^2) (docs/method.md §4.2, §13 #5)");

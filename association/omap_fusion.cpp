@@ -24,6 +24,10 @@ struct Accumulator {
   Matrix5d second_sum = Matrix5d::Zero();  // sum of mean mean^T
   Matrix5d covariance_sum = Matrix5d::Zero();
   std::map<int, int> class_counts;
+  // A panel's orientation: sum of (cos 2 yaw, sin 2 yaw) over the samples
+  // that hold it as a panel (its period is pi), and their count.
+  Eigen::Vector2d doubled_yaw_sum = Eigen::Vector2d::Zero();
+  int yaw_count = 0;
   // (sample index, P(xi)) in sample order; one entry per sample (merged
   // identities keep the largest P(xi) of a sample).
   std::vector<std::pair<int, double>> presence;
@@ -59,6 +63,8 @@ void MergeInto(Accumulator* a, Accumulator&& b) {
   a->mean_sum += b.mean_sum;
   a->second_sum += b.second_sum;
   a->covariance_sum += b.covariance_sum;
+  a->doubled_yaw_sum += b.doubled_yaw_sum;
+  a->yaw_count += b.yaw_count;
   for (const auto& [c, n] : b.class_counts) a->class_counts[c] += n;
   std::vector<std::pair<int, double>> presence;
   auto i = a->presence.begin(), j = b.presence.begin();
@@ -144,6 +150,9 @@ OMapObject MakeObject(const Accumulator& a, const std::vector<ClassPrior>& class
   object.diameter_m = mean[3];
   object.height_m = mean[4];
   object.covariance = 0.5 * (covariance + covariance.transpose());
+  // The circular mean of an angle of period pi.
+  if (a.yaw_count > 0)
+    object.yaw_rad = 0.5 * std::atan2(a.doubled_yaw_sum.y(), a.doubled_yaw_sum.x());
   double existence_sum = 0;
   for (const auto& [sample, xi] : a.presence) existence_sum += xi;
   object.existence_probability = existence_sum / num_samples;  // (4.46) with 1/N_s
@@ -341,6 +350,11 @@ FusionResult FuseSamples(const std::vector<EvaluationPtr>& samples,
           {static_cast<int>(n),
            ExistenceWeight(object->covariance, v, classes[state.classes[j]], options)});
       ++a.class_counts[state.classes[j]];
+      if (object->oriented) {
+        const double doubled = 2.0 * object->geometry.yaw_rad;
+        a.doubled_yaw_sum += Eigen::Vector2d(std::cos(doubled), std::sin(doubled));
+        ++a.yaw_count;
+      }
     }
   }
   FusionResult result;

@@ -37,7 +37,9 @@ SilhouetteModel SilhouetteOf(const CameraModel& camera, ObjectShape shape,
       model.viewpoint_height_m = ViewpointHeight(camera);
       break;
     case ObjectShape::kPanel:
-      // Half length times the mean |cos| (or |sin|) over the front half space.
+      // Its extents follow from its orientation (PanelExtents); these are
+      // their means over the front half space, for code that has none.
+      model.panel = true;
       model.depth_half_extent = model.width_half_extent = 1.0 / kPi;
       break;
   }
@@ -144,6 +146,26 @@ bool SphereEnds(const CameraModel& camera, const Eigen::Vector3d& base_robot, do
   return true;
 }
 
+// A panel's half extents per unit width along and across the line of sight
+// (docs/method.md §4.2, "Panels"), with their derivatives with respect to
+// alpha, the angle from the line of sight to the panel.
+struct PanelExtents {
+  double depth = 0.0, width = 0.0;
+  double depth_wrt_alpha = 0.0, width_wrt_alpha = 0.0;
+};
+
+PanelExtents PanelExtentsAt(double alpha) {
+  const double c = std::cos(alpha), s = std::sin(alpha);
+  constexpr double e2 = kPanelSmoothing * kPanelSmoothing;
+  const double smooth_cos = std::sqrt(c * c + e2), smooth_sin = std::sqrt(s * s + e2);
+  PanelExtents extents;
+  extents.depth = 0.5 * smooth_cos;
+  extents.width = 0.5 * smooth_sin;
+  extents.depth_wrt_alpha = -0.5 * s * c / smooth_cos;
+  extents.width_wrt_alpha = 0.5 * s * c / smooth_sin;
+  return extents;
+}
+
 }  // namespace
 
 SliceCensoring CensoringOf(const CameraModel& camera, const BoundingSlice& measured,
@@ -195,16 +217,23 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   }
 
   const double d = object.diameter_m;
+  // A panel's extents depend on alpha = yaw - theta - bearing (robot frame).
+  const bool panel = silhouette.enabled && silhouette.panel && !silhouette.sphere;
+  PanelExtents extents;
+  if (panel)
+    extents = PanelExtentsAt(object.yaw_rad - robot_pose_world.theta -
+                             std::atan2(base_robot.y(), base_robot.x()));
+  const double depth_half_extent = panel ? extents.depth : silhouette.depth_half_extent;
   // s_phi = 2 atan(k d / rho), k = 1/2 in the thesis (A.10).
-  const double k = silhouette.enabled ? silhouette.width_half_extent : 0.5;
+  const double k = !silhouette.enabled ? 0.5 : panel ? extents.width : silhouette.width_half_extent;
   SilhouetteEnd inner, outer;
   if (silhouette.enabled && silhouette.sphere) {
     if (!SphereEnds(camera, base_robot, range, object, silhouette.viewpoint_height_m,
                     jacobians != nullptr, &inner, &outer, top_beyond_view ? &beyond : nullptr))
       return false;
   } else if (silhouette.enabled) {
-    if (!SilhouetteEnds(camera, base_robot, range, object, silhouette.depth_half_extent,
-                        jacobians != nullptr, &inner, &outer, top_beyond_view ? &beyond : nullptr))
+    if (!SilhouetteEnds(camera, base_robot, range, object, depth_half_extent, jacobians != nullptr,
+                        &inner, &outer, top_beyond_view ? &beyond : nullptr))
       return false;
   } else {
     inner.radius_px = base_polar.radius_px;
@@ -237,6 +266,19 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
   const double d_width_d_range = -2.0 * k * d / denominator;
   wrt_point.row(3) << d_width_d_range * base_robot.x() / range,
       d_width_d_range * base_robot.y() / range, 0.0;
+  // A panel: d(slice)/d(alpha). An end's derivative with respect to the
+  // diameter is delta'(d) = k_depth times that with respect to delta.
+  Eigen::Vector4d wrt_alpha = Eigen::Vector4d::Zero();
+  if (panel) {
+    const double per_depth = d / depth_half_extent * extents.depth_wrt_alpha;
+    wrt_alpha(0) = inner.wrt_diameter * per_depth;
+    wrt_alpha(2) = (outer.wrt_diameter - inner.wrt_diameter) * per_depth;
+    wrt_alpha(3) = 2.0 * d * range / denominator * extents.width_wrt_alpha;
+    // alpha = yaw - theta - atan2(y, x) of the base point in the robot frame.
+    const Eigen::RowVector3d alpha_wrt_point(base_robot.y() / (range * range),
+                                             -base_robot.x() / (range * range), 0.0);
+    wrt_point += wrt_alpha * alpha_wrt_point;
+  }
 
   // point_robot = R(theta)^T (base_world - t) with z passed through.
   Eigen::Matrix3d point_wrt_base;
@@ -247,6 +289,8 @@ bool PredictSlice(const CameraModel& camera, const Pose2& robot_pose_world,
       0, 0, 0;
   jacobians->wrt_base = wrt_point * point_wrt_base;
   jacobians->wrt_pose = wrt_point * point_wrt_pose;
+  jacobians->wrt_pose.col(2) -= wrt_alpha;  // alpha's explicit -theta
+  jacobians->wrt_yaw = wrt_alpha;
   jacobians->wrt_size.setZero();
   jacobians->wrt_size(0, 0) = inner.wrt_diameter;
   jacobians->wrt_size(2, 0) = outer.wrt_diameter - inner.wrt_diameter;

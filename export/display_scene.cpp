@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "core/angles.h"
+
 namespace oslam {
 namespace {
 
@@ -64,6 +66,12 @@ DisplayScene BuildDisplayScene(const ExportScene& scene, const ExportOptions& op
     shown.alpha = std::clamp(object->existence_probability, 0.0, 1.0);
     if (shown.shape == ObjectShape::kBox || shown.shape == ObjectShape::kPanel)
       shown.yaw_rad = FacingYaw(*object, trajectories);
+    // A panel with an estimated orientation: its width (the mesh's local y)
+    // along that yaw, its face towards the path.
+    if (shown.shape == ObjectShape::kPanel && object->yaw_rad) {
+      const double normal = *object->yaw_rad - 0.5 * kPi;
+      shown.yaw_rad = std::cos(normal - shown.yaw_rad) >= 0 ? normal : normal + kPi;
+    }
     shown.local =
         ShapeMesh(shown.shape, object->diameter_m, object->height_m, options.cylinder_segments);
     shown.local.Transform(Eigen::Affine3f(

@@ -68,6 +68,21 @@ bool TouchesAnnulus(const CameraModel& camera, const BoundingSlice& slice) {
          slice.u_r_px + slice.s_r_px >= annulus.blind_radius_px;
 }
 
+// What the solver predicts for an object (docs/method.md §4.2): its class's
+// silhouette, a panel's from its orientation when the map has one (else
+// from the mean extents); the thesis' section for an object of no known
+// class.
+SilhouetteModel ObjectSilhouette(const CameraModel& camera, const std::vector<ObjectClass>& classes,
+                                 const OMapObject& object) {
+  const auto found = std::find_if(classes.begin(), classes.end(), [&](const ObjectClass& c) {
+    return c.name == object.class_name;
+  });
+  if (found == classes.end()) return {};
+  SilhouetteModel silhouette = SilhouetteOf(camera, found->shape, found->footprint_aspect);
+  if (!object.yaw_rad) silhouette.panel = false;
+  return silhouette;
+}
+
 struct ObjectLabelToDraw {
   std::string text;
   cv::Point2d anchor;  // the middle of the slice's outer arc
@@ -123,8 +138,12 @@ cv::Mat DrawOverlay(const cv::Mat& frame, long frame_index, const CameraModel& c
   std::vector<ObjectLabelToDraw> labels;
   for (const OMapObject* object : ShownObjects(scene.map, min_existence)) {
     BoundingSlice slice;
-    const CylinderGeometry geometry{object->base_world, object->diameter_m, object->height_m};
-    if (!PredictSlice(camera, pose, geometry, &slice) || !TouchesAnnulus(camera, slice)) continue;
+    CylinderGeometry geometry{object->base_world, object->diameter_m, object->height_m};
+    const SilhouetteModel silhouette = ObjectSilhouette(camera, scene.classes, *object);
+    geometry.yaw_rad = object->yaw_rad.value_or(0.0);
+    if (!PredictSlice(camera, pose, geometry, &slice, nullptr, silhouette) ||
+        !TouchesAnnulus(camera, slice))
+      continue;
     const Rgb rgb = ClassColour(scene.classes, object->class_name);
     const cv::Rect bounds =
         DrawPrediction(&image, camera, slice, rgb, object->existence_probability);

@@ -33,6 +33,10 @@ struct OMapObject {
   // Covariance of (x, y, z, diameter, height); zero when unknown, NaN where
   // the estimate had no finite value.
   Eigen::Matrix<double, 5, 5> covariance = Eigen::Matrix<double, 5, 5>::Zero();
+  // A panel's orientation: the world-frame direction of its width (the
+  // diameter), modulo pi, rad (docs/method.md §4.2, "Panels"); absent for the
+  // other shapes and in maps made without it.
+  std::optional<double> yaw_rad;
   int num_detections = 0;
   // P(class | object is real) per class name, most probable first; empty
   // when the map was made with known classes.

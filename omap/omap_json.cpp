@@ -52,6 +52,7 @@ Json ObjectToJson(const OMapObject& o) {
                  {"existence_probability", Number(o.existence_probability)},
                  {"num_detections", o.num_detections},
                  {"covariance", covariance}};
+  if (o.yaw_rad) object["yaw_rad"] = Number(*o.yaw_rad);
   if (!o.class_histogram.empty()) {
     Json histogram = Json::object();
     for (const auto& [name, probability] : o.class_histogram) histogram[name] = Number(probability);
@@ -187,6 +188,8 @@ OMapObject ReadObject(const Reader& reader, const Json& node, const std::string&
   object.existence_probability = reader.Number(node, "existence_probability", where);
   if (!(object.existence_probability >= 0.0 && object.existence_probability <= 1.0))
     reader.Fail(where + "existence_probability", "must be in [0, 1]");
+  if (node.contains("yaw_rad"))
+    object.yaw_rad = reader.Within(node["yaw_rad"], where + "yaw_rad", -10.0, 10.0, "rad");
   if (node.contains("num_detections"))
     object.num_detections = reader.Int(node["num_detections"], where + "num_detections", 0);
   if (node.contains("covariance")) {

@@ -51,6 +51,7 @@ LoadedInput Load(const SlamStageInput& input, const SlamStageOptions& options) {
       prior.slice_model.silhouette = SilhouetteOf(*loaded.camera, c.shape, c.footprint_aspect);
     prior.slice_model.censor_at_image_limits = options.censor_slices;
     prior.slice_model.censor_margin_px = options.censor_margin_px;
+    prior.slice_model.bearing_noise_px = options.bearing_noise_px;
     loaded.data.classes.push_back(prior);
     loaded.class_names.push_back(c.name);
   }
@@ -165,6 +166,8 @@ bool SlamStageOptions::Validate(std::string* why) const {
     return fail("the class location prior's std devs must be > 0 m");
   if (!(censor_margin_px >= 0) || !std::isfinite(censor_margin_px))
     return fail("the censoring margin must be >= 0 px");
+  if (!(bearing_noise_px >= 0) || !std::isfinite(bearing_noise_px))
+    return fail("the bearing noise must be >= 0 px");
   return tracks.Validate(why) && target.Validate(why) && fusion.Validate(why) &&
          EffectiveSampler().Validate(why) && baseline.Validate(why);
 }

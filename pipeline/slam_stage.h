@@ -33,7 +33,7 @@ struct SlamStageOptions {
   SamplerOptions sampler;    // MC3, moves
   FusionOptions fusion;      // spurious model, identity merging
   NearestNeighbourOptions baseline;
-  double confusion_floor = 1e-3;                            // smallest P(a | c) (docs/method.md §13 #12)
+  double confusion_floor = 1e-3;  // smallest P(a | c) (docs/method.md §13 #12)
   double location_std_xy_m = 10.0, location_std_z_m = 2.0;  // Gamma(c) (docs/method.md §13 #7)
   // Beyond the thesis (docs/method.md §4.2, §5.1): each class's detections
   // predicted as its silhouette (classes.yaml `shape:`) rather than the
@@ -45,6 +45,11 @@ struct SlamStageOptions {
   bool censor_slices = true;
   double censor_margin_px = 10.0;
   bool support_prior = true;
+  // The bearing noise E_phi (SliceModel::bearing_noise_px; 0: E, the
+  // thesis). The detector's bearings err by ~0.3 px and a symmetric
+  // silhouette's middle is its base point's bearing; with E = 30 px on them
+  // the map's heading rested on the first odometry steps (docs/method.md §4.2).
+  double bearing_noise_px = 5.0;
   // Detected classes are right: no switch moves, no merges across classes (Sec. 6.2).
   bool known_classes = false;
   // log P(a | c) counted once per track (default) or once per detection

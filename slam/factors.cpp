@@ -2,12 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <Eigen/Cholesky>
 
+#include "calib/observation_model.h"
 #include "core/angles.h"
 #include "core/error.h"
-#include "calib/observation_model.h"
 
 namespace oslam {
 
@@ -69,30 +70,38 @@ bool OdometryFactor::Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd>
 
 BoundingSliceFactor::BoundingSliceFactor(const CameraModel* camera, int pose_key, int base_key,
                                          int size_key, const BoundingSlice& measured,
-                                         double pixel_std_px, const SliceModel& model)
-    : Factor({pose_key, base_key, size_key}),
+                                         double pixel_std_px, const SliceModel& model, int yaw_key)
+    : Factor(yaw_key >= 0 ? std::vector<int>{pose_key, base_key, size_key, yaw_key}
+                          : std::vector<int>{pose_key, base_key, size_key}),
       camera_(camera),
       measured_(measured),
       silhouette_(model.silhouette) {
   if (!camera) throw Error("BoundingSliceFactor needs a camera");
+  if ((yaw_key >= 0) != (model.silhouette.enabled && model.silhouette.panel))
+    throw Error("BoundingSliceFactor: a panel's silhouette needs its yaw, and only a panel's");
   if (!(pixel_std_px > 0.0) || !std::isfinite(pixel_std_px))
     throw Error("the pixel noise E must be positive");
   if (!(measured.u_r_px > 0.0) || !std::isfinite(measured.u_r_px))
     throw Error("a bounding slice needs a positive radius u_r");
   if (model.censor_at_image_limits)
     censoring_ = CensoringOf(*camera, measured, model.censor_margin_px);
-  const Eigen::Vector4d sigma = NoiseSigma(measured, pixel_std_px);
+  if (!(model.bearing_noise_px >= 0.0) || !std::isfinite(model.bearing_noise_px))
+    throw Error("the bearing noise must be >= 0 px");
+  const Eigen::Vector4d sigma = NoiseSigma(measured, pixel_std_px, model.bearing_noise_px);
   inverse_sigma_ = sigma.cwiseInverse();
-  // log |R| |W| = 2 sum log sigma, sigma = (E, E/u_r, sqrt2 E, sqrt2 E/u_r),
-  // with two logs instead of four (O-SLAM builds these per proposal).
-  log_det_ = 8.0 * std::log(pixel_std_px) + 2.0 * std::log(2.0) - 4.0 * std::log(measured.u_r_px);
+  // log |R| |W| = 2 sum log sigma, sigma = (E, E_phi/u_r, sqrt2 E, sqrt2 E/u_r),
+  // with few logs (O-SLAM builds these per proposal).
+  const double bearing = model.bearing_noise_px > 0.0 ? model.bearing_noise_px : pixel_std_px;
+  log_det_ = 6.0 * std::log(pixel_std_px) + 2.0 * std::log(bearing) + 2.0 * std::log(2.0) -
+             4.0 * std::log(measured.u_r_px);
 }
 
-Eigen::Vector4d BoundingSliceFactor::NoiseSigma(const BoundingSlice& measured,
-                                                double pixel_std_px) {
+Eigen::Vector4d BoundingSliceFactor::NoiseSigma(const BoundingSlice& measured, double pixel_std_px,
+                                                double bearing_std_px) {
   // sigma of (u_r, u_phi, s_r, s_phi): R = diag(E^2, (E/u_r)^2), W = 2R.
   const double e = pixel_std_px, sqrt2 = std::sqrt(2.0);
-  return {e, e / measured.u_r_px, sqrt2 * e, sqrt2 * e / measured.u_r_px};
+  const double bearing = bearing_std_px > 0.0 ? bearing_std_px : e;
+  return {e, bearing / measured.u_r_px, sqrt2 * e, sqrt2 * e / measured.u_r_px};
 }
 
 Eigen::Vector4d BoundingSliceFactor::Residual(const BoundingSlice& predicted,
@@ -113,6 +122,7 @@ Eigen::Vector4d BoundingSliceFactor::CensoredResidual(const BoundingSlice& predi
     change(jacobians->wrt_pose);
     change(jacobians->wrt_base);
     change(jacobians->wrt_size);
+    change(jacobians->wrt_yaw);
   };
   const double inner = residual[0];
   const double outer = residual[0] + residual[2];  // predicted - measured outer radius
@@ -141,6 +151,8 @@ bool BoundingSliceFactor::Linearize(const Values& values, Eigen::Ref<Eigen::Vect
   object.base_world = Eigen::Map<const Eigen::Vector3d>(values.Data(keys()[1]));
   object.diameter_m = values.Data(keys()[2])[0];
   object.height_m = values.Data(keys()[2])[1];
+  const bool has_yaw = keys().size() == 4;
+  if (has_yaw) object.yaw_rad = values.Data(keys()[3])[0];
   BoundingSlice predicted;
   SliceJacobians jacobians;
   // A censored outer end is satisfied by a top beyond the mirror's view.
@@ -153,7 +165,8 @@ bool BoundingSliceFactor::Linearize(const Values& values, Eigen::Ref<Eigen::Vect
   if (!jacobian) return true;
   jacobian->leftCols<3>() = inverse_sigma_.asDiagonal() * jacobians.wrt_pose;
   jacobian->middleCols<3>(3) = inverse_sigma_.asDiagonal() * jacobians.wrt_base;
-  jacobian->rightCols<2>() = inverse_sigma_.asDiagonal() * jacobians.wrt_size;
+  jacobian->middleCols<2>(6) = inverse_sigma_.asDiagonal() * jacobians.wrt_size;
+  if (has_yaw) jacobian->col(8) = inverse_sigma_.cwiseProduct(jacobians.wrt_yaw);
   return true;
 }
 
@@ -184,6 +197,19 @@ bool PriorFactor::Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd> er
   if (angle >= 0) difference[angle] = WrapAngle(difference[angle]);
   error = sqrt_information_ * difference;
   if (jacobian) *jacobian = sqrt_information_;
+  return true;
+}
+
+double PanelYawPrior::Error(double yaw_rad) {
+  // The yaw modulo pi, in (-pi/2, pi/2].
+  return 0.5 * WrapAngle(2.0 * yaw_rad) / kPanelYawPriorStd;
+}
+
+bool PanelYawPrior::Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd> error,
+                              Eigen::MatrixXd* jacobian) const {
+  if (values.Dim(keys()[0]) != 1) return false;
+  error[0] = Error(values.Data(keys()[0])[0]);
+  if (jacobian) (*jacobian)(0, 0) = 1.0 / kPanelYawPriorStd;
   return true;
 }
 

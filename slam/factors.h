@@ -56,11 +56,14 @@ class OdometryFactor final : public Factor {
 // min(0, predicted - measured outer radius u_r + s_r) in place of the s_r
 // row, a censored inner end max(0, predicted - measured u_r) in the u_r row
 // (and the s_r row then compares the outer ends).
+// A panel's silhouette (SilhouetteModel::panel) also depends on its
+// orientation: `yaw_key` is then a 1-D variable, the panel's yaw (rad), the
+// fourth key; it must be given for a panel and only for one (throws).
 class BoundingSliceFactor final : public Factor {
  public:
   BoundingSliceFactor(const CameraModel* camera, int pose_key, int base_key, int size_key,
                       const BoundingSlice& measured, double pixel_std_px,
-                      const SliceModel& model = {});
+                      const SliceModel& model = {}, int yaw_key = -1);
 
   int Dimension() const override { return 4; }
   bool Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd> error,
@@ -73,7 +76,10 @@ class BoundingSliceFactor final : public Factor {
   // The model's pieces, for code that fits one object outside a graph
   // (object initialisation): the noise sigmas (E, E/u_r, sqrt(2)E,
   // sqrt(2)E/u_r) and the unwhitened residual, u_phi wrapped.
-  static Eigen::Vector4d NoiseSigma(const BoundingSlice& measured, double pixel_std_px);
+  // With `bearing_std_px` > 0 the u_phi row's is bearing_std_px / u_r
+  // (SliceModel::bearing_noise_px).
+  static Eigen::Vector4d NoiseSigma(const BoundingSlice& measured, double pixel_std_px,
+                                    double bearing_std_px = 0.0);
   static Eigen::Vector4d Residual(const BoundingSlice& predicted, const BoundingSlice& measured);
   // The residual with censored ends applied (see the class comment); when
   // `jacobians` is given its rows are changed to match.
@@ -115,6 +121,28 @@ class PriorFactor final : public Factor {
   Eigen::MatrixXd sqrt_information_;  // L^{-1}
   double log_det_;
   std::string name_;
+};
+
+// A panel's orientation prior (docs/method.md §4.2, "Panels"): flat over its
+// period pi, the density 1/pi. The Gaussian factor's residual is the yaw
+// wrapped to (-pi/2, pi/2] over kPanelYawPriorStd, a regulariser that keeps
+// J'J definite when the views leave the yaw free (at most 0.012 nats), and
+// its log |P| is chosen so that its normaliser is the flat prior's:
+// -log|P|/2 - log(2 pi)/2 = -log(pi).
+inline constexpr double kPanelYawPriorStd = 10.0;  // rad
+class PanelYawPrior final : public Factor {
+ public:
+  explicit PanelYawPrior(int yaw_key) : Factor({yaw_key}) {}
+
+  int Dimension() const override { return 1; }
+  bool Linearize(const Values& values, Eigen::Ref<Eigen::VectorXd> error,
+                 Eigen::MatrixXd* jacobian) const override;
+  double LogDetCovariance() const override { return kLogDet; }
+  std::string Name() const override { return "panel yaw prior"; }
+
+  // The whitened residual at `yaw_rad`.
+  static double Error(double yaw_rad);
+  static constexpr double kLogDet = 0.45158270528945486;  // log(pi / 2)
 };
 
 // Diagonal-covariance helpers for the two class priors.

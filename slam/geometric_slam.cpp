@@ -68,6 +68,8 @@ bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
   if (!camera.BackProjectPixel(pixel, &ray)) return false;
   const double bearing = std::atan2(ray.direction_robot.y(), ray.direction_robot.x());
   const Eigen::Vector3d direction(std::cos(bearing), std::sin(bearing), 0.0);
+  // A panel starts face-on to this view.
+  const double yaw = WrapAngle(pose.theta + bearing + 0.5 * kPi);
 
   // 1-D search on the range (docs/method.md §5.4): the size prior alone gives a range
   // from s_phi; u_r (at the prior height of the base) and s_r add to it. The
@@ -82,6 +84,7 @@ bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
         pose.RobotToWorld(direction * range + Eigen::Vector3d(0, 0, prior.location_mean_m.z()));
     candidate.diameter_m = d;
     candidate.height_m = h;
+    candidate.yaw_rad = yaw;
     BoundingSlice predicted;
     if (!PredictSlice(camera, pose, candidate, &predicted, nullptr, prior.slice_model.silhouette))
       return false;
@@ -113,37 +116,48 @@ bool InitialObjectFromDetection(const CameraModel& camera, const Pose2& pose,
       pose.RobotToWorld(direction * best_range + Eigen::Vector3d(0, 0, prior.location_mean_m.z()));
   object->diameter_m = d;
   object->height_m = h;
+  object->yaw_rad = yaw;
   return true;
 }
 
 namespace {
 
-// Levenberg-Marquardt on one object's 5 parameters (base, diameter, height)
-// over its detections and class priors, the poses held. `object` holds the
-// start and receives the result when a step lowered the cost.
+// Levenberg-Marquardt on one object's parameters (base, diameter, height, and
+// a panel's yaw: 5 or 6) over its detections and class priors, the poses
+// held. `object` holds the start and receives the result when a step
+// lowered the cost.
 struct ObjectFit {
   bool improved = false;
   bool information_valid = false;  // `information` is J'J at the result
-  double cost = 0;  // 1/2 sum of squared whitened errors at the result
-  double prior_squared = 0;  // the class priors' share of 2 cost
-  Eigen::Matrix<double, 5, 5> information;  // J'J at the result
-  double log_det_noise = 0;                 // sum of log|covariance| of the factors
+  double cost = 0;                 // 1/2 sum of squared whitened errors at the result
+  double prior_squared = 0;        // the class priors' share of 2 cost
+  int num_parameters = 5;          // 6 for a panel
+  // J'J at the result, the leading num_parameters block (else unit).
+  Eigen::Matrix<double, 6, 6> information;
+  double log_det_noise = 0;  // sum of log|covariance| of the factors
   int num_rows = 0;
 };
+
+bool IsPanel(const ClassPrior& prior) {
+  return prior.slice_model.silhouette.enabled && prior.slice_model.silhouette.panel;
+}
 
 bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>& poses,
                             const std::vector<const SliceObservation*>& detections,
                             const ClassPrior& prior, double pixel_std_px, int max_iterations,
                             CylinderGeometry* object, ObjectFit* fit) {
-  using Vector5d = Eigen::Matrix<double, 5, 1>;
-  using Matrix5d = Eigen::Matrix<double, 5, 5>;
+  // theta = (base, diameter, height, yaw); the yaw is held unless a panel's.
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  const bool panel = IsPanel(prior);
   const Eigen::Vector3d location_weight = prior.location_std_m.cwiseInverse();
   const Eigen::Vector2d size_weight = prior.size_std_m.cwiseInverse();
-  // Whitened errors of the class priors: location (3), then size (2).
-  auto prior_error = [&](const Vector5d& theta) {
-    Vector5d error;
+  // Whitened errors of the priors: location (3), size (2), a panel's yaw.
+  auto prior_error = [&](const Vector6d& theta) {
+    Vector6d error;
     error << location_weight.cwiseProduct(theta.head<3>() - prior.location_mean_m),
-        size_weight.cwiseProduct(theta.tail<2>() - prior.size_mean_m);
+        size_weight.cwiseProduct(theta.segment<2>(3) - prior.size_mean_m),
+        panel ? PanelYawPrior::Error(theta[5]) : 0.0;
     return error;
   };
   std::vector<SliceCensoring> censoring(detections.size());
@@ -151,11 +165,12 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
     for (size_t k = 0; k < detections.size(); ++k)
       censoring[k] = CensoringOf(camera, detections[k]->slice, prior.slice_model.censor_margin_px);
   // Cost, gradient and Gauss-Newton matrix of the object's own factors.
-  auto evaluate = [&](const Vector5d& theta, double* cost, Vector5d* gradient, Matrix5d* hessian) {
+  auto evaluate = [&](const Vector6d& theta, double* cost, Vector6d* gradient, Matrix6d* hessian) {
     CylinderGeometry candidate;
     candidate.base_world = theta.head<3>();
     candidate.diameter_m = theta[3];
     candidate.height_m = theta[4];
+    candidate.yaw_rad = theta[5];
     double sum = 0.0;
     if (gradient) gradient->setZero(), hessian->setZero();
     SliceJacobians jacobians;
@@ -168,45 +183,49 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
                         censoring[k].outer ? &beyond : nullptr))
         return false;
       const Eigen::Vector4d inverse_sigma =
-          BoundingSliceFactor::NoiseSigma(z, pixel_std_px).cwiseInverse();
+          BoundingSliceFactor::NoiseSigma(z, pixel_std_px, prior.slice_model.bearing_noise_px)
+              .cwiseInverse();
       const Eigen::Vector4d error =
           inverse_sigma.cwiseProduct(BoundingSliceFactor::CensoredResidual(
               predicted, z, censoring[k], gradient ? &jacobians : nullptr));
       sum += error.squaredNorm();
       if (gradient) {
-        Eigen::Matrix<double, 4, 5> j;
-        j << jacobians.wrt_base, jacobians.wrt_size;
+        Eigen::Matrix<double, 4, 6> j;
+        j << jacobians.wrt_base, jacobians.wrt_size, jacobians.wrt_yaw;
         j = inverse_sigma.asDiagonal() * j;
         *gradient += j.transpose() * error;
         *hessian += j.transpose() * j;
       }
     }
-    const Vector5d priors = prior_error(theta);
+    const Vector6d priors = prior_error(theta);
     sum += priors.squaredNorm();
     if (gradient) {
       gradient->head<3>() += location_weight.cwiseProduct(priors.head<3>());
-      gradient->tail<2>() += size_weight.cwiseProduct(priors.tail<2>());
+      gradient->segment<2>(3) += size_weight.cwiseProduct(priors.segment<2>(3));
       hessian->diagonal().head<3>() += location_weight.cwiseAbs2();
-      hessian->diagonal().tail<2>() += size_weight.cwiseAbs2();
+      hessian->diagonal().segment<2>(3) += size_weight.cwiseAbs2();
+      // A held yaw: a unit diagonal and no gradient, so it never moves.
+      (*gradient)[5] += panel ? priors[5] / kPanelYawPriorStd : 0.0;
+      (*hessian)(5, 5) += panel ? 1.0 / (kPanelYawPriorStd * kPanelYawPriorStd) : 1.0;
     }
     *cost = 0.5 * sum;
     return std::isfinite(*cost);
   };
-  Vector5d theta;
-  theta << object->base_world, object->diameter_m, object->height_m;
+  Vector6d theta;
+  theta << object->base_world, object->diameter_m, object->height_m, object->yaw_rad;
   double cost;
-  Vector5d gradient;
-  Matrix5d hessian;
+  Vector6d gradient;
+  Matrix6d hessian;
   if (!evaluate(theta, &cost, &gradient, &hessian)) return false;
   fit->information_valid = true;
   double lambda = 1e-3;
   bool improved = false;
   for (int iteration = 0; iteration < max_iterations; ++iteration) {
-    Matrix5d damped = hessian;
+    Matrix6d damped = hessian;
     damped.diagonal() *= 1.0 + lambda;
-    const Vector5d step = damped.ldlt().solve(-gradient);
+    const Vector6d step = damped.ldlt().solve(-gradient);
     if (!step.allFinite()) break;
-    const Vector5d candidate = theta + step;
+    const Vector6d candidate = theta + step;
     double new_cost;
     if (candidate[3] > 0 && candidate[4] > 0 && evaluate(candidate, &new_cost, nullptr, nullptr) &&
         new_cost < cost) {
@@ -229,17 +248,23 @@ bool FitObjectWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>&
     object->base_world = theta.head<3>();
     object->diameter_m = theta[3];
     object->height_m = theta[4];
+    object->yaw_rad = WrapAngle(theta[5]);
   }
   fit->improved = improved;
   fit->cost = cost;
   fit->prior_squared = prior_error(theta).squaredNorm();
   fit->information = hessian;
-  fit->num_rows = 4 * static_cast<int>(detections.size()) + 5;
-  fit->log_det_noise = 2.0 * (prior.location_std_m.array().log().sum() +
-                               prior.size_std_m.array().log().sum());
+  fit->num_parameters = panel ? 6 : 5;
+  fit->num_rows = 4 * static_cast<int>(detections.size()) + fit->num_parameters;
+  fit->log_det_noise =
+      2.0 * (prior.location_std_m.array().log().sum() + prior.size_std_m.array().log().sum()) +
+      (panel ? PanelYawPrior::kLogDet : 0.0);
   for (const SliceObservation* detection : detections)
-    fit->log_det_noise +=
-        2.0 * BoundingSliceFactor::NoiseSigma(detection->slice, pixel_std_px).array().log().sum();
+    fit->log_det_noise += 2.0 * BoundingSliceFactor::NoiseSigma(detection->slice, pixel_std_px,
+                                                                prior.slice_model.bearing_noise_px)
+                                    .array()
+                                    .log()
+                                    .sum();
   return true;
 }
 
@@ -249,10 +274,34 @@ bool RefineObjectFromDetections(const CameraModel& camera, const std::vector<Pos
                                 const std::vector<const SliceObservation*>& detections,
                                 const ClassPrior& prior, double pixel_std_px,
                                 CylinderGeometry* object) {
-  ObjectFit fit;
-  return FitObjectWithPosesHeld(camera, poses, detections, prior, pixel_std_px, 20, object,
-                                &fit) &&
-         fit.improved;
+  if (!IsPanel(prior)) {
+    ObjectFit fit;
+    return FitObjectWithPosesHeld(camera, poses, detections, prior, pixel_std_px, 20, object,
+                                  &fit) &&
+           fit.improved;
+  }
+  // A panel's views determine its yaw only up to mirror images about the
+  // lines of sight (|cos|, |sin|): start from yaws spread over its period pi
+  // and keep the best fit.
+  constexpr int kYawStarts = 6;
+  bool found = false;
+  double best_cost = 0.0;
+  CylinderGeometry best;
+  for (int start = 0; start < kYawStarts; ++start) {
+    CylinderGeometry candidate = *object;
+    candidate.yaw_rad = WrapAngle(object->yaw_rad + start * kPi / kYawStarts);
+    ObjectFit fit;
+    if (!FitObjectWithPosesHeld(camera, poses, detections, prior, pixel_std_px, 20, &candidate,
+                                &fit))
+      continue;
+    if (!found || fit.cost < best_cost) {
+      found = true;
+      best_cost = fit.cost;
+      best = candidate;
+    }
+  }
+  if (found) *object = best;
+  return found;
 }
 
 bool ObjectLogEvidenceWithPosesHeld(const CameraModel& camera, const std::vector<Pose2>& poses,
@@ -265,11 +314,12 @@ bool ObjectLogEvidenceWithPosesHeld(const CameraModel& camera, const std::vector
   if (!FitObjectWithPosesHeld(camera, poses, detections, prior, pixel_std_px, 20, object, &fit) ||
       !fit.information_valid)
     return false;
-  const Eigen::LLT<Eigen::Matrix<double, 5, 5>> cholesky(fit.information);
+  const int n = fit.num_parameters;
+  const Eigen::LLT<Eigen::MatrixXd> cholesky(fit.information.topLeftCorner(n, n));
   if (cholesky.info() != Eigen::Success) return false;
   const double log_det_information = 2.0 * cholesky.matrixLLT().diagonal().array().log().sum();
   *log_evidence = -fit.cost - 0.5 * fit.log_det_noise - 0.5 * log_det_information +
-                  0.5 * (5 - fit.num_rows) * kLog2Pi;
+                  0.5 * (n - fit.num_rows) * kLog2Pi;
   if (detections_squared_residual)
     *detections_squared_residual = std::max(0.0, 2.0 * fit.cost - fit.prior_squared);
   return std::isfinite(*log_evidence);
@@ -426,8 +476,8 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
   if (warm_start)
     for (const auto& object : warm_start->objects) previous[object.id] = &object;
   struct ObjectKeys {
-    int id, class_index, base, size, count;
-    size_t first_factor = 0, end_factor = 0;  // its detections' factors
+    int id, class_index, base, size, yaw, count;  // yaw: a panel's, else -1
+    size_t first_factor = 0, end_factor = 0;      // its detections' factors
   };
   std::vector<ObjectKeys> objects;
   for (const auto& [id, list] : by_object) {
@@ -442,7 +492,9 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     }
     const int base = graph.AddVariable(initial.base_world);
     const int size = graph.AddVariable(Eigen::Vector2d(initial.diameter_m, initial.height_m));
-    objects.push_back({id, class_index, base, size, static_cast<int>(list.size())});
+    const int yaw =
+        IsPanel(prior) ? graph.AddVariable(Eigen::Matrix<double, 1, 1>(initial.yaw_rad), 0) : -1;
+    objects.push_back({id, class_index, base, size, yaw, static_cast<int>(list.size())});
   }
 
   // ---- factors ----
@@ -461,7 +513,7 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     for (const SliceObservation* observation : by_object[object.id]) {
       Factor* slice = graph.Emplace<BoundingSliceFactor>(
           &camera_, pose_keys[observation->frame], object.base, object.size, observation->slice,
-          options_.pixel_std_px, problem.classes[object.class_index].slice_model);
+          options_.pixel_std_px, problem.classes[object.class_index].slice_model, object.yaw);
       if (slots && observation->detection_id >= 0)
         slice->set_linearization_slot(DetectionSlot(observation->detection_id));
     }
@@ -471,6 +523,7 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     const ClassPrior& prior = problem.classes[object.class_index];
     graph.Add(MakeLocationPrior(object.base, prior.location_mean_m, prior.location_std_m));
     graph.Add(MakeSizePrior(object.size, prior.size_mean_m, prior.size_std_m));
+    if (object.yaw >= 0) graph.Emplace<PanelYawPrior>(object.yaw);
   }
 
   // ---- solve and read out ----
@@ -493,6 +546,8 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
     mapped.geometry.base_world = values.Get(object.base);
     mapped.geometry.diameter_m = values.Data(object.size)[0];
     mapped.geometry.height_m = values.Data(object.size)[1];
+    if (object.yaw >= 0) mapped.geometry.yaw_rad = values.Data(object.yaw)[0];
+    mapped.oriented = object.yaw >= 0;
     mapped.num_observations = object.count;
     if (!solved.squared_errors.empty())
       for (size_t f = object.first_factor; f < object.end_factor; ++f)

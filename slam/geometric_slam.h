@@ -17,10 +17,10 @@
 #include <Eigen/Core>
 
 #include "calib/camera_model.h"
+#include "calib/observation_model.h"
 #include "core/bounding_slice.h"
 #include "core/motion_model.h"
 #include "core/pose2.h"
-#include "calib/observation_model.h"
 #include "solver/sparse_solver.h"
 
 namespace oslam {
@@ -125,6 +125,7 @@ struct MappedObject {
   int id = 0;
   int class_index = 0;
   CylinderGeometry geometry;
+  bool oriented = false;  // geometry.yaw_rad was estimated (a panel, docs/method.md §4.2)
   // Joint covariance of (x, y, z, d, h); zero when not computed.
   Eigen::Matrix<double, 5, 5> covariance = Eigen::Matrix<double, 5, 5>::Zero();
   int num_observations = 0;
@@ -139,7 +140,7 @@ struct GeometricSlamResult {
   std::vector<MappedObject> objects;              // sorted by id
   SolverSummary summary;
   Evidence evidence;
-  std::string covariance_message;  // why covariances are missing, if they are
+  std::string covariance_message;       // why covariances are missing, if they are
   bool has_object_covariances = false;  // objects[].covariance were computed
   KeyframeStartSummary keyframe_start;
 };

@@ -22,11 +22,11 @@
 #include <functional>
 #include <map>
 
-#include "solver/factor_graph.h"
 #include "slam/factors.h"
 #include "slam/geometric_slam.h"
 #include "slam/keyframe_start.h"
 #include "slam/landmark_factors.h"
+#include "solver/factor_graph.h"
 
 namespace oslam {
 namespace {
@@ -100,7 +100,7 @@ StageFit SolveStage(const StageContext& context, int first_free, int end, Sparse
     graph.Emplace<RelativePoseFactor>(key_of(j - 1), key_of(j), context.keyframes.links[j].relative,
                                       context.keyframes.links[j].covariance);
   struct StageObject {
-    int id, base, size;
+    int id, base, size, yaw;  // yaw: a panel's, else -1
   };
   std::vector<StageObject> stage_objects;
   for (const auto& [id, list] : context.keyframes.by_object) {
@@ -117,13 +117,17 @@ StageFit SolveStage(const StageContext& context, int first_free, int end, Sparse
     const CylinderGeometry& geometry = objects->at(id);
     const int base = graph.AddVariable(geometry.base_world);
     const int size = graph.AddVariable(Eigen::Vector2d(geometry.diameter_m, geometry.height_m));
-    stage_objects.push_back({id, base, size});
+    const bool panel = prior.slice_model.silhouette.enabled && prior.slice_model.silhouette.panel;
+    const int yaw =
+        panel ? graph.AddVariable(Eigen::Matrix<double, 1, 1>(geometry.yaw_rad), 0) : -1;
+    stage_objects.push_back({id, base, size, yaw});
     for (const SliceObservation* observation : seen)
       graph.Emplace<BoundingSliceFactor>(&context.camera, key_of(observation->frame), base, size,
                                          observation->slice, context.pixel_std_px,
-                                         prior.slice_model);
+                                         prior.slice_model, yaw);
     graph.Add(MakeLocationPrior(base, prior.location_mean_m, prior.location_std_m));
     graph.Add(MakeSizePrior(size, prior.size_mean_m, prior.size_std_m));
+    if (panel) graph.Emplace<PanelYawPrior>(yaw);
   }
 
   const SolveResult solved = solver->Solve(&graph);
@@ -143,6 +147,7 @@ StageFit SolveStage(const StageContext& context, int first_free, int end, Sparse
     geometry.base_world = graph.values().Get(object.base);
     geometry.diameter_m = graph.values().Data(object.size)[0];
     geometry.height_m = graph.values().Data(object.size)[1];
+    if (object.yaw >= 0) geometry.yaw_rad = graph.values().Data(object.yaw)[0];
   }
   return fit;
 }

@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/angles.h"
+
 namespace oslam {
 namespace {
 
@@ -70,6 +72,7 @@ OMap ToOMap(const GeometricSlamResult& result, const std::vector<std::string>& c
     object.base_world = mapped.geometry.base_world;
     object.diameter_m = mapped.geometry.diameter_m;
     object.height_m = mapped.geometry.height_m;
+    if (mapped.oriented) object.yaw_rad = 0.5 * WrapAngle(2.0 * mapped.geometry.yaw_rad);
     object.existence_probability = 1.0;
     object.covariance = mapped.covariance;
     object.num_detections = mapped.num_observations;

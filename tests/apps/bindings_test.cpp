@@ -114,6 +114,7 @@ std::vector<KeyCase> Cases() {
       {"slam.silhouette_model", "0", [](O o) { return !o.slam.silhouette_model; }},
       {"slam.censor_slices", "0", [](O o) { return !o.slam.censor_slices; }},
       {"slam.censor_margin_px", "4", [](O o) { return o.slam.censor_margin_px == 4; }},
+      {"slam.bearing_noise_px", "7", [](O o) { return o.slam.bearing_noise_px == 7; }},
       {"slam.support_prior", "0", [](O o) { return !o.slam.support_prior; }},
       {"slam.pixel_noise_px", "15", [](O o) { return o.slam.target.slam.pixel_std_px == 15; }},
       {"slam.motion_add_fwd_m", "0.02",

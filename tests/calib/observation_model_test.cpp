@@ -36,7 +36,8 @@ TEST_P(SpecObservationVectors, MatchToSpecPrecision) {
 INSTANTIATE_TEST_SUITE_P(
     Spec, SpecObservationVectors,
     ::testing::Values(
-        ObservationVector{"lpa", {0, 0, 0}, {2, 1, 0}, 0.6, 0.6, {144.000, 0.46365, 43.369, 0.26674}},
+        ObservationVector{
+            "lpa", {0, 0, 0}, {2, 1, 0}, 0.6, 0.6, {144.000, 0.46365, 43.369, 0.26674}},
         ObservationVector{
             "lpa", {1, -1, kPi / 2}, {1.5, 2, 0}, 0.25, 0.25, {157.026, -0.16515, 13.210, 0.08215}},
         ObservationVector{
@@ -47,7 +48,9 @@ INSTANTIATE_TEST_SUITE_P(
                           1.0,
                           1.7,
                           {161.124, 2.05619, 192.642, 0.46295}}),
-    [](const auto& info) { return std::string(info.param.preset) + "_" + std::to_string(info.index); });
+    [](const auto& info) {
+      return std::string(info.param.preset) + "_" + std::to_string(info.index);
+    });
 
 Eigen::VectorXd SliceVector(const CameraModel& camera, const Eigen::VectorXd& x) {
   // x = pose (3), base (3), size (2)
@@ -203,6 +206,79 @@ TEST(SilhouetteModel, BoxAndPanelExtentsAreMeansOverYaw) {
   EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kPanel).width_half_extent, 1 / kPi, 1e-12);
   EXPECT_NEAR(SilhouetteOf(camera, ObjectShape::kSphere).viewpoint_height_m,
               camera.parameters().focus_height_m, 1e-9);
+}
+
+// A panel's slice as a function of (pose, base, diameter, height, yaw).
+Eigen::VectorXd PanelVector(const CameraModel& camera, const SilhouetteModel& model,
+                            const Eigen::VectorXd& x) {
+  BoundingSlice slice;
+  CylinderGeometry panel{x.segment<3>(3), x[6], x[7]};
+  panel.yaw_rad = x[8];
+  EXPECT_TRUE(PredictSlice(camera, {x[0], x[1], x[2]}, panel, &slice, nullptr, model));
+  return Eigen::Vector4d(slice.u_r_px, slice.u_phi_rad, slice.s_r_px, slice.s_phi_rad);
+}
+
+// The panel's orientation enters through alpha = yaw - bearing: every block,
+// the yaw's included, against central differences, face-on, oblique and
+// nearly edge-on, below and above the viewpoint.
+TEST(SilhouetteModel, PanelJacobiansWithYawMatchCentralDifferences) {
+  const HyperbolicCamera cameras[] = {HyperbolicCamera::Preset("lpa"),
+                                      HyperbolicCamera::Preset("cogniron")};
+  const SilhouetteModel model = SilhouetteOf(cameras[0], ObjectShape::kPanel);
+  ASSERT_TRUE(model.panel);
+  std::vector<Eigen::Matrix<double, 9, 1>> cases;
+  for (const double yaw : {0.0, 0.4, kPi / 2 - 0.01, 1.2, -2.0, 2.9}) {
+    Eigen::Matrix<double, 9, 1> x;
+    x << 0.5, 0.5, 0.3, -1, 2, 0.02, 1.0, 2.1, yaw;  // a door, its top above the viewpoint
+    cases.push_back(x);
+    x << 0, 0, 0, 3, 1, 0, 1.2, 0.5, yaw;  // a low panel
+    cases.push_back(x);
+  }
+  for (const HyperbolicCamera& camera : cameras) {
+    for (const auto& x : cases) {
+      BoundingSlice slice;
+      SliceJacobians analytic;
+      CylinderGeometry panel{x.segment<3>(3), x[6], x[7]};
+      panel.yaw_rad = x[8];
+      ASSERT_TRUE(PredictSlice(camera, {x[0], x[1], x[2]}, panel, &slice, &analytic, model));
+      const Eigen::MatrixXd numeric = testing::NumericJacobian(
+          [&](const Eigen::VectorXd& v) { return PanelVector(camera, model, v); }, x);
+      Eigen::Matrix<double, 4, 9> combined;
+      combined << analytic.wrt_pose, analytic.wrt_base, analytic.wrt_size, analytic.wrt_yaw;
+      EXPECT_LT((combined - numeric).cwiseAbs().maxCoeff(),
+                1e-6 * std::max(1.0, numeric.cwiseAbs().maxCoeff()))
+          << "case " << x.transpose();
+    }
+  }
+}
+
+// A panel's angular width is what its two vertical edges subtend: the full
+// width face-on, none edge-on, and in between the edges' bearings (exact up
+// to the second order in width / range). Turned by pi it is the same panel.
+TEST(SilhouetteModel, PanelWidthFollowsItsOrientation) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  const SilhouetteModel model = SilhouetteOf(camera, ObjectShape::kPanel);
+  const double width = 1.04, range = 3.0;
+  for (double alpha = 0.0; alpha < kPi; alpha += kPi / 12) {
+    // The panel at (range, 0), its length turned by alpha from the line of sight.
+    CylinderGeometry panel{Eigen::Vector3d(range, 0, 0), width, 2.17};
+    panel.yaw_rad = alpha;
+    BoundingSlice slice, turned;
+    ASSERT_TRUE(PredictSlice(camera, {}, panel, &slice, nullptr, model));
+    panel.yaw_rad = alpha + kPi;
+    ASSERT_TRUE(PredictSlice(camera, {}, panel, &turned, nullptr, model));
+    EXPECT_NEAR(turned.s_phi_rad, slice.s_phi_rad, 1e-12);
+    const Eigen::Vector2d edge = 0.5 * width * Eigen::Vector2d(std::cos(alpha), std::sin(alpha));
+    const double subtended =
+        std::abs(std::atan2(edge.y(), range + edge.x()) - std::atan2(-edge.y(), range - edge.x()));
+    EXPECT_NEAR(slice.s_phi_rad, subtended, 0.02 * 2 * std::atan(0.5 * width / range) + 0.01)
+        << "alpha " << alpha;
+  }
+  CylinderGeometry face_on{Eigen::Vector3d(range, 0, 0), width, 2.17};
+  face_on.yaw_rad = kPi / 2;
+  BoundingSlice slice;
+  ASSERT_TRUE(PredictSlice(camera, {}, face_on, &slice, nullptr, model));
+  EXPECT_NEAR(slice.s_phi_rad, 2 * std::atan(0.5 * width / range), 1e-3);
 }
 
 TEST(SliceCensoring, EndsAtTheImageLimitsAreBounds) {

@@ -9,9 +9,9 @@
 #include <Eigen/LU>
 
 #include "calib/hyperbolic_camera.h"
+#include "calib/observation_model.h"
 #include "core/angles.h"
 #include "core/error.h"
-#include "calib/observation_model.h"
 #include "tests/solver/factor_check.h"
 #include "tests/test_util.h"
 
@@ -145,7 +145,11 @@ TEST(BoundingSliceFactorTest, CensoredJacobiansMatchCentralDifferences) {
       // Keep the end at the limit: re-derive s_r from the rim for tall ones.
       BoundingSlice at_limit = measured;
       if (tall) at_limit.s_r_px = annulus.rim_radius_px - 1.0 - at_limit.u_r_px;
-      BoundingSliceFactor factor(&camera, pose, base_key, size_key, at_limit, 30.0, model);
+      // A panel's orientation is a fourth key.
+      const double yaw = 3.0 * u(rng);
+      const int yaw_key =
+          model.silhouette.panel ? values.Add(Eigen::Matrix<double, 1, 1>(yaw), 0) : -1;
+      BoundingSliceFactor factor(&camera, pose, base_key, size_key, at_limit, 30.0, model, yaw_key);
       ASSERT_EQ(factor.censoring().inner, !tall);  // (the wide margin censors both ends)
       ASSERT_TRUE(factor.censoring().outer);
       Eigen::VectorXd error(4);
@@ -154,9 +158,10 @@ TEST(BoundingSliceFactorTest, CensoredJacobiansMatchCentralDifferences) {
       const double bound_row = tall ? error[2] : error[0];
       BoundingSlice predicted;
       bool beyond = false;  // a tall top may be beyond the mirror's view: bound met
-      ASSERT_TRUE(PredictSlice(
-          camera, p, {values.Get(base_key), values.Data(size_key)[0], values.Data(size_key)[1]},
-          &predicted, nullptr, model.silhouette, tall ? &beyond : nullptr));
+      ASSERT_TRUE(PredictSlice(camera, p,
+                               {values.Get(base_key), values.Data(size_key)[0],
+                                values.Data(size_key)[1], yaw_key >= 0 ? yaw : 0.0},
+                               &predicted, nullptr, model.silhouette, tall ? &beyond : nullptr));
       const double gap =
           tall ? predicted.u_r_px + predicted.s_r_px - (at_limit.u_r_px + at_limit.s_r_px)
                : predicted.u_r_px - at_limit.u_r_px;
@@ -206,6 +211,54 @@ TEST(BoundingSliceFactorTest, CensoredOuterEndKeepsTheHeightAbovePrediction) {
   values.Set(size, Eigen::Vector2d(1.0, 0.6));
   ASSERT_TRUE(censored.Linearize(values, error, nullptr));
   EXPECT_LT(error[2], -0.1);
+}
+
+// A panel's slice factor has the panel's yaw as a fourth key.
+TEST(BoundingSliceFactorTest, PanelYawJacobianMatchesCentralDifferences) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  SliceModel panel;
+  panel.silhouette = SilhouetteOf(camera, ObjectShape::kPanel);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    Values values;
+    const int pose = values.AddPose(u(rng), u(rng), 3.0 * u(rng));
+    const Pose2 p{values.Data(pose)[0], values.Data(pose)[1], values.Data(pose)[2]};
+    const double range = 2.0 + (u(rng) + 1.0), bearing = 3.0 * u(rng);
+    const int base = values.Add(
+        p.RobotToWorld({range * std::cos(bearing), range * std::sin(bearing), 0.05 * u(rng)}));
+    const int size = values.Add(Eigen::Vector2d(1.0 + 0.1 * u(rng), 0.5 + 0.1 * u(rng)));
+    const int yaw = values.Add(Eigen::Matrix<double, 1, 1>(3.0 * u(rng)), 0);
+    BoundingSliceFactor factor(&camera, pose, base, size, {150.0, u(rng), 20.0, 0.2}, 30.0, panel,
+                               yaw);
+    ASSERT_EQ(factor.keys().size(), 4u);
+    Eigen::VectorXd error(4);
+    if (!factor.Linearize(values, error, nullptr)) continue;
+    ExpectJacobianMatchesNumeric(factor, values, 1e-5);
+    ++checked;
+  }
+  EXPECT_GT(checked, 20);
+  // A panel needs its yaw, and only a panel has one.
+  EXPECT_THROW(BoundingSliceFactor(&camera, 0, 1, 2, {150.0, 0.0, 20.0, 0.2}, 30.0, panel),
+               oslam::Error);
+  EXPECT_THROW(BoundingSliceFactor(&camera, 0, 1, 2, {150.0, 0.0, 20.0, 0.2}, 30.0, {}, 3),
+               oslam::Error);
+}
+
+// The yaw prior is flat over the panel's period pi: its normaliser is the
+// uniform density 1/pi, and its residual is periodic in pi and small.
+TEST(PanelYawPriorTest, NormaliserIsTheFlatDensityAndResidualHasPeriodPi) {
+  Values values;
+  const int yaw = values.Add(Eigen::Matrix<double, 1, 1>(0.7), 0);
+  const PanelYawPrior prior(yaw);
+  ExpectJacobianMatchesNumeric(prior, values, 1e-7);
+  EXPECT_NEAR(-0.5 * prior.LogDetCovariance() - 0.5 * std::log(2 * kPi), -std::log(kPi), 1e-12);
+  for (const double angle : {-3.0, -1.0, 0.2, 1.5, 2.9}) {
+    EXPECT_NEAR(PanelYawPrior::Error(angle + kPi), PanelYawPrior::Error(angle), 1e-12);
+    EXPECT_LE(std::abs(PanelYawPrior::Error(angle)), 0.5 * kPi / kPanelYawPriorStd + 1e-12);
+  }
+  EXPECT_NEAR(PanelYawPrior::Error(0.3), 0.3 / kPanelYawPriorStd, 1e-12);
 }
 
 TEST(PriorFactorTest, JacobianErrorAndNormaliser) {

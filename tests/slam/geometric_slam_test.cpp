@@ -14,6 +14,7 @@
 #include <Eigen/LU>
 
 #include "calib/hyperbolic_camera.h"
+#include "core/angles.h"
 #include "core/error.h"
 #include "slam/factors.h"
 #include "solver/sparse_solver.h"
@@ -446,6 +447,106 @@ TEST(GeometricSlamTest, SolvesOnTwoThreadsAtOnceEqualOneThreadBitForBit) {
       for (size_t j = 0; j < alone.objects.size(); ++j)
         EXPECT_EQ(result.objects[j].covariance, alone.objects[j].covariance);
     }
+}
+
+// A door on a wall, seen from one side only as the robot drives past it
+// (docs/method.md §4.2, "Panels"): exact odometry and detections from the
+// panel model at its true orientation.
+struct DoorPass {
+  HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  CylinderGeometry door{Eigen::Vector3d(0.4, 2.5, 0.0), 1.04, 2.17};
+  std::vector<Pose2> poses;
+  GeometricSlamProblem problem;
+
+  explicit DoorPass(bool panel_model) {
+    door.yaw_rad = 0.2;  // the wall a little askew to the path
+    ClassPrior prior;
+    prior.size_mean_m = {1.0, 2.2};
+    prior.size_std_m = {0.3, 0.5};
+    prior.location_std_m = {10.0, 10.0, 0.03};  // on the floor
+    prior.slice_model.silhouette = SilhouetteOf(camera, ObjectShape::kPanel);
+    prior.slice_model.censor_at_image_limits = true;
+    const SilhouetteModel truth = prior.slice_model.silhouette;
+    prior.slice_model.silhouette.panel = panel_model;
+    problem.classes.push_back(prior);
+    problem.object_class[0] = 0;
+    problem.increments.resize(1);
+    poses.push_back({-2.0, 0.0, 0.0});
+    problem.first_pose = poses[0];
+    for (int i = 1; i < 40; ++i) {
+      const OdometryIncrement step{0.1, 0.05 * std::sin(0.5 * i)};
+      problem.increments.push_back(step);
+      poses.push_back(ApplyIncrement(poses.back(), step));
+    }
+    for (size_t i = 0; i < poses.size(); ++i) {
+      BoundingSlice slice;
+      bool beyond = false;
+      if (!PredictSlice(camera, poses[i], door, &slice, nullptr, truth, &beyond)) continue;
+      // A top beyond the rim is measured at the rim (a censored end).
+      if (beyond) slice.s_r_px = camera.annulus().rim_radius_px - slice.u_r_px;
+      problem.observations.push_back({static_cast<long>(i), 0, slice});
+    }
+  }
+};
+
+TEST(GeometricSlamTest, PanelWidthAndYawFromOneSidedViews) {
+  GeometricSlamOptions options;
+  options.pixel_std_px = 0.1;  // exact detections: the priors must not pull
+  const DoorPass pass(/*panel_model=*/true);
+  ASSERT_GT(pass.problem.observations.size(), 30u);
+  const GeometricSlamResult result = GeometricSlam(pass.camera, options).Solve(pass.problem);
+  ASSERT_TRUE(result.summary.IsUsable()) << result.summary.message;
+  ASSERT_EQ(result.objects.size(), 1u);
+  const CylinderGeometry& door = result.objects[0].geometry;
+  EXPECT_NEAR(door.diameter_m, pass.door.diameter_m, 0.01);
+  EXPECT_LT((door.base_world - pass.door.base_world).norm(), 0.01);
+  // The yaw modulo pi.
+  EXPECT_NEAR(0.5 * WrapAngle(2 * (door.yaw_rad - pass.door.yaw_rad)), 0.0, 0.01);
+
+  // The mean extent over the half space (1/pi) reads the same views as a
+  // door a quarter too wide: the bias the orientation removes.
+  const DoorPass mean_model(/*panel_model=*/false);
+  const GeometricSlamResult biased = GeometricSlam(pass.camera, options).Solve(mean_model.problem);
+  ASSERT_EQ(biased.objects.size(), 1u);
+  EXPECT_GT(biased.objects[0].geometry.diameter_m - pass.door.diameter_m, 0.15);
+}
+
+// The per-object Laplace evidence (6 parameters for a panel, its flat yaw
+// prior included) equals the solver's on a graph with the poses held.
+TEST(GeometricSlamTest, PanelEvidenceWithPosesHeldEqualsTheSolvers) {
+  const DoorPass pass(/*panel_model=*/true);
+  const ClassPrior& prior = pass.problem.classes[0];
+  std::vector<const SliceObservation*> list;
+  for (const SliceObservation& observation : pass.problem.observations)
+    list.push_back(&observation);
+  CylinderGeometry object = pass.door;
+  object.base_world += Eigen::Vector3d(0.1, -0.1, 0.0);
+  object.yaw_rad += 0.1;
+  double log_evidence = 0;
+  ASSERT_TRUE(ObjectLogEvidenceWithPosesHeld(pass.camera, pass.poses, list, prior, 30.0, &object,
+                                             &log_evidence));
+
+  FactorGraph graph;
+  std::vector<int> pose_keys;
+  for (const Pose2& pose : pass.poses)
+    pose_keys.push_back(graph.AddPose(pose.x, pose.y, pose.theta, true));
+  const int base = graph.AddVariable(pass.door.base_world);
+  const int size = graph.AddVariable(Eigen::Vector2d(pass.door.diameter_m, pass.door.height_m));
+  const int yaw = graph.AddVariable(Eigen::Matrix<double, 1, 1>(pass.door.yaw_rad), 0);
+  graph.Add(MakeLocationPrior(base, prior.location_mean_m, prior.location_std_m));
+  graph.Add(MakeSizePrior(size, prior.size_mean_m, prior.size_std_m));
+  graph.Emplace<PanelYawPrior>(yaw);
+  for (const SliceObservation* observation : list)
+    graph.Emplace<BoundingSliceFactor>(&pass.camera, pose_keys[observation->frame], base, size,
+                                       observation->slice, 30.0, prior.slice_model, yaw);
+  SolverOptions tight;
+  tight.absolute_function_tolerance = 0.0;
+  tight.function_tolerance = 1e-12;
+  SparseSolver solver(tight);
+  const SolveResult solved = solver.Solve(&graph);
+  ASSERT_TRUE(solved.evidence.valid);
+  EXPECT_NEAR(log_evidence, solved.evidence.log_evidence, 1e-3);
+  EXPECT_NEAR(0.5 * WrapAngle(2 * (object.yaw_rad - graph.values().Data(yaw)[0])), 0.0, 1e-3);
 }
 
 TEST(GeometricSlamTest, InvalidInputThrowsNamingTheProblem) {
