@@ -147,8 +147,11 @@ OMapObject MakeObject(const Accumulator& a, const std::vector<ClassPrior>& class
   const Matrix5d covariance =
       a.covariance_sum / a.count + a.second_sum / a.count - mean * mean.transpose();
   object.base_world = mean.head<3>();
-  object.diameter_m = mean[3];
-  object.height_m = mean[4];
+  // The solver's sizes are unconstrained least-squares values: an object seen
+  // only as a sliver (a leg taken for a box) can come out a few cm below
+  // zero. A size is not negative; the O-Map format bounds it at 0.
+  object.diameter_m = std::max(0.0, mean[3]);
+  object.height_m = std::max(0.0, mean[4]);
   object.covariance = 0.5 * (covariance + covariance.transpose());
   // The circular mean of an angle of period pi.
   if (a.yaw_count > 0)

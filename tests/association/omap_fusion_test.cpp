@@ -92,6 +92,22 @@ TEST(OMapFusionTest, ThesisFusionKeepsOneObjectPerIdentity) {
   EXPECT_NEAR(r.map.trajectory[1].theta, 0.1, 1e-12);
 }
 
+// The solver's sizes are unconstrained: a sliver of an object can come out
+// a few cm below zero. The O-Map never carries a negative size (its reader
+// would reject the file the run just wrote).
+TEST(OMapFusionTest, ASizeBelowZeroIsReportedAsZero) {
+  const EvaluationPtr sample = Sample({{{0}, {1.0, 0, 0}}});
+  auto solution = std::make_shared<GeometricSlamResult>(*sample->solution);
+  solution->objects[0].geometry.diameter_m = -0.04;
+  solution->objects[0].geometry.height_m = -0.01;
+  auto sliver = std::make_shared<StateEvaluation>(*sample);
+  sliver->solution = solution;
+  const FusionResult r = FuseSamples({sliver}, Classes(), {3}, NoSpurious(false));
+  ASSERT_EQ(r.map.objects.size(), 1u);
+  EXPECT_EQ(r.map.objects[0].diameter_m, 0.0);
+  EXPECT_EQ(r.map.objects[0].height_m, 0.0);
+}
+
 TEST(OMapFusionTest, AlternatingIdentitiesOfOneObjectBecomeOne) {
   const FusionResult r =
       FuseSamples(AlternatingSamples(10), Classes(), {3, 3, 3, 2}, NoSpurious(true));
