@@ -49,7 +49,8 @@ struct SlamStageOptions {
   // thesis). The detector's bearings err by ~0.3 px and a symmetric
   // silhouette's middle is its base point's bearing; with E = 30 px on them
   // the map's heading rested on the first odometry steps (docs/method.md §4.2).
-  double bearing_noise_px = 5.0;
+  // 10 px also covers the bearing error of blurred, compressed video.
+  double bearing_noise_px = 10.0;
   // Detected classes are right: no switch moves, no merges across classes (Sec. 6.2).
   bool known_classes = false;
   // log P(a | c) counted once per track (default) or once per detection
