@@ -15,6 +15,7 @@
 #include "detect/blob_detector.h"
 #include "detect/colour_training.h"
 #include "detect/evaluation.h"
+#include "detect/trained_classes.h"
 #include "samples/scene.h"
 #include "samples/simulator.h"
 #include "test_util.h"
@@ -44,9 +45,7 @@ class FragmentsTest : public ::testing::Test {
 
   static Outcome Detect(const BlobDetectorOptions& options) {
     const std::unique_ptr<CameraModel> camera = LoadCamera(run_ + "/camera.yaml");
-    const std::vector<ObjectClass> untrained = ReadClasses(run_ + "/classes.yaml");
-    const std::vector<ObjectClass> classes = LearnImageShapes(
-        TrainColourModels(untrained, ExamplesFromGroundTruth(run_, untrained), 3.0), run_);
+    const std::vector<ObjectClass> classes = ClassesTrainedOnGroundTruth(run_);
     const GroundTruth truth = *ReadGroundTruth(run_);
     const FrameSource frames(run_);
     const BlobDetector detector(*camera, classes, options);

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "detect/blob_detector.h"
 #include "detect/colour_training.h"
+#include "detect/trained_classes.h"
 #include "samples/scene.h"
 #include "samples/simulator.h"
 #include "test_util.h"
@@ -67,9 +68,7 @@ testing::TempDir* LookAlikes::dir_ = nullptr;
 TEST_F(LookAlikes, LearntImageShapesSeparateASameColouredBallAndBucket) {
   const std::string run = Run();
   const std::unique_ptr<CameraModel> camera = LoadCamera(run + "/camera.yaml");
-  const std::vector<ObjectClass> untrained = ReadClasses(run + "/classes.yaml");
-  const std::vector<ObjectClass> classes = LearnImageShapes(
-      TrainColourModels(untrained, ExamplesFromGroundTruth(run, untrained), 3.0), run);
+  const std::vector<ObjectClass> classes = ClassesTrainedOnGroundTruth(run);
   ASSERT_TRUE(classes[kBallId].image_shape && classes[kBucketId].image_shape);
   const ImageShapeModel& ball = *classes[kBallId].image_shape;
   const ImageShapeModel& bucket = *classes[kBucketId].image_shape;

@@ -15,6 +15,7 @@
 #include "detect/blob_detector.h"
 #include "detect/colour_training.h"
 #include "detect/evaluation.h"
+#include "detect/trained_classes.h"
 #include "detect/view_checks.h"
 #include "samples/scene.h"
 #include "samples/simulator.h"
@@ -123,9 +124,7 @@ TEST(ViewChecks, DropLookAlikesOfTheWrongSizeAndKeepEveryTrueView) {
   const std::string run = dir.Path("run");
   Simulate(LoadScene(std::string(OSLAM_SOURCE_DIR) + "/tests/data/view_checks.yaml"), run, {});
   const std::unique_ptr<CameraModel> camera = LoadCamera(run + "/camera.yaml");
-  const std::vector<ObjectClass> untrained = ReadClasses(run + "/classes.yaml");
-  const std::vector<ObjectClass> classes = LearnImageShapes(
-      TrainColourModels(untrained, ExamplesFromGroundTruth(run, untrained), 3.0), run);
+  const std::vector<ObjectClass> classes = ClassesTrainedOnGroundTruth(run);
   const GroundTruth truth = *ReadGroundTruth(run);
   const FrameSource frames(run);
   auto evaluate = [&](const BlobDetectorOptions& options) {
