@@ -205,7 +205,7 @@ void BindModel(SlamStageOptions* o, Bindings* b) {
            "1: base height from the class's support prior (classes.yaml base_height_m, "
            "base_height_std_m; docs/method.md §5.1)");
   b->Add(&o->bearing_noise_px, "bearing-noise", "PX",
-         "bearing noise E_phi: sigma(u_phi) = E_phi / u_r (default 5; 0: E, thesis)")
+         "bearing noise E_phi: sigma(u_phi) = E_phi / u_r (0: E, thesis)")
       .Key("bearing_noise_px",
            "bearing noise E_phi, px: sigma(u_phi) = E_phi / u_r; 0: the detection noise E "
            "(thesis; docs/method.md §4.2)")
