@@ -134,6 +134,11 @@ struct UnknownAssociationOptions {
   int joint_anchors = 2;
   int joint_retry_inliers = 2;
   int joint_every_poses = 50;  // RANSAC at most once per this many poses
+  // After a joint merge's solve, the worst-fitting pairs are split off again
+  // and the problem re-solved while their landmarks' standardised residuals
+  // exceed joint_misfit_z, at most joint_repair_rounds times (0: never).
+  int joint_repair_rounds = 5;
+  double joint_misfit_z = 4;
   // Noise calibration and refinement (docs/method.md §16.3). The evidence
   // decides associations only as well as the stated noise is right: too
   // loose (GTSAM's Victoria Park file: bearing std 0.2 rad for a laser) and
@@ -252,6 +257,7 @@ class LandmarkAssociation {
   std::optional<JointAlignment> AlignRecentOntoOld(const StateEvaluation& before, int n);
   EvaluationPtr TryAnchor(const StateEvaluation& before, const JointAlignment& alignment,
                           const std::vector<double>& driven, int anchor, int n);
+  EvaluationPtr WithoutMisfitPairs(EvaluationPtr e, const JointAlignment& alignment, int n);
   AssociationState ReleasedAndMerged(const AssociationState& s, const JointAlignment& alignment,
                                      int anchor) const;
   long KeepJointMerge(const EvaluationPtr& before, const EvaluationPtr& best, int best_anchor,
@@ -297,6 +303,7 @@ class LandmarkAssociation {
   AssociationState state_;  // the last window's (or the global pass's) final state
   EvaluationPtr previous_;  // the last window's final full solve
   EvaluationPtr current_;
+  long split_pairs_ = 0;                    // by the last WithoutMisfitPairs
   int tracks_before_ = 0, tracks_now_ = 0;  // tracks of the earlier windows, and with this one
   std::array<MoveStatistics, kNumMoveTypes> stats_{};
   // The window's data, kept alive as long as its evaluator.

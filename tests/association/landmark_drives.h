@@ -87,7 +87,8 @@ inline LandmarkDataset SimulateDrive(unsigned seed, std::vector<Pose2>* true_pos
 // far beyond its stated noise, so the car re-enters A tens of metres and
 // degrees off: one re-seen tree cannot pay for bending the excursion, all of
 // them together can.
-inline LandmarkDataset SimulateExcursion(unsigned seed, double heading_bias_rad) {
+inline LandmarkDataset SimulateExcursion(unsigned seed, double heading_bias_rad,
+                                         double tree_spacing_m = 6.0) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
@@ -104,14 +105,15 @@ inline LandmarkDataset SimulateExcursion(unsigned seed, double heading_bias_rad)
       last.theta = WrapAngle(last.theta + turn);
     }
   }
-  // Trees 4-7 m beside the path, at least 6 m apart.
+  // Trees 4-7 m beside the path, at least tree_spacing_m apart.
+  const size_t max_trees = static_cast<size_t>(70 * 36 / (tree_spacing_m * tree_spacing_m));
   std::vector<Eigen::Vector2d> trees;
-  for (int attempt = 0; attempt < 20000 && trees.size() < 70; ++attempt) {
+  for (int attempt = 0; attempt < 20000 && trees.size() < max_trees; ++attempt) {
     const Pose2& p = poses[std::uniform_int_distribution<size_t>(0, poses.size() - 1)(rng)];
     const double side = uniform(rng) < 0.5 ? -1 : 1, offset = side * (4 + 3 * uniform(rng));
     const Eigen::Vector2d t(p.x - offset * std::sin(p.theta), p.y + offset * std::cos(p.theta));
     bool clear = true;
-    for (const auto& o : trees) clear = clear && (o - t).norm() > 6.0;
+    for (const auto& o : trees) clear = clear && (o - t).norm() > tree_spacing_m;
     for (const auto& q : poses) clear = clear && (Eigen::Vector2d(q.x, q.y) - t).norm() > 3.0;
     if (clear) trees.push_back(t);
   }
