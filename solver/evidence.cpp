@@ -66,6 +66,25 @@ bool SolveUnitColumnsInBatches(
     const std::vector<std::vector<int>>& columns, int system,
     const std::function<void(size_t group, const double* solution)>& take, std::string* why) {
   const int n = static_cast<int>(factor->n);
+  // One right-hand side and one solution buffer for all batches, reused by
+  // cholmod_solve2: a fresh n x 64 pair per batch (megabytes on a long
+  // trajectory) cost more in page faults than the solves themselves.
+  size_t total_columns = 0;
+  for (const auto& group : columns) total_columns += group.size();
+  cholmod_dense* unit = cholmod_zeros(
+      n, std::max<size_t>(1, std::min<size_t>(total_columns, kCovarianceBatch)), CHOLMOD_REAL, cc);
+  cholmod_dense *x = nullptr, *y = nullptr, *e = nullptr;
+  const auto release = [&] {
+    cholmod_free_dense(&unit, cc);
+    cholmod_free_dense(&x, cc);
+    cholmod_free_dense(&y, cc);
+    cholmod_free_dense(&e, cc);
+  };
+  if (!unit) {
+    if (why) *why = "CHOLMOD could not allocate the right-hand side";
+    return false;
+  }
+  auto* ux = static_cast<double*>(unit->x);
   size_t g = 0;
   while (g < columns.size()) {
     size_t end = g;
@@ -73,15 +92,30 @@ bool SolveUnitColumnsInBatches(
     while (end < columns.size() &&
            (width == 0 || width + static_cast<int>(columns[end].size()) <= kCovarianceBatch))
       width += static_cast<int>(columns[end++].size());
-    cholmod_dense* unit = cholmod_zeros(n, width, CHOLMOD_REAL, cc);
-    auto* ux = static_cast<double*>(unit->x);
+    if (width > static_cast<int>(unit->ncol)) {  // one group wider than a batch
+      cholmod_free_dense(&unit, cc);
+      unit = cholmod_zeros(n, width, CHOLMOD_REAL, cc);
+      if (!unit) {
+        release();
+        if (why) *why = "CHOLMOD could not allocate the right-hand side";
+        return false;
+      }
+      ux = static_cast<double*>(unit->x);
+    }
+    const size_t allocated_columns = unit->ncol;
+    unit->ncol = width;
     int c = 0;
     for (size_t h = g; h < end; ++h)
       for (int column : columns[h])
         ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = 1.0;
-    cholmod_dense* x = cholmod_solve(system, factor, unit, cc);
-    cholmod_free_dense(&unit, cc);
-    if (!x) {
+    const int solved = cholmod_solve2(system, factor, unit, nullptr, &x, nullptr, &y, &e, cc);
+    c = 0;
+    for (size_t h = g; h < end; ++h)
+      for (int column : columns[h])
+        ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = 0.0;
+    unit->ncol = allocated_columns;
+    if (!solved || !x) {
+      release();
       if (why) *why = "CHOLMOD solve failed";
       return false;
     }
@@ -91,9 +125,9 @@ bool SolveUnitColumnsInBatches(
       take(h, xx + static_cast<size_t>(c) * n);
       c += static_cast<int>(columns[h].size());
     }
-    cholmod_free_dense(&x, cc);
     g = end;
   }
+  release();
   return true;
 }
 
@@ -166,18 +200,32 @@ bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_p
   const auto* fp = static_cast<const int*>(factor->p);
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
+  // The draws' and the solutions' buffers reused across batches (see
+  // SolveUnitColumnsInBatches).
+  cholmod_dense* z = cholmod_allocate_dense(n, std::min(kCovarianceBatch, std::max(count, 1)), n,
+                                            CHOLMOD_REAL, cc);
+  cholmod_dense *y = nullptr, *work_y = nullptr, *work_e = nullptr;
+  const auto release = [&] {
+    cholmod_free_dense(&z, cc);
+    cholmod_free_dense(&y, cc);
+    cholmod_free_dense(&work_y, cc);
+    cholmod_free_dense(&work_e, cc);
+  };
+  if (!z) {
+    if (why) *why = "CHOLMOD could not allocate the draws";
+    return false;
+  }
+  auto* zx = static_cast<double*>(z->x);
   for (int first = 0; first < count; first += kCovarianceBatch) {
     const int width = std::min(kCovarianceBatch, count - first);
-    cholmod_dense* z = cholmod_zeros(n, width, CHOLMOD_REAL, cc);
-    auto* zx = static_cast<double*>(z->x);
+    z->ncol = width;
     for (int c = 0; c < width; ++c)
       for (int i = 0; i < n; ++i) {
         const double d = factor->is_ll ? 1.0 : fx[fp[i]];
         zx[static_cast<size_t>(c) * n + i] = normal(rng) / std::sqrt(std::abs(d));
       }
-    cholmod_dense* y = cholmod_solve(CHOLMOD_Lt, factor, z, cc);
-    cholmod_free_dense(&z, cc);
-    if (!y) {
+    if (!cholmod_solve2(CHOLMOD_Lt, factor, z, nullptr, &y, nullptr, &work_y, &work_e, cc) || !y) {
+      release();
       if (why) *why = "CHOLMOD solve failed";
       return false;
     }
@@ -187,8 +235,8 @@ bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_p
         for (int c = 0; c < width; ++c)
           (*samples)[g](static_cast<Eigen::Index>(r), first + c) =
               yx[static_cast<size_t>(c) * n + inverse_permutation[columns[g][r]]];
-    cholmod_free_dense(&y, cc);
   }
+  release();
   return true;
 }
 
