@@ -244,9 +244,9 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&u.joint_min_inliers, "joint-inliers", "N",
         "unknown association: joint re-entry merges (RANSAC alignment of the recent landmarks "
         "onto old ones) need this many aligned pairs (0: off)");
-  b.Add(&u.joint_recent_poses, "joint-recent", "POSES",
-        "unknown association: joint merges align the landmarks first seen in this many last "
-        "poses onto older ones");
+  b.Add(&u.joint_recent_m, "joint-recent", "M",
+        "unknown association: joint merges align the landmarks first seen in the last M metres "
+        "driven onto older ones");
   b.Add(&u.joint_repair_rounds, "joint-repair", "ROUNDS",
         "unknown association: after a joint merge's solve, split off the worst-fitting pairs and "
         "re-solve, at most this many times (0: never)");

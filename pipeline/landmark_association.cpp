@@ -58,7 +58,7 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
   }
   if (joint_min_inliers < 0 ||
       (joint_min_inliers > 0 &&
-       (joint_min_inliers < 3 || joint_recent_poses < 1 || !(joint_search_m > 0) ||
+       (joint_min_inliers < 3 || !(joint_recent_m > 0) || !(joint_search_m > 0) ||
         !(joint_inlier_m > 0) || !(joint_max_rotation_rad >= 0) || joint_ransac_iterations < 1 ||
         joint_anchors < 1 || joint_retry_inliers < 0 || joint_every_poses < 1 ||
         joint_repair_rounds < 0 || !(joint_misfit_z > 0) || !(joint_max_shift_m >= 0)))) {
@@ -158,6 +158,11 @@ void LandmarkAssociation::BuildTracks() {
     }
   }
   options_.target.slam.landmark_prior_mean_m = centre / placed;
+  driven_m_.assign(data.dead_reckoning.size(), 0.0);
+  for (size_t i = 1; i < data.dead_reckoning.size(); ++i)
+    driven_m_[i] =
+        driven_m_[i - 1] + std::hypot(data.dead_reckoning[i].x - data.dead_reckoning[i - 1].x,
+                                      data.dead_reckoning[i].y - data.dead_reckoning[i - 1].y);
   result_.track_time_s = SecondsSince(start_);
   Say(Format("tracks: %.0f sightings -> %.0f tracks (gate %.2f m, pose gap %.0f), %.2f s",
              double(placed), double(num_tracks_), options_.tracks.gate_m,
@@ -197,7 +202,7 @@ void LandmarkAssociation::RunWindow(size_t w) {
   if (const long joined = JointMerge(n); joined > 0) {
     accepted += joined;
     // The rest of the re-entry: the recent tracks against everything.
-    const int recent_from = n - options_.joint_recent_poses;
+    const int recent_from = StretchStart(n, options_.joint_recent_m);
     const int first_recent = static_cast<int>(
         std::lower_bound(first_pose_.begin(), first_pose_.begin() + tracks_now_, recent_from) -
         first_pose_.begin());
@@ -483,8 +488,9 @@ long LandmarkAssociation::JointMerge(int n) {
 }
 
 long LandmarkAssociation::TryJointMerge(int n) {
-  if (n - last_failure_ > options_.joint_recent_poses) joint_needed_ = options_.joint_min_inliers;
-  if (n - options_.joint_recent_poses <= 0) return 0;
+  const int recent_from = StretchStart(n, options_.joint_recent_m);
+  if (last_failure_ < recent_from) joint_needed_ = options_.joint_min_inliers;
+  if (recent_from <= 0) return 0;  // not driven that far yet
   const EvaluationPtr before = current_;
   const std::optional<JointAlignment> alignment = AlignRecentOntoOld(*before, n);
   if (!alignment) return 0;
@@ -500,7 +506,7 @@ long LandmarkAssociation::TryJointMerge(int n) {
   EvaluationPtr best;
   int best_anchor = 0;
   for (int k = 0, previous_anchor = -1; k < options_.joint_anchors; ++k) {
-    const int anchor = std::max(0, n - 1 - (options_.joint_recent_poses << k));
+    const int anchor = std::max(0, StretchStart(n, options_.joint_recent_m * (1 << k)) - 1);
     if (anchor == previous_anchor) break;
     previous_anchor = anchor;
     // The correction moves every pose after the anchor: poses held in the
@@ -516,13 +522,13 @@ long LandmarkAssociation::TryJointMerge(int n) {
 }
 
 // The units aligned: the recent part of each landmark (its tracks first seen
-// since n - joint_recent_poses, placed by their own sightings: a merge made
+// in the last joint_recent_m metres, placed by their own sightings: a merge made
 // under the drift may be wrong) and the old part (tracks last seen before
 // that, at the landmark's position). nullopt when no alignment is worth a
 // try.
 std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRecentOntoOld(
     const StateEvaluation& before, int n) {
-  const int recent_from = n - options_.joint_recent_poses;
+  const int recent_from = StretchStart(n, options_.joint_recent_m);
   const AssociationState& s = before.state;
   JointAlignment alignment;
   std::vector<Unit>& recent = alignment.recent;
@@ -739,6 +745,13 @@ long LandmarkAssociation::KeepJointMerge(const EvaluationPtr& before, const Eval
   joint_needed_ = static_cast<int>(pairs) + options_.joint_retry_inliers;
   last_failure_ = n;
   return 0;
+}
+
+int LandmarkAssociation::StretchStart(int n, double metres) const {
+  if (n <= 0) return 0;
+  const double from = driven_m_[n - 1] - metres;
+  return static_cast<int>(std::lower_bound(driven_m_.begin(), driven_m_.begin() + n, from) -
+                          driven_m_.begin());
 }
 
 Eigen::Vector2d LandmarkAssociation::PlacedBy(const std::vector<int>& tracks,

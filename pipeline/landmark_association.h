@@ -102,7 +102,7 @@ struct UnknownAssociationOptions {
   // cannot, but many together can; docs/benchmarks.md). At most every
   // joint_every_poses poses, after the window's targeted merges, the recent
   // parts of the landmarks (their tracks first seen in the last
-  // joint_recent_poses poses, placed by their own sightings: a merge made
+  // joint_recent_m metres driven, placed by their own sightings: a merge made
   // under the drift may be wrong) are aligned rigidly onto the old parts
   // (tracks last seen before that) by RANSAC: joint_ransac_iterations
   // samples of two recent parts, every old pair within joint_search_m that
@@ -110,7 +110,7 @@ struct UnknownAssociationOptions {
   // nearest pairs within joint_inlier_m. An alignment with at least
   // joint_min_inliers inliers (a dense park offers random ones of 4-7) that
   // moves something by more than joint_inlier_m and merges something new is
-  // tried: per anchor pose (joint_recent_poses times 1, 2, 4, ... back,
+  // tried: per anchor pose (joint_recent_m times 1, 2, 4, ... back,
   // joint_anchors of them) the tracks first seen after the anchor are
   // released from their landmarks, every inlier pair merged, and the whole
   // problem solved from the trajectory with the correction spread along the
@@ -120,7 +120,11 @@ struct UnknownAssociationOptions {
   // state before is restored and the next try needs joint_retry_inliers
   // more inliers. joint_min_inliers 0: off.
   int joint_min_inliers = 8;
-  int joint_recent_poses = 300;
+  // In metres driven, not poses, so that the span means the same at any
+  // pose rate: Victoria Park's 300 poses (0.57 m apart) were about 170 m; on
+  // the synthetic city worlds (a pose per metre) 300 poses were too long a
+  // stretch to align rigidly under their heading drift (docs/benchmarks.md).
+  double joint_recent_m = 170;
   double joint_search_m = 60;
   double joint_inlier_m = 2.5;
   double joint_max_rotation_rad = 0.5;
@@ -262,6 +266,9 @@ class LandmarkAssociation {
                                      int anchor) const;
   long KeepJointMerge(const EvaluationPtr& before, const EvaluationPtr& best, int best_anchor,
                       int n, size_t pairs);
+  // The first pose within `metres` driven (by the dead reckoning) of pose
+  // n - 1: the start of the stretch that long ending at pose n.
+  int StretchStart(int n, double metres) const;
   // Where the sightings of `tracks` before pose n put their landmark.
   Eigen::Vector2d PlacedBy(const std::vector<int>& tracks, const std::vector<Pose2>& poses,
                            int n) const;
@@ -296,6 +303,7 @@ class LandmarkAssociation {
   const LandmarkDataset* data_ = nullptr;    // stated_ or calibrated_
   int num_tracks_ = 0;
   std::vector<int> first_pose_, last_pose_, track_size_;  // per track
+  std::vector<double> driven_m_;  // per pose: metres driven since pose 0 (dead reckoning)
   std::optional<ClassConfusionModel> model_;
   std::vector<int> ends_;  // of the windows (pose counts)
 

@@ -7,6 +7,7 @@
 // is reproducible from its seed; the option checks.
 #include "pipeline/landmark_association.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -88,7 +89,7 @@ TEST(LandmarkAssociationTest, JointMergeClosesALoopNoSingleMergeCloses) {
   const std::vector<int> truth = GivenAssociation(data);
   UnknownAssociationOptions options;
   options.seed = 5;
-  options.joint_recent_poses = 80;  // 160 m (Victoria Park's 300 poses are about 170 m)
+  options.joint_recent_m = 160;  // 80 poses (Victoria Park's 300 poses are about 170 m)
   options.joint_every_poses = 20;
   UnknownAssociationOptions single = options;
   single.joint_min_inliers = 0;
@@ -124,27 +125,34 @@ TEST(LandmarkAssociationTest, JointMergeClosesALoopNoSingleMergeCloses) {
 // Splitting the misfit pairs off again and re-solving keeps the loop closed.
 TEST(LandmarkAssociationTest, JointMergeSplitsItsMisfitPairs) {
   // Measured on 12 drives x spacings 3 and 4 m: without the repair 4 of 24
-  // left the loop open (recall 0.65-0.67); with it all 24 are the truth.
-  // This is one of those four.
-  const LandmarkDataset data = SimulateExcursion(4, 0.003, 4.0);
-  const std::vector<int> truth = GivenAssociation(data);
-  UnknownAssociationOptions options;
-  options.seed = 5;
-  options.joint_recent_poses = 80;
-  options.joint_every_poses = 20;
-  UnknownAssociationOptions unrepaired = options;
-  unrepaired.joint_repair_rounds = 0;
-  const UnknownAssociationResult without = SolveUnknownAssociation(data, unrepaired);
-  const UnknownAssociationResult with = SolveUnknownAssociation(data, options);
-  const PairwiseAgreement a = ComparePairwise(without.association, truth);
-  const PairwiseAgreement b = ComparePairwise(with.association, truth);
-  std::printf(
-      "unrepaired P %.4f R %.4f (%ld pairs kept), repaired P %.4f R %.4f (%ld pairs kept)\n",
-      a.precision, a.recall, without.joint_merges, b.precision, b.recall, with.joint_merges);
-  EXPECT_LT(a.recall, 0.8);
-  EXPECT_DOUBLE_EQ(b.agreement, 1.0);
-  EXPECT_GT(with.joint_merges, 0);
-  EXPECT_GT(with.log_target, without.log_target);
+  // left the loop open (recall 0.65-0.67; which ones depends on where the
+  // recent stretch starts); with it all 24 are the truth. Three of them:
+  // every one repaired is the truth, and at least one is not without.
+  double worst_unrepaired_recall = 1;
+  for (unsigned seed : {4u, 5u, 6u}) {
+    const LandmarkDataset data = SimulateExcursion(seed, 0.003, 4.0);
+    const std::vector<int> truth = GivenAssociation(data);
+    UnknownAssociationOptions options;
+    options.seed = 5;
+    options.joint_recent_m = 160;
+    options.joint_every_poses = 20;
+    UnknownAssociationOptions unrepaired = options;
+    unrepaired.joint_repair_rounds = 0;
+    const UnknownAssociationResult without = SolveUnknownAssociation(data, unrepaired);
+    const UnknownAssociationResult with = SolveUnknownAssociation(data, options);
+    const PairwiseAgreement a = ComparePairwise(without.association, truth);
+    const PairwiseAgreement b = ComparePairwise(with.association, truth);
+    std::printf(
+        "drive %u: unrepaired P %.4f R %.4f (%ld pairs kept), repaired P %.4f R %.4f "
+        "(%ld pairs kept)\n",
+        seed, a.precision, a.recall, without.joint_merges, b.precision, b.recall,
+        with.joint_merges);
+    worst_unrepaired_recall = std::min(worst_unrepaired_recall, a.recall);
+    EXPECT_DOUBLE_EQ(b.agreement, 1.0) << "drive " << seed;
+    EXPECT_GT(with.joint_merges, 0) << "drive " << seed;
+    EXPECT_GE(with.log_target, without.log_target) << "drive " << seed;
+  }
+  EXPECT_LT(worst_unrepaired_recall, 0.8);
 }
 
 // Two trees 0.9 m apart seen with a loose sighting noise (as GTSAM's file
