@@ -64,8 +64,8 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
         joint_repair_rounds < 0 || !(joint_misfit_z > 0) || !(joint_max_shift_m >= 0)))) {
     if (why)
       *why =
-          "joint merges need >= 3 inliers (0: off), recent poses, RANSAC samples, anchors "
-          "and a pose spacing >= 1, distances > 0";
+          "joint merges need >= 3 inliers (0: off), RANSAC samples, anchors and a pose "
+          "spacing >= 1, repair rounds >= 0, a recent span, distances and a misfit z > 0";
     return false;
   }
   return true;

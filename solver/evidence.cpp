@@ -68,7 +68,7 @@ bool SolveUnitColumnsInBatches(
   const int n = static_cast<int>(factor->n);
   // One right-hand side and one solution buffer for all batches, reused by
   // cholmod_solve2: a fresh n x 64 pair per batch (megabytes on a long
-  // trajectory) cost more in page faults than the solves themselves.
+  // trajectory) is page-faulted in anew each time.
   size_t total_columns = 0;
   for (const auto& group : columns) total_columns += group.size();
   cholmod_dense* unit = cholmod_zeros(
