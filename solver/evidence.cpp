@@ -58,6 +58,29 @@ double LogDetOfFactor(const cholmod_factor* factor) {
 
 namespace {
 
+// A right-hand side, its solution and cholmod_solve2's workspace, reused
+// across batches (a fresh n x 64 set per batch, megabytes on a long
+// trajectory, is page-faulted in anew each time) and freed together.
+struct SolveBuffers {
+  explicit SolveBuffers(cholmod_common* common) : cc(common) {}
+  ~SolveBuffers() {
+    for (cholmod_dense** d : {&rhs, &solution, &work_y, &work_e}) cholmod_free_dense(d, cc);
+  }
+  SolveBuffers(const SolveBuffers&) = delete;
+  SolveBuffers& operator=(const SolveBuffers&) = delete;
+  // Solves `system` with `factor` for the first `width` columns of rhs.
+  bool Solve(int system, cholmod_factor* factor, int width) {
+    const size_t allocated_columns = rhs->ncol;
+    rhs->ncol = width;
+    const int solved =
+        cholmod_solve2(system, factor, rhs, nullptr, &solution, nullptr, &work_y, &work_e, cc);
+    rhs->ncol = allocated_columns;
+    return solved && solution;
+  }
+  cholmod_common* cc;
+  cholmod_dense *rhs = nullptr, *solution = nullptr, *work_y = nullptr, *work_e = nullptr;
+};
+
 // Solves with the factor (`system`: CHOLMOD_A or CHOLMOD_L) for the unit
 // columns of every group, kCovarianceBatch columns per solve, and hands each
 // group the n x size slice of the solution that belongs to it.
@@ -66,25 +89,16 @@ bool SolveUnitColumnsInBatches(
     const std::vector<std::vector<int>>& columns, int system,
     const std::function<void(size_t group, const double* solution)>& take, std::string* why) {
   const int n = static_cast<int>(factor->n);
-  // One right-hand side and one solution buffer for all batches, reused by
-  // cholmod_solve2: a fresh n x 64 pair per batch (megabytes on a long
-  // trajectory) is page-faulted in anew each time.
   size_t total_columns = 0;
   for (const auto& group : columns) total_columns += group.size();
-  cholmod_dense* unit = cholmod_zeros(
-      n, std::max<size_t>(1, std::min<size_t>(total_columns, kCovarianceBatch)), CHOLMOD_REAL, cc);
-  cholmod_dense *x = nullptr, *y = nullptr, *e = nullptr;
-  const auto release = [&] {
-    cholmod_free_dense(&unit, cc);
-    cholmod_free_dense(&x, cc);
-    cholmod_free_dense(&y, cc);
-    cholmod_free_dense(&e, cc);
+  SolveBuffers buffers(cc);
+  const auto allocate = [&](size_t width) {
+    cholmod_free_dense(&buffers.rhs, cc);
+    buffers.rhs = cholmod_zeros(n, std::max<size_t>(1, width), CHOLMOD_REAL, cc);
+    if (!buffers.rhs && why) *why = "CHOLMOD could not allocate the right-hand side";
+    return buffers.rhs != nullptr;
   };
-  if (!unit) {
-    if (why) *why = "CHOLMOD could not allocate the right-hand side";
-    return false;
-  }
-  auto* ux = static_cast<double*>(unit->x);
+  if (!allocate(std::min<size_t>(total_columns, kCovarianceBatch))) return false;
   size_t g = 0;
   while (g < columns.size()) {
     size_t end = g;
@@ -92,42 +106,30 @@ bool SolveUnitColumnsInBatches(
     while (end < columns.size() &&
            (width == 0 || width + static_cast<int>(columns[end].size()) <= kCovarianceBatch))
       width += static_cast<int>(columns[end++].size());
-    if (width > static_cast<int>(unit->ncol)) {  // one group wider than a batch
-      cholmod_free_dense(&unit, cc);
-      unit = cholmod_zeros(n, width, CHOLMOD_REAL, cc);
-      if (!unit) {
-        release();
-        if (why) *why = "CHOLMOD could not allocate the right-hand side";
-        return false;
-      }
-      ux = static_cast<double*>(unit->x);
-    }
-    const size_t allocated_columns = unit->ncol;
-    unit->ncol = width;
-    int c = 0;
-    for (size_t h = g; h < end; ++h)
-      for (int column : columns[h])
-        ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = 1.0;
-    const int solved = cholmod_solve2(system, factor, unit, nullptr, &x, nullptr, &y, &e, cc);
-    c = 0;
-    for (size_t h = g; h < end; ++h)
-      for (int column : columns[h])
-        ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = 0.0;
-    unit->ncol = allocated_columns;
-    if (!solved || !x) {
-      release();
+    // One group wider than a batch.
+    if (width > static_cast<int>(buffers.rhs->ncol) && !allocate(width)) return false;
+    auto* ux = static_cast<double*>(buffers.rhs->x);
+    const auto set_units = [&](double value) {
+      int c = 0;
+      for (size_t h = g; h < end; ++h)
+        for (int column : columns[h])
+          ux[static_cast<size_t>(c++) * n + inverse_permutation[column]] = value;
+    };
+    set_units(1.0);
+    const bool solved = buffers.Solve(system, factor, width);
+    set_units(0.0);
+    if (!solved) {
       if (why) *why = "CHOLMOD solve failed";
       return false;
     }
-    const auto* xx = static_cast<const double*>(x->x);
-    c = 0;
+    const auto* xx = static_cast<const double*>(buffers.solution->x);
+    int c = 0;
     for (size_t h = g; h < end; ++h) {
       take(h, xx + static_cast<size_t>(c) * n);
       c += static_cast<int>(columns[h].size());
     }
     g = end;
   }
-  release();
   return true;
 }
 
@@ -200,43 +202,33 @@ bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_p
   const auto* fp = static_cast<const int*>(factor->p);
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
-  // The draws' and the solutions' buffers reused across batches (see
-  // SolveUnitColumnsInBatches).
-  cholmod_dense* z = cholmod_allocate_dense(n, std::min(kCovarianceBatch, std::max(count, 1)), n,
-                                            CHOLMOD_REAL, cc);
-  cholmod_dense *y = nullptr, *work_y = nullptr, *work_e = nullptr;
-  const auto release = [&] {
-    cholmod_free_dense(&z, cc);
-    cholmod_free_dense(&y, cc);
-    cholmod_free_dense(&work_y, cc);
-    cholmod_free_dense(&work_e, cc);
-  };
-  if (!z) {
+  // The draws and their solutions reused across batches (SolveBuffers).
+  SolveBuffers buffers(cc);
+  buffers.rhs = cholmod_allocate_dense(n, std::min(kCovarianceBatch, std::max(count, 1)), n,
+                                       CHOLMOD_REAL, cc);
+  if (!buffers.rhs) {
     if (why) *why = "CHOLMOD could not allocate the draws";
     return false;
   }
-  auto* zx = static_cast<double*>(z->x);
+  auto* zx = static_cast<double*>(buffers.rhs->x);
   for (int first = 0; first < count; first += kCovarianceBatch) {
     const int width = std::min(kCovarianceBatch, count - first);
-    z->ncol = width;
     for (int c = 0; c < width; ++c)
       for (int i = 0; i < n; ++i) {
         const double d = factor->is_ll ? 1.0 : fx[fp[i]];
         zx[static_cast<size_t>(c) * n + i] = normal(rng) / std::sqrt(std::abs(d));
       }
-    if (!cholmod_solve2(CHOLMOD_Lt, factor, z, nullptr, &y, nullptr, &work_y, &work_e, cc) || !y) {
-      release();
+    if (!buffers.Solve(CHOLMOD_Lt, factor, width)) {
       if (why) *why = "CHOLMOD solve failed";
       return false;
     }
-    const auto* yx = static_cast<const double*>(y->x);
+    const auto* yx = static_cast<const double*>(buffers.solution->x);
     for (size_t g = 0; g < columns.size(); ++g)
       for (size_t r = 0; r < columns[g].size(); ++r)
         for (int c = 0; c < width; ++c)
           (*samples)[g](static_cast<Eigen::Index>(r), first + c) =
               yx[static_cast<size_t>(c) * n + inverse_permutation[columns[g][r]]];
   }
-  release();
   return true;
 }
 

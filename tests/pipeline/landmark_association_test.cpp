@@ -81,16 +81,23 @@ TEST(LandmarkAssociationTest, WindowsAndSamplingKeepTheTrueAssociation) {
   EXPECT_GT(result.sampler.swaps_proposed, 0);
 }
 
+// Joint merges on the excursion drives (2 m steps): stretches of 80 poses,
+// RANSAC every 20.
+UnknownAssociationOptions ExcursionOptions() {
+  UnknownAssociationOptions options;
+  options.seed = 5;
+  options.joint_recent_m = 160;  // 80 poses (Victoria Park's 300 poses are about 170 m)
+  options.joint_every_poses = 20;
+  return options;
+}
+
 // The re-entry into A after the drifting excursion: the single targeted
 // merges leave it open, the joint merge (RANSAC alignment, correction spread
 // along the excursion, kept on the full evidence) closes it.
 TEST(LandmarkAssociationTest, JointMergeClosesALoopNoSingleMergeCloses) {
   const LandmarkDataset data = SimulateExcursion(11, 0.0015);
   const std::vector<int> truth = GivenAssociation(data);
-  UnknownAssociationOptions options;
-  options.seed = 5;
-  options.joint_recent_m = 160;  // 80 poses (Victoria Park's 300 poses are about 170 m)
-  options.joint_every_poses = 20;
+  const UnknownAssociationOptions options = ExcursionOptions();
   UnknownAssociationOptions single = options;
   single.joint_min_inliers = 0;
   const UnknownAssociationResult without = SolveUnknownAssociation(data, single);
@@ -132,10 +139,7 @@ TEST(LandmarkAssociationTest, JointMergeSplitsItsMisfitPairs) {
   for (unsigned seed : {4u, 5u, 6u}) {
     const LandmarkDataset data = SimulateExcursion(seed, 0.003, 4.0);
     const std::vector<int> truth = GivenAssociation(data);
-    UnknownAssociationOptions options;
-    options.seed = 5;
-    options.joint_recent_m = 160;
-    options.joint_every_poses = 20;
+    const UnknownAssociationOptions options = ExcursionOptions();
     UnknownAssociationOptions unrepaired = options;
     unrepaired.joint_repair_rounds = 0;
     const UnknownAssociationResult without = SolveUnknownAssociation(data, unrepaired);
