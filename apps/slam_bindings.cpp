@@ -71,6 +71,11 @@ void BindSampling(SlamStageOptions* o, Bindings* b) {
       .Key("hill_climb_patience");
   b->Add(&s.hill_climb_max_steps, "hill-climb-max", "N", "at most this many hill-climbing steps")
       .Key("hill_climb_max");
+  b->Add(&s.hill_climb_sweeps, "hill-climb-sweeps", "N",
+         "then at most N sweeps trying every single-track move and class switch (0 = thesis)")
+      .Key("hill_climb_sweeps",
+           "then at most N sweeps of every single-track move and class switch (docs/method.md "
+           "§9.7)");
   b->Add(&s.refine_every, "refine-every", "N",
          "K_NL: full re-optimisation of the current state every N hill-climbing steps")
       .Key("refine_every",
@@ -150,6 +155,11 @@ void BindProposals(SlamStageOptions* o, Bindings* b) {
   b->Add(&m.reassign_sigma_m, "reassign-sigma", "M",
          "reassign move sigma_R: how far a track looks for an object (docs/method.md §9.2)")
       .Key("reassign_sigma_m", "reassign move sigma_R, m (docs/method.md §9.2)");
+  b->Add(&m.reassign_focus, "reassign-focus", "K",
+         "reassign picks tracks misfitting their object's class or alone 1+K times as often")
+      .Key("reassign_focus",
+           "reassign: weight 1 + K of a track misfitting its object's class or alone "
+           "(docs/method.md §9.2)");
   b->Add(&m.class_proposal_uniform, "class-proposal-uniform", "U",
          "uniform share of the class drawn by merge/split/switch (0 = thesis)")
       .Key("class_proposal_uniform");

@@ -32,6 +32,24 @@ int AssociationState::BlockOf(int track) const {
   return -1;
 }
 
+AssociationState AssociationState::WithTrackMoved(int track, int target_block,
+                                                  int alone_class) const {
+  AssociationState moved = *this;
+  const int from = BlockOf(track);
+  if (from >= 0) {
+    std::vector<int>& block = moved.blocks[from];
+    block.erase(std::find(block.begin(), block.end(), track));
+  }
+  if (target_block >= 0) {
+    moved.blocks[target_block].push_back(track);
+  } else {
+    moved.blocks.push_back({track});
+    moved.classes.push_back(alone_class);
+  }
+  moved.Canonicalize();
+  return moved;
+}
+
 size_t AssociationState::num_tracks() const {
   size_t n = 0;
   for (const auto& block : blocks) n += block.size();

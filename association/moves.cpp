@@ -100,18 +100,64 @@ bool MergePartnerWeights(const StateEvaluation& s, int j1, const MoveOptions& op
   return NormaliseLog(log_e);
 }
 
-// Where a track of object `from` may go (reassign, docs/method.md §9.2): the
-// other objects with the merge partner weights eps_j seen from `from`, with
-// sigma_R for sigma_E (wider: an object of one or two tracks is often placed
-// far along its viewing rays), and last (index = number of objects) alone,
-// weighted as an object at d_thr would be. Alone is no move for a track
-// alone already. Normalised; false when the track can go nowhere.
-bool ReassignWeights(const StateEvaluation& s, int from, const MoveOptions& options,
+// log P(a_t | c) per detector decision of one track: the track's class
+// likelihood divided by the decisions it counts for, so that long and short
+// tracks weigh alike.
+double LogTrackFit(const ClassConfusionModel& model, int track, int c) {
+  return model.BlockLogLikelihood({track}, c) / std::max(1, model.track_size(track));
+}
+
+// Where `track` of object `from` may go (reassign, docs/method.md §9.2): every
+// other object k with exp(-|l_k - l_from|^2 / (2 sigma_R^2)) P(a_t | c_k) (an
+// object of one or two tracks is often placed far along its viewing rays, so
+// the class the track's detections fit counts more than the distance), zero
+// across classes with an infinite mismatch penalty; last (index = number of
+// objects) alone, weighted as an object at d_thr of the track's best-fitting
+// class would be. Alone is no move for a track alone already. Normalised;
+// false when the track can go nowhere.
+bool ReassignWeights(const StateEvaluation& s, int from, int track,
+                     const ClassConfusionModel& model, const MoveOptions& options,
                      std::vector<double>* log_w) {
-  *log_w = LogPartnerWeights(s, from, options.reassign_sigma_m, options);
+  const size_t n = s.state.blocks.size();
+  const double sigma2 = options.reassign_sigma_m * options.reassign_sigma_m;
+  log_w->assign(n + 1, kNegInf);
+  double best_fit = kNegInf;
+  for (int c = 0; c < model.num_classes(); ++c)
+    best_fit = std::max(best_fit, LogTrackFit(model, track, c));
+  for (size_t k = 0; k < n; ++k) {
+    if (static_cast<int>(k) == from) continue;
+    if (std::isinf(options.class_mismatch_penalty) && s.state.classes[k] != s.state.classes[from])
+      continue;
+    (*log_w)[k] = -0.5 * (s.locations[k] - s.locations[from]).squaredNorm() / sigma2 +
+                  LogTrackFit(model, track, s.state.classes[k]);
+  }
   const double alone = options.merge_distance_m / options.reassign_sigma_m;
-  log_w->push_back(s.state.blocks[from].size() > 1 ? -0.5 * alone * alone : kNegInf);
+  if (s.state.blocks[from].size() > 1) (*log_w)[n] = -0.5 * alone * alone + best_fit;
   return NormaliseLog(log_w);
+}
+
+// How likely reassign picks each track (docs/method.md §9.2): weight
+// 1 + kappa (1 - P(a_t | c_j)) + kappa [t is alone], kappa =
+// reassign_focus. The tracks that move in a posterior are those whose
+// detected class disagrees with their object's and those alone; a uniform
+// draw over ~60 tracks seldom picks them. Normalised over all tracks; indexed
+// by track id (-infinity for ids the state does not hold).
+std::vector<double> ReassignTrackWeights(const StateEvaluation& s, const ClassConfusionModel& model,
+                                         const MoveOptions& options) {
+  int max_track = -1;
+  for (const std::vector<int>& block : s.state.blocks)
+    for (int t : block) max_track = std::max(max_track, t);
+  std::vector<double> log_w(static_cast<size_t>(max_track + 1), kNegInf);
+  const double kappa = options.reassign_focus;
+  for (size_t j = 0; j < s.state.blocks.size(); ++j) {
+    const std::vector<int>& block = s.state.blocks[j];
+    for (int t : block) {
+      const double misfit = -std::expm1(LogTrackFit(model, t, s.state.classes[j]));
+      log_w[t] = std::log(1.0 + kappa * misfit + (block.size() == 1 ? kappa : 0.0));
+    }
+  }
+  NormaliseLog(&log_w);
+  return log_w;
 }
 
 // Split weights r^2(j), zero for single-track objects (#19).
@@ -226,6 +272,19 @@ std::vector<double> SwitchWeights(const StateEvaluation& s, const ClassConfusion
   return log_p;
 }
 
+// q(c | Psi_j) over the classes other than c_j, renormalised (beyond
+// Algorithm 7, docs/method.md §9.2): drawing the current class again was a
+// self-transition, 85 % of switch proposals on long_loop. Empty when no other
+// class is possible.
+std::vector<double> SwitchClassProposal(const StateEvaluation& s, int block,
+                                        const ClassConfusionModel& model,
+                                        const MoveOptions& options) {
+  std::vector<double> log_q = LogClassProposal(model, s.state.blocks[block], options);
+  log_q[s.state.classes[block]] = kNegInf;
+  if (!NormaliseLog(&log_q)) return {};
+  return log_q;
+}
+
 Proposal ProposeSwitch(const StateEvaluation& s, const ClassConfusionModel& model,
                        const MoveOptions& options, const MoveProbabilities& probabilities,
                        Rng& rng) {
@@ -234,8 +293,9 @@ Proposal ProposeSwitch(const StateEvaluation& s, const ClassConfusionModel& mode
   std::vector<double> log_p = SwitchWeights(s, model);
   if (!NormaliseLog(&log_p)) return p;
   const int j = SampleLog(log_p, rng);
-  const int c = SampleLog(LogClassProposal(model, s.state.blocks[j], options), rng);
-  if (c == s.state.classes[j]) return p;  // same state: accepted without a solve
+  std::vector<double> log_q = SwitchClassProposal(s, j, model, options);
+  if (log_q.empty()) return p;
+  const int c = SampleLog(log_q, rng);
   p.track = s.state.blocks[j].front();
   p.old_class_a = s.state.classes[j];
   p.state = s.state;
@@ -245,15 +305,7 @@ Proposal ProposeSwitch(const StateEvaluation& s, const ClassConfusionModel& mode
   return p;
 }
 
-// log of the probability that reassign moves `track`: an object drawn
-// uniformly, then one of its tracks (so that the objects of one track, the
-// likeliest to belong elsewhere, are not drowned by the large ones).
-double LogReassignTrackProbability(const StateEvaluation& s, int block) {
-  return -std::log(static_cast<double>(s.state.blocks.size())) -
-         std::log(static_cast<double>(s.state.blocks[block].size()));
-}
-
-// Reassign (beyond the thesis): a track (LogReassignTrackProbability) leaves its object
+// Reassign (beyond the thesis): a track (ReassignTrackWeights) leaves its object
 // (which keeps its class, or goes if the track was all of it) for a nearby
 // object (which keeps its class) or becomes an object alone, of a class
 // drawn from the class proposal.
@@ -263,12 +315,11 @@ Proposal ProposeReassign(const StateEvaluation& s, const ClassConfusionModel& mo
   Proposal p;
   p.type = MoveType::kReassign;
   if (s.state.blocks.empty() || !(probabilities.reassign > 0)) return p;
-  const int from =
-      std::uniform_int_distribution<int>(0, static_cast<int>(s.state.blocks.size()) - 1)(rng);
+  const int track = SampleLog(ReassignTrackWeights(s, model, options), rng);
+  const int from = s.state.BlockOf(track);
   const std::vector<int>& block = s.state.blocks[from];
-  const int track = block[std::uniform_int_distribution<size_t>(0, block.size() - 1)(rng)];
   std::vector<double> log_w;
-  if (!ReassignWeights(s, from, options, &log_w)) return p;
+  if (!ReassignWeights(s, from, track, model, options, &log_w)) return p;
   const int target = SampleLog(log_w, rng);
   const bool alone = target == static_cast<int>(s.state.blocks.size());
   p.track = track;
@@ -276,21 +327,12 @@ Proposal ProposeReassign(const StateEvaluation& s, const ClassConfusionModel& mo
   std::copy_if(block.begin(), block.end(), std::back_inserter(p.part_a),
                [track](int t) { return t != track; });
   int alone_class = 0;
-  p.state = s.state;
   if (alone) {
     alone_class = SampleLog(LogClassProposal(model, {track}, options), rng);
-    p.state.blocks.push_back({track});
-    p.state.classes.push_back(alone_class);
   } else {
     p.part_b = s.state.blocks[target];
-    p.state.blocks[target].push_back(track);
   }
-  p.state.blocks[from] = p.part_a;
-  if (p.part_a.empty()) {
-    p.state.blocks.erase(p.state.blocks.begin() + from);
-    p.state.classes.erase(p.state.classes.begin() + from);
-  }
-  p.state.Canonicalize();
+  p.state = s.state.WithTrackMoved(track, alone ? -1 : target, alone_class);
   p.log_q_forward = LogReassignProbability(s, track, alone ? -1 : target, alone_class, model,
                                            options, probabilities);
   p.self_transition = false;
@@ -352,6 +394,8 @@ bool MoveOptions::Validate(std::string* why) const {
     return fail("the merge count smoothing must be >= 0");
   if (!(reassign_sigma_m > 0) || std::isinf(reassign_sigma_m))
     return fail("sigma_R of the reassign move must be > 0 m");
+  if (!(reassign_focus >= 0) || std::isinf(reassign_focus))
+    return fail("the reassign move's focus on misfitting tracks must be >= 0 and finite");
   if (!(class_proposal_uniform >= 0) || !(class_proposal_uniform < 1))
     return fail("the uniform share of the class proposal must be in [0, 1)");
   return true;
@@ -390,8 +434,9 @@ double LogSwitchProbability(const StateEvaluation& s, int block, int new_class,
                             const MoveProbabilities& probabilities) {
   std::vector<double> log_p = SwitchWeights(s, model);
   if (!NormaliseLog(&log_p)) return kNegInf;
-  return LogOf(probabilities.switch_class) + log_p[block] +
-         LogClassProposal(model, s.state.blocks[block], options)[new_class];
+  const std::vector<double> log_q = SwitchClassProposal(s, block, model, options);
+  if (log_q.empty()) return kNegInf;
+  return LogOf(probabilities.switch_class) + log_p[block] + log_q[new_class];
 }
 
 double LogReassignProbability(const StateEvaluation& s, int track, int target_block,
@@ -399,12 +444,12 @@ double LogReassignProbability(const StateEvaluation& s, int track, int target_bl
                               const MoveOptions& options, const MoveProbabilities& probabilities) {
   const int from = s.state.BlockOf(track);
   std::vector<double> log_w;
-  if (from < 0 || target_block == from || !ReassignWeights(s, from, options, &log_w))
+  if (from < 0 || target_block == from || !ReassignWeights(s, from, track, model, options, &log_w))
     return kNegInf;
   const double log_where =
       target_block >= 0 ? log_w[target_block]
                         : log_w.back() + LogClassProposal(model, {track}, options)[alone_class];
-  return LogOf(probabilities.reassign) + LogReassignTrackProbability(s, from) + log_where;
+  return LogOf(probabilities.reassign) + ReassignTrackWeights(s, model, options)[track] + log_where;
 }
 
 Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& model,

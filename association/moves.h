@@ -54,6 +54,10 @@ struct MoveOptions {
   // sigma_R: the reassign move's sigma_E for where a track goes (beyond the
   // thesis, docs/method.md §9.2).
   double reassign_sigma_m = 1.0;
+  // kappa: how much more often reassign picks a track whose detected class
+  // misfits its object's, or a track alone (docs/method.md §9.2); 0 = every
+  // track alike.
+  double reassign_focus = 10.0;
 
   bool Validate(std::string* why) const;
 };

@@ -53,6 +53,8 @@ OMapReport SamplerReport(const SamplerSummary& s) {
                        {"num_solves", s.num_solves},
                        {"num_cache_hits", s.num_cache_hits},
                        {"hill_climb_steps", s.hill_climb_steps},
+                       {"sweeps", s.sweeps},
+                       {"sweep_changes", s.sweep_changes},
                        {"hill_climb_log_target", hill_trace},
                        {"cold_chain_log_target", trace}};
   return {"sampler", report.dump()};

@@ -357,6 +357,7 @@ bool SamplerOptions::Validate(std::string* why) const {
   if (hill_climb_max_steps < hill_climb_steps)
     return fail("hill_climb_max_steps must be >= hill_climb_steps");
   if (refine_every < 1) return fail("the refinement interval K_NL must be >= 1");
+  if (hill_climb_sweeps < 0) return fail("hill_climb_sweeps must be >= 0");
   if (!(hill_climb_screen_nats >= 0))
     return fail("the hill-climbing screen margin must be >= 0 nats (inf: solve every proposal)");
   if (!ValidProbabilities(hill_climb_moves) || !ValidProbabilities(sampling_moves))
@@ -542,8 +543,92 @@ EvaluationPtr Sampler::HillClimb(const AssociationState& start_state, StateEvalu
                options_.hill_climb_steps);
   }
   summary->hill_climb_steps = step;
+  current = Sweep(current, evaluator, summary);
   summary->hill_climbed_log_target = current->log_target;
   summary->hill_climb_time_s = SecondsSince(clock);
+  return current;
+}
+
+namespace {
+
+// The states one change away from `state` that a sweep tries for `track`:
+// into every other object within `radius_m` of its own, or, when it has
+// company, alone at every class.
+std::vector<AssociationState> TrackChanges(const StateEvaluation& current, int track,
+                                           int num_classes, double radius_m) {
+  const AssociationState& state = current.state;
+  const int from = state.BlockOf(track);
+  std::vector<AssociationState> changes;
+  for (size_t k = 0; k < state.blocks.size(); ++k)
+    if (static_cast<int>(k) != from &&
+        (current.locations[k] - current.locations[from]).norm() < radius_m)
+      changes.push_back(state.WithTrackMoved(track, static_cast<int>(k), 0));
+  if (state.blocks[from].size() > 1)
+    for (int c = 0; c < num_classes; ++c) changes.push_back(state.WithTrackMoved(track, -1, c));
+  return changes;
+}
+
+std::vector<AssociationState> ClassChanges(const AssociationState& state, int block,
+                                           int num_classes) {
+  std::vector<AssociationState> changes;
+  for (int c = 0; c < num_classes; ++c) {
+    if (c == state.classes[block]) continue;
+    changes.push_back(state);
+    changes.back().classes[block] = c;
+  }
+  return changes;
+}
+
+}  // namespace
+
+EvaluationPtr Sampler::Sweep(EvaluationPtr current, StateEvaluator* evaluator,
+                             SamplerSummary* summary) const {
+  // Each candidate is ranked by the evaluator's approximation (poses held);
+  // the best is solved, and taken when the solve raises the target. A change
+  // the approximation puts slightly below the current state is still solved,
+  // since the poses it holds may cost the change a little.
+  constexpr double kSolveAboveNats = -1.0;
+  const int num_classes = model_.num_classes();
+  const double radius_m = 3.0 * options_.moves.reassign_sigma_m;
+  // A candidate the evaluator cannot approximate is solved instead.
+  auto take_best = [&](const std::vector<AssociationState>& changes) {
+    EvaluationPtr best_approximate, best_solved;
+    for (const AssociationState& change : changes) {
+      EvaluationPtr approximate = evaluator->Approximate(change, *current);
+      if (approximate && approximate->valid) {
+        if (!best_approximate || approximate->log_target > best_approximate->log_target)
+          best_approximate = approximate;
+      } else if (!approximate) {
+        EvaluationPtr solved = evaluator->Evaluate(change, current.get());
+        if (solved && solved->valid &&
+            (!best_solved || solved->log_target > best_solved->log_target))
+          best_solved = solved;
+      }
+    }
+    if (best_approximate && best_approximate->log_target - current->log_target >= kSolveAboveNats) {
+      EvaluationPtr solved = evaluator->Evaluate(best_approximate->state, current.get());
+      if (solved && solved->valid && (!best_solved || solved->log_target > best_solved->log_target))
+        best_solved = solved;
+    }
+    if (!best_solved || !(best_solved->log_target > current->log_target)) return false;
+    current = best_solved;
+    ++summary->sweep_changes;
+    summary->hill_climb_trace.push_back(current->log_target);
+    return true;
+  };
+  for (int sweep = 0; sweep < options_.hill_climb_sweeps; ++sweep) {
+    ++summary->sweeps;
+    bool changed = false;
+    for (int track = 0; track < model_.num_tracks(); ++track) {
+      if (current->state.BlockOf(track) < 0) continue;
+      changed |= take_best(TrackChanges(*current, track, num_classes, radius_m));
+    }
+    for (size_t j = 0; j < current->state.blocks.size(); ++j)
+      changed |= take_best(ClassChanges(current->state, static_cast<int>(j), num_classes));
+    EvaluationPtr refined = evaluator->Refine(current->state, current.get());
+    if (refined && refined->valid) current = refined;
+    if (!changed) break;
+  }
   return current;
 }
 

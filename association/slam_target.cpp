@@ -168,9 +168,30 @@ bool SlamEvaluator::LocalObjectLogTarget(const std::vector<int>& block, int clas
   return true;
 }
 
+const SlamEvaluator::LocalValue& SlamEvaluator::LocalValueFrom(const StateEvaluation& from,
+                                                               const std::vector<int>& block,
+                                                               int class_index) {
+  if (memo_solution_ != from.solution) {
+    memo_.clear();
+    memo_solution_ = from.solution;
+  }
+  auto [entry, added] = memo_.try_emplace({block, class_index});
+  LocalValue& value = entry->second;
+  if (!added) return value;
+  // Started where a solve's warm start would put it (docs/method.md §9.6):
+  // at from's object holding the block's earliest track.
+  const MappedObject* start =
+      FindObject(*from.solution, from.state.blocks[from.state.BlockOf(block.front())].front());
+  if (!start) return value;
+  CylinderGeometry object = start->geometry;
+  value.usable = LocalObjectLogTarget(block, class_index, from.solution->trajectory, &object,
+                                      &value.log_target, &value.squared_residual);
+  value.location = object.base_world;
+  return value;
+}
+
 EvaluationPtr SlamEvaluator::Approximate(const AssociationState& to, const StateEvaluation& from) {
   if (!from.solution || !from.valid) return nullptr;
-  const std::vector<Pose2>& poses = from.solution->trajectory;
   // from's objects by (tracks, class); the ones `to` keeps cancel.
   std::map<std::vector<int>, size_t> from_index;
   for (size_t j = 0; j < from.state.blocks.size(); ++j) from_index[from.state.blocks[j]] = j;
@@ -186,29 +207,18 @@ EvaluationPtr SlamEvaluator::Approximate(const AssociationState& to, const State
       approximate->residual2.push_back(from.residual2[found->second]);
       continue;
     }
-    // Started where a solve's warm start would put it (docs/method.md §9.6).
-    const int old_block = from.state.BlockOf(to.blocks[j].front());
-    const MappedObject* start =
-        old_block < 0 ? nullptr : FindObject(*from.solution, from.state.blocks[old_block].front());
-    if (!start) return nullptr;
-    CylinderGeometry object = start->geometry;
-    double value, residual2;
-    if (!LocalObjectLogTarget(to.blocks[j], to.classes[j], poses, &object, &value, &residual2))
-      return nullptr;
-    log_target += value;
-    approximate->locations.push_back(object.base_world);
-    approximate->residual2.push_back(residual2);
+    if (from.state.BlockOf(to.blocks[j].front()) < 0) return nullptr;
+    const LocalValue& value = LocalValueFrom(from, to.blocks[j], to.classes[j]);
+    if (!value.usable) return nullptr;
+    log_target += value.log_target;
+    approximate->locations.push_back(value.location);
+    approximate->residual2.push_back(value.squared_residual);
   }
   for (size_t j = 0; j < from.state.blocks.size(); ++j) {
     if (kept[j]) continue;
-    const MappedObject* start = FindObject(*from.solution, from.state.blocks[j].front());
-    if (!start) return nullptr;
-    CylinderGeometry object = start->geometry;
-    double value, residual2;
-    if (!LocalObjectLogTarget(from.state.blocks[j], from.state.classes[j], poses, &object, &value,
-                              &residual2))
-      return nullptr;
-    log_target -= value;
+    const LocalValue& value = LocalValueFrom(from, from.state.blocks[j], from.state.classes[j]);
+    if (!value.usable) return nullptr;
+    log_target -= value.log_target;
   }
   approximate->log_target = log_target;
   approximate->valid = std::isfinite(log_target);

@@ -7,14 +7,15 @@
 // cached by its canonical form, so a revisited state keeps one value (§9.3).
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
 
 #include "association/association_state.h"
-#include "slam/geometric_slam.h"
 #include "association/tracks.h"
+#include "slam/geometric_slam.h"
 
 namespace oslam {
 
@@ -80,11 +81,28 @@ class SlamEvaluator : public StateEvaluator {
                             const std::vector<Pose2>& poses, CylinderGeometry* object,
                             double* log_target, double* squared_residual) const;
 
+  // An object's local log target (LocalObjectLogTarget) with from's poses,
+  // started at from's object holding its earliest track; a function of
+  // (from, block, class) alone, so it is kept while Approximate is called
+  // from one state: a chain proposes from one state many times, and each
+  // proposal re-solved the objects it takes away.
+  struct LocalValue {
+    bool usable = false;
+    double log_target = 0, squared_residual = 0;
+    Eigen::Vector3d location = Eigen::Vector3d::Zero();
+  };
+  const LocalValue& LocalValueFrom(const StateEvaluation& from, const std::vector<int>& block,
+                                   int class_index);
+
   const SlamTargetData& data_;
   const ClassConfusionModel& model_;
   SlamTargetOptions options_;
   GeometricSlam full_, step_, covariances_;
   EvaluationCache cache_;
+  // LocalValueFrom's values for the solution memo_solution_ (held, so that
+  // its address is not reused while the values are kept).
+  std::shared_ptr<const GeometricSlamResult> memo_solution_;
+  std::map<std::pair<std::vector<int>, int>, LocalValue> memo_;
 };
 
 }  // namespace oslam

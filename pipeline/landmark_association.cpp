@@ -951,6 +951,9 @@ EvaluationPtr LandmarkAssociation::SampleMc3(EvaluationPtr best) {
   const auto sampling_start = std::chrono::steady_clock::now();
   SamplerOptions sampler_options;
   sampler_options.hill_climb_steps = 0;
+  sampler_options.hill_climb_sweeps = 0;  // the search above has climbed
+  // The temperature step measured for landmark SLAM (docs/method.md §16).
+  sampler_options.delta_temperature = 3.33;
   sampler_options.refine_every = options_.refine_every;
   sampler_options.sampling_moves = {0.5, 0.5, 0.0};  // one class: nothing to switch
   sampler_options.moves = options_.moves;

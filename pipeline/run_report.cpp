@@ -125,8 +125,9 @@ void SamplerSection(const RunPipelineOptions& options, const SamplerSummary& s,
   md << "Log target: log P(association, classes | detections, odometry) up to a constant, in "
         "nats (docs/method.md §8).\n\n| | |\n|---|---|\n"
      << "| start | " << Fixed(s.initial_log_target, 1) << " |\n"
-     << "| after hill climbing (" << s.hill_climb_steps << " steps) | "
-     << Fixed(s.hill_climbed_log_target, 1) << " |\n"
+     << "| after hill climbing (" << s.hill_climb_steps << " steps, " << s.sweeps
+     << " sweeps changing " << s.sweep_changes << ") | " << Fixed(s.hill_climbed_log_target, 1)
+     << " |\n"
      << "| highest of the cold chain after burn-in | " << Fixed(best, 1) << " |\n"
      << "| effective sample size | " << Fixed(s.effective_sample_size, 0) << " of " << kept.size()
      << " iterations after burn-in (of the cold chain's log target; integrated autocorrelation, "
@@ -134,8 +135,9 @@ void SamplerSection(const RunPipelineOptions& options, const SamplerSummary& s,
      << "| distinct log-target values after burn-in | " << distinct.size() << " |\n"
      << "| chain swaps accepted | " << s.swaps_accepted << " of " << s.swaps_proposed << " ("
      << Percent(s.swaps_accepted, s.swaps_proposed) << ") |\n\n";
-  md << "Moves of the cold chain. Acceptance = accepted / proposed; a no-op proposal (a switch "
-        "to the class the object has) counts as proposed and not accepted; screened out = "
+  md << "Moves of the cold chain. Acceptance = accepted / proposed; a no-op proposal (nothing "
+        "to propose, such as a merge with no partner) counts as proposed and not accepted; "
+        "screened out = "
         "rejected by the cheap first stage of delayed acceptance without a solve.\n\n"
         "| phase | move | proposed | accepted | acceptance | no-op | screened out |\n"
         "|---|---|---|---|---|---|---|\n";

@@ -93,9 +93,11 @@ void ReportMoves(const char* phase, const std::array<MoveStatistics, kNumMoveTyp
 
 void ReportSampler(const SamplerResult& result, const StageOutput& output) {
   const SamplerSummary& s = result.summary;
-  output.Print(Format("hill climbing: %d steps, log target %.2f -> %.2f in %.2f s",
-                      s.hill_climb_steps, s.initial_log_target, s.hill_climbed_log_target,
-                      s.hill_climb_time_s));
+  output.Print(
+      Format("hill climbing: %d steps and %d sweeps (%d changes), log target %.2f -> "
+             "%.2f in %.2f s",
+             s.hill_climb_steps, s.sweeps, s.sweep_changes, s.initial_log_target,
+             s.hill_climbed_log_target, s.hill_climb_time_s));
   ReportMoves("hill", s.hill_climb, output);
   output.Print(Format("MC3: %zu samples in %.2f s; swaps %ld/%ld accepted; ESS(log target) %.1f",
                       result.samples.size(), s.sampling_time_s, s.swaps_accepted, s.swaps_proposed,

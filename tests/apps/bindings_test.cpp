@@ -100,6 +100,8 @@ std::vector<KeyCase> Cases() {
       {"slam.merge_sigma_m", "0.8", [](O o) { return o.slam.sampler.moves.merge_sigma_m == 0.8; }},
       {"slam.reassign_sigma_m", "1.5",
        [](O o) { return o.slam.sampler.moves.reassign_sigma_m == 1.5; }},
+      {"slam.reassign_focus", "4", [](O o) { return o.slam.sampler.moves.reassign_focus == 4; }},
+      {"slam.hill_climb_sweeps", "2", [](O o) { return o.slam.sampler.hill_climb_sweeps == 2; }},
       {"slam.class_proposal_uniform", "0",
        [](O o) { return o.slam.sampler.moves.class_proposal_uniform == 0; }},
       {"slam.merge_count_smoothing", "0.2",

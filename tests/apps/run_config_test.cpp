@@ -84,8 +84,7 @@ TEST(RunConfig, PrintedDefaultsKeepTheirOrderAndText) {
         "  min_existence: 0.1  # leave out objects with a lower existence probability\n"
         "  overlays: 1  # 1: draw the map on every frame\n  overlay_frames: \"\"",
         "  overlay_format: \"jpg\"  #",
-        "  floor_grid: 1  # 1: a floor grid in the glTF\n  camera_every: 0  #",
-        "  ascii_ply: 0  #",
+        "  floor_grid: 1  # 1: a floor grid in the glTF\n  camera_every: 0  #", "  ascii_ply: 0  #",
         "eval:\n  threshold: 0.5  # objects at or below this existence probability are not in "
         "the map\n  gate_m: 0.5  # largest base-point distance of a match, m\n"})
     EXPECT_NE(yaml.find(lines), std::string::npos) << lines << "\nin\n" << yaml;
@@ -102,7 +101,8 @@ TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
   EXPECT_EQ(s.sampler.hill_climb_max_steps, 2000);
   EXPECT_EQ(s.sampler.refine_every, 50);
   EXPECT_EQ(s.sampler.num_chains, 3);
-  EXPECT_EQ(s.sampler.delta_temperature, 3.33);
+  EXPECT_EQ(s.sampler.delta_temperature, 0.5);
+  EXPECT_EQ(s.sampler.hill_climb_sweeps, 5);
   EXPECT_EQ(s.sampler.hill_climb_moves.merge, sampler.hill_climb_moves.merge);
   EXPECT_EQ(s.sampler.hill_climb_moves.split, sampler.hill_climb_moves.split);
   EXPECT_EQ(s.sampler.sampling_moves.merge, 0.4);
@@ -125,7 +125,8 @@ TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
   EXPECT_EQ(s.tracks.min_length, 3);
   EXPECT_EQ(s.tracks.link_rule, TrackLinkRule::kNearest);
   EXPECT_EQ(s.tracks.max_gap_frames, 2);  // oslam's occlusion bridging (docs/method.md §9.7)
-  // docs/method.md §13 #1: Q_add = diag(5 mm, 5 mm, 1 deg), Q_mult = diag(0.1, 0.01, 0.15), std devs.
+  // docs/method.md §13 #1: Q_add = diag(5 mm, 5 mm, 1 deg), Q_mult = diag(0.1, 0.01, 0.15), std
+  // devs.
   const MotionNoiseOptions& q = s.target.slam.motion;
   EXPECT_EQ(q.additive_std[0], 0.005);
   EXPECT_EQ(q.additive_std[1], 0.005);

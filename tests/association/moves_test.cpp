@@ -356,21 +356,38 @@ TEST(MovesTest, ImpossibleReverseMoves) {
 }
 
 // q(c) = (1 - u) prod P(a | c) / Z + u / |classes|: the uniform share keeps
-// a class the tracks' detections speak against within reach.
-TEST(MovesTest, SwitchClassProposalMixesInTheUniformShare) {
+// a class the tracks' detections speak against within reach (seen on the
+// class a merge draws).
+TEST(MovesTest, ClassProposalMixesInTheUniformShare) {
   const ClassConfusionModel model = TestModel();
   const MoveProbabilities probabilities{0.4, 0.4, 0.2};
   const AssociationState one = State({{0, 1, 3}, {2}}, {0, 1});
   const EvaluationPtr e = TestEvaluation(one, model);
-  const std::vector<int>& block = one.blocks[0];
-  const double data = std::exp(model.ClassLogProposal(block)[1]);
-  ASSERT_LT(data, 0.01);  // tracks 0, 1, 3 were all reported as class 0
+  const double data = std::exp(model.ClassLogProposal({0, 1, 2, 3})[1]);
+  ASSERT_LT(data, 0.05);  // three of the four tracks were reported as class 0
   MoveOptions options;
   options.class_proposal_uniform = 0;
-  const double without = LogSwitchProbability(*e, 0, 1, model, options, probabilities);
+  const double without = LogMergeProbability(*e, 0, 1, 1, model, options, probabilities);
   options.class_proposal_uniform = 0.1;
-  const double with = LogSwitchProbability(*e, 0, 1, model, options, probabilities);
+  const double with = LogMergeProbability(*e, 0, 1, 1, model, options, probabilities);
   EXPECT_NEAR(with - without, std::log((0.9 * data + 0.05) / data), 1e-9);
+}
+
+// The switch draws among the other classes only, q(c') / (1 - q(c_j)): with
+// two classes it always proposes the other one, and never the current one.
+TEST(MovesTest, SwitchNeverProposesTheCurrentClass) {
+  const ClassConfusionModel model = TestModel();
+  const MoveProbabilities probabilities{0.4, 0.4, 0.2};
+  const AssociationState one = State({{0, 1, 3}, {2}}, {0, 1});
+  const EvaluationPtr e = TestEvaluation(one, model);
+  const MoveOptions options;
+  EXPECT_EQ(LogSwitchProbability(*e, 0, 0, model, options, probabilities), kNegInf);
+  const double to_other = LogSwitchProbability(*e, 0, 1, model, options, probabilities);
+  const double block_term = to_other - std::log(0.2);
+  EXPECT_LE(block_term, 0.0);
+  // Only the block draw is left: both blocks' switch probabilities sum to P_switch.
+  const double other_block = LogSwitchProbability(*e, 1, 0, model, options, probabilities);
+  EXPECT_NEAR(std::exp(to_other) + std::exp(other_block), 0.2, 1e-12);
 }
 
 TEST(MovesTest, OptionsValidationNamesTheBadValue) {

@@ -60,6 +60,7 @@ SamplerOptions TestOptions(int chains, int iterations) {
   // iteration (Algorithm 8), so the sample counts say what the tests state.
   options.sampling_moves = {0.3, 0.3, 0.2, 0.2};
   options.cold_chain_steps = 1;
+  options.hill_climb_sweeps = 0;
   return options;
 }
 
@@ -240,6 +241,54 @@ TEST(SamplerTest, HillClimbingNeverDecreasesTheTarget) {
     previous = v;
   }
   EXPECT_GT(result.summary.hill_climbed_log_target, result.summary.initial_log_target);
+}
+
+// The sweeps after the climb end where no single change they try raises the
+// target: no track moved into another object or alone at any class, no
+// object switched to another class. Some candidates have no approximation
+// (the test evaluator withholds a seventh) and are solved instead.
+TEST(SamplerTest, SweepsEndWhereNoSingleTrackMoveOrClassSwitchImproves) {
+  const ClassConfusionModel model = TestModel();
+  for (int steps : {0, 5}) {
+    SamplerOptions options = TestOptions(1, 2);
+    options.burn_in = 0;
+    options.hill_climb_steps = steps;
+    options.hill_climb_patience = 0;
+    options.hill_climb_sweeps = 20;
+    Sampler sampler(
+        model,
+        [&model] {
+          auto evaluator = std::make_unique<TestEvaluator>(model);
+          evaluator->EnableApproximation(0.0);
+          return evaluator;
+        },
+        options);
+    const SamplerResult result = sampler.Run(SeparateTracksState(kTrackClass));
+    const AssociationState& end = result.hill_climbed->state;
+    const double end_target = TestLogTarget(end, model);
+    EXPECT_EQ(result.summary.hill_climbed_log_target, end_target);
+    if (steps == 0) {
+      EXPECT_GT(result.summary.sweep_changes, 0);
+    }
+    EXPECT_LT(result.summary.sweeps, 20) << "the sweeps stop once nothing changes";
+    for (int track = 0; track < 4; ++track) {
+      const int from = end.BlockOf(track);
+      for (size_t k = 0; k < end.blocks.size(); ++k) {
+        if (static_cast<int>(k) == from) continue;
+        EXPECT_LE(TestLogTarget(end.WithTrackMoved(track, static_cast<int>(k), 0), model),
+                  end_target);
+      }
+      if (end.blocks[from].size() > 1) {
+        for (int c = 0; c < 2; ++c)
+          EXPECT_LE(TestLogTarget(end.WithTrackMoved(track, -1, c), model), end_target);
+      }
+    }
+    for (size_t j = 0; j < end.blocks.size(); ++j) {
+      AssociationState switched = end;
+      switched.classes[j] = 1 - switched.classes[j];
+      EXPECT_LE(TestLogTarget(switched, model), end_target);
+    }
+  }
 }
 
 // With an exact approximation and a 0-nat margin, the hill-climbing screen

@@ -288,6 +288,26 @@ TEST_F(SlamTargetTest, TheApproximationKeepsSharedObjectsAndSolvesTheChangedOnes
   EXPECT_EQ(evaluator.Approximate(s_.truth, invalid), nullptr);
 }
 
+// The objects' local values are kept while proposals come from one state;
+// what is kept must be what a fresh evaluator computes.
+TEST_F(SlamTargetTest, TheApproximationIsTheSameRepeatedAndFromAFreshEvaluator) {
+  SlamEvaluator evaluator(s_.data, model_, Options()), fresh(s_.data, model_, Options());
+  const EvaluationPtr truth = evaluator.Refine(s_.truth, nullptr);
+  const EvaluationPtr split = evaluator.Refine(SplitOffLastTrack(s_.truth), nullptr);
+  const AssociationState wrong = Merge(s_.truth, 0, 1);
+  const EvaluationPtr first = evaluator.Approximate(s_.truth, *split);
+  const EvaluationPtr other = evaluator.Approximate(wrong, *truth);  // another state
+  const EvaluationPtr again = evaluator.Approximate(s_.truth, *split);
+  const EvaluationPtr from_fresh = fresh.Approximate(s_.truth, *split);
+  ASSERT_TRUE(first && other && again && from_fresh);
+  for (const EvaluationPtr& e : {again, from_fresh}) {
+    EXPECT_EQ(e->log_target, first->log_target);
+    EXPECT_EQ(e->locations, first->locations);
+    EXPECT_EQ(e->residual2, first->residual2);
+  }
+  EXPECT_EQ(other->log_target, fresh.Approximate(wrong, *truth)->log_target);
+}
+
 TEST_F(SlamTargetTest, CompleteAddsCovariancesAtTheSameEstimateOnce) {
   SlamEvaluator full(s_.data, model_, Options()), evaluator(s_.data, model_, Options());
   const EvaluationPtr exact = full.Refine(s_.truth, nullptr);
