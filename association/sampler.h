@@ -66,7 +66,10 @@ struct SamplerOptions {
   // sends the chains it reaches back to that iteration (their evaluators roll
   // back), and the result is the one of stepping the chains one after another.
   // 0 (or an evaluator that cannot roll back): the chains step in lock-step.
-  int speculation_depth = 8;
+  // Default 0: with ΔT 0.5 a quarter of the swaps are accepted, and the work
+  // done ahead of them was lost (long_loop: O-SLAM 2.3-2.5 s wall at depth 8,
+  // 1.6-1.8 s in lock-step; docs/method.md §9.4).
+  int speculation_depth = 0;
   // MC³ proposals pass a cheap screen before they are solved (delayed
   // acceptance, Christen & Fox 2005): the first stage accepts with
   // min(1, exp(beta a(x, y))), a = the evaluator's approximate log ratio, the

@@ -515,7 +515,8 @@ GeometricSlamResult GeometricSlam::Solve(const GeometricSlamProblem& problem,
           &camera_, pose_keys[observation->frame], object.base, object.size, observation->slice,
           options_.pixel_std_px, problem.classes[object.class_index].slice_model, object.yaw);
       if (slots && observation->detection_id >= 0)
-        slice->set_linearization_slot(DetectionSlot(observation->detection_id));
+        slice->set_linearization_slot(DetectionSlot(observation->detection_id, object.class_index,
+                                                    static_cast<int>(problem.classes.size())));
     }
     object.end_factor = graph.factors().size();
   }

@@ -191,12 +191,18 @@ class GeometricSlam {
 
  private:
   // Linearisation slots (SolverOptions::reuse_linearizations): odometry
-  // factor i gets 2 (i - 1), detection d gets 2 d + 1. A slot must keep its
+  // factor i gets 2 (i - 1), detection d seen as an object of class c gets
+  // 2 (d C + c) + 1 (C classes): the class's silhouette makes it another
+  // function of the same variables, so a class switch must not reuse the
+  // other class's linearisation (it did, and a proposal's value then
+  // depended on which class the slot last saw). A slot must keep its
   // measurement across solves, so the measurements seen are recorded, and
   // the kept linearisations are dropped when a problem changes one. False
   // (no slots for this problem) when it gives one id to two measurements.
   int OdometrySlot(long frame) const { return static_cast<int>(2 * (frame - 1)); }
-  int DetectionSlot(int detection_id) const { return 2 * detection_id + 1; }
+  int DetectionSlot(int detection_id, int class_index, int num_classes) const {
+    return 2 * (detection_id * num_classes + class_index) + 1;
+  }
   bool CheckSlotMeasurements(const GeometricSlamProblem& problem);
   // A new object's initial geometry from its (frame-ordered) detections,
   // seen from `poses` (indexed by frame).

@@ -146,7 +146,7 @@ std::vector<KeyCase> Cases() {
       {"slam.class_likelihood_per_detection", "1",
        [](O o) { return o.slam.class_likelihood_per_detection; }},
       {"slam.swap_every", "3", [](O o) { return o.slam.sampler.swap_every == 3; }},
-      {"slam.speculation_depth", "0", [](O o) { return o.slam.sampler.speculation_depth == 0; }},
+      {"slam.speculation_depth", "3", [](O o) { return o.slam.sampler.speculation_depth == 3; }},
       {"slam.hill_climb_screen_nats", "inf",
        [](O o) { return std::isinf(o.slam.sampler.hill_climb_screen_nats); }},
       {"slam.delayed_acceptance", "0", [](O o) { return !o.slam.sampler.delayed_acceptance; }},
