@@ -306,9 +306,10 @@ Proposal ProposeSwitch(const StateEvaluation& s, const ClassConfusionModel& mode
 }
 
 // Reassign (beyond the thesis): a track (ReassignTrackWeights) leaves its object
-// (which keeps its class, or goes if the track was all of it) for a nearby
-// object (which keeps its class) or becomes an object alone, of a class
-// drawn from the class proposal.
+// for a nearby object or becomes an object alone (ReassignWeights); the two
+// objects it changes draw their classes from the class proposal, as a merge
+// and a split do: the object it joins (or it alone) from q(c | its tracks),
+// what it leaves (unless empty) from q(c | the rest).
 Proposal ProposeReassign(const StateEvaluation& s, const ClassConfusionModel& model,
                          const MoveOptions& options, const MoveProbabilities& probabilities,
                          Rng& rng) {
@@ -326,15 +327,20 @@ Proposal ProposeReassign(const StateEvaluation& s, const ClassConfusionModel& mo
   p.old_class_a = s.state.classes[from];
   std::copy_if(block.begin(), block.end(), std::back_inserter(p.part_a),
                [track](int t) { return t != track; });
-  int alone_class = 0;
-  if (alone) {
-    alone_class = SampleLog(LogClassProposal(model, {track}, options), rng);
-  } else {
+  std::vector<int> joined = {track};
+  if (!alone) {
     p.part_b = s.state.blocks[target];
+    p.old_class_b = s.state.classes[target];
+    joined = Union(p.part_b, {track});
   }
-  p.state = s.state.WithTrackMoved(track, alone ? -1 : target, alone_class);
-  p.log_q_forward = LogReassignProbability(s, track, alone ? -1 : target, alone_class, model,
-                                           options, probabilities);
+  const int joined_class = SampleLog(LogClassProposal(model, joined, options), rng);
+  const int rest_class =
+      p.part_a.empty() ? 0 : SampleLog(LogClassProposal(model, p.part_a, options), rng);
+  p.state = s.state.WithTrackMoved(track, alone ? -1 : target, joined_class);
+  p.state.classes[p.state.BlockOf(track)] = joined_class;
+  if (!p.part_a.empty()) p.state.classes[p.state.BlockOf(p.part_a.front())] = rest_class;
+  p.log_q_forward = LogReassignProbability(s, track, alone ? -1 : target, joined_class, rest_class,
+                                           model, options, probabilities);
   p.self_transition = false;
   return p;
 }
@@ -440,16 +446,22 @@ double LogSwitchProbability(const StateEvaluation& s, int block, int new_class,
 }
 
 double LogReassignProbability(const StateEvaluation& s, int track, int target_block,
-                              int alone_class, const ClassConfusionModel& model,
+                              int joined_class, int rest_class, const ClassConfusionModel& model,
                               const MoveOptions& options, const MoveProbabilities& probabilities) {
   const int from = s.state.BlockOf(track);
   std::vector<double> log_w;
   if (from < 0 || target_block == from || !ReassignWeights(s, from, track, model, options, &log_w))
     return kNegInf;
-  const double log_where =
-      target_block >= 0 ? log_w[target_block]
-                        : log_w.back() + LogClassProposal(model, {track}, options)[alone_class];
-  return LogOf(probabilities.reassign) + ReassignTrackWeights(s, model, options)[track] + log_where;
+  const std::vector<int> joined =
+      target_block >= 0 ? Union(s.state.blocks[target_block], {track}) : std::vector<int>{track};
+  std::vector<int> rest;
+  for (int t : s.state.blocks[from])
+    if (t != track) rest.push_back(t);
+  double log_q = LogOf(probabilities.reassign) + ReassignTrackWeights(s, model, options)[track] +
+                 (target_block >= 0 ? log_w[target_block] : log_w.back()) +
+                 LogClassProposal(model, joined, options)[joined_class];
+  if (!rest.empty()) log_q += LogClassProposal(model, rest, options)[rest_class];
+  return log_q;
 }
 
 Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& model,
@@ -477,10 +489,10 @@ double LogReverseProbability(const Proposal& p, const StateEvaluation& proposed,
     case MoveType::kSwitch:
       return LogSwitchProbability(proposed, proposed.state.BlockOf(p.track), p.old_class_a, model,
                                   options, probabilities);
-    case MoveType::kReassign:  // back to what its object kept, or alone at the old class
+    case MoveType::kReassign:  // back to what its object kept (or alone), at the old classes
       return LogReassignProbability(
           proposed, p.track, p.part_a.empty() ? -1 : proposed.state.BlockOf(p.part_a.front()),
-          p.old_class_a, model, options, probabilities);
+          p.old_class_a, p.old_class_b, model, options, probabilities);
   }
   return kNegInf;
 }
@@ -501,9 +513,10 @@ double LogForwardProbability(const Proposal& p, const StateEvaluation& from,
       return LogSwitchProbability(from, from.state.BlockOf(p.track), new_class(p.track), model,
                                   options, probabilities);
     case MoveType::kReassign:
-      return LogReassignProbability(from, p.track,
-                                    p.part_b.empty() ? -1 : from.state.BlockOf(p.part_b.front()),
-                                    new_class(p.track), model, options, probabilities);
+      return LogReassignProbability(
+          from, p.track, p.part_b.empty() ? -1 : from.state.BlockOf(p.part_b.front()),
+          new_class(p.track), p.part_a.empty() ? 0 : new_class(p.part_a.front()), model, options,
+          probabilities);
   }
   return kNegInf;
 }

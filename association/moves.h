@@ -72,8 +72,9 @@ struct Proposal {
   // moved track's object keeps (part_a) and the object it joins (part_b;
   // empty: it becomes an object alone).
   std::vector<int> part_a, part_b;
-  // merge: classes of part_a/b; split/switch/reassign: old class (of the
-  // object the moved track left).
+  // merge: classes of part_a/b; split/switch: old class; reassign: old
+  // classes of the object the moved track left (a) and of the one it joined
+  // (b).
   int old_class_a = 0, old_class_b = 0;
   int track = 0;  // switch: a track of the switched object; reassign: the moved track
 };
@@ -108,10 +109,11 @@ double LogSplitProbability(const StateEvaluation& s, int block, const std::vecto
 double LogSwitchProbability(const StateEvaluation& s, int block, int new_class,
                             const ClassConfusionModel& model, const MoveOptions& options,
                             const MoveProbabilities& probabilities);
-// Moving `track` into the object `target_block` (which keeps its class), or
-// alone (target_block = -1) as a new object of class `alone_class`.
+// Moving `track` into the object `target_block`, or alone (target_block =
+// -1), the object it then belongs to taking class `joined_class` and what it
+// leaves (when not empty) `rest_class`.
 double LogReassignProbability(const StateEvaluation& s, int track, int target_block,
-                              int alone_class, const ClassConfusionModel& model,
+                              int joined_class, int rest_class, const ClassConfusionModel& model,
                               const MoveOptions& options, const MoveProbabilities& probabilities);
 
 }  // namespace oslam

@@ -551,20 +551,62 @@ EvaluationPtr Sampler::HillClimb(const AssociationState& start_state, StateEvalu
 
 namespace {
 
-// The states one change away from `state` that a sweep tries for `track`:
+// The class the detections of `block` speak for most (the class proposal's
+// data-driven mode).
+int LikeliestClass(const ClassConfusionModel& model, const std::vector<int>& block) {
+  const std::vector<double> log_q = model.ClassLogProposal(block);
+  return static_cast<int>(std::max_element(log_q.begin(), log_q.end()) - log_q.begin());
+}
+
+// The states one change away from `current` that a sweep tries for `track`:
 // into every other object within `radius_m` of its own, or, when it has
-// company, alone at every class.
+// company, alone (at its object's class or its detections' likeliest). The object it joins and the
+// one it leaves each keep their class or take the one their tracks' detections speak for most: a
+// wrong track can hold its object at a class that only fits with it.
 std::vector<AssociationState> TrackChanges(const StateEvaluation& current, int track,
-                                           int num_classes, double radius_m) {
+                                           const ClassConfusionModel& model, double radius_m) {
   const AssociationState& state = current.state;
   const int from = state.BlockOf(track);
+  std::vector<int> rest;
+  for (int t : state.blocks[from])
+    if (t != track) rest.push_back(t);
+  std::vector<int> rest_classes;
+  if (!rest.empty()) {
+    rest_classes = {state.classes[from]};
+    const int likeliest = LikeliestClass(model, rest);
+    if (likeliest != rest_classes.front()) rest_classes.push_back(likeliest);
+  }
   std::vector<AssociationState> changes;
-  for (size_t k = 0; k < state.blocks.size(); ++k)
-    if (static_cast<int>(k) != from &&
-        (current.locations[k] - current.locations[from]).norm() < radius_m)
-      changes.push_back(state.WithTrackMoved(track, static_cast<int>(k), 0));
-  if (state.blocks[from].size() > 1)
-    for (int c = 0; c < num_classes; ++c) changes.push_back(state.WithTrackMoved(track, -1, c));
+  auto add = [&](AssociationState moved, int joined_class) {
+    moved.classes[moved.BlockOf(track)] = joined_class;
+    if (rest.empty()) {
+      changes.push_back(std::move(moved));
+      return;
+    }
+    for (int rest_class : rest_classes) {
+      moved.classes[moved.BlockOf(rest.front())] = rest_class;
+      changes.push_back(moved);
+    }
+  };
+  for (size_t k = 0; k < state.blocks.size(); ++k) {
+    if (static_cast<int>(k) == from ||
+        !((current.locations[k] - current.locations[from]).norm() < radius_m))
+      continue;
+    const AssociationState moved = state.WithTrackMoved(track, static_cast<int>(k), 0);
+    std::vector<int> joined = state.blocks[k];
+    joined.insert(std::upper_bound(joined.begin(), joined.end(), track), track);
+    add(moved, state.classes[k]);
+    const int likeliest = LikeliestClass(model, joined);
+    if (likeliest != state.classes[k]) add(moved, likeliest);
+  }
+  if (!rest.empty()) {
+    // Alone at its object's class or at the one its detections speak for
+    // most; the class sweep tries the others.
+    const int likeliest = LikeliestClass(model, {track});
+    add(state.WithTrackMoved(track, -1, state.classes[from]), state.classes[from]);
+    if (likeliest != state.classes[from])
+      add(state.WithTrackMoved(track, -1, likeliest), likeliest);
+  }
   return changes;
 }
 
@@ -621,7 +663,7 @@ EvaluationPtr Sampler::Sweep(EvaluationPtr current, StateEvaluator* evaluator,
     bool changed = false;
     for (int track = 0; track < model_.num_tracks(); ++track) {
       if (current->state.BlockOf(track) < 0) continue;
-      changed |= take_best(TrackChanges(*current, track, num_classes, radius_m));
+      changed |= take_best(TrackChanges(*current, track, model_, radius_m));
     }
     for (size_t j = 0; j < current->state.blocks.size(); ++j)
       changed |= take_best(ClassChanges(current->state, static_cast<int>(j), num_classes));

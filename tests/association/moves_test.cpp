@@ -100,6 +100,7 @@ Tally Draw(const StateEvaluation& from, const ClassConfusionModel& model,
 // the rare ones).
 void ExpectFrequency(long count, long n, double p, const std::string& what) {
   const double frequency = static_cast<double>(count) / n;
+  p = std::clamp(p, 0.0, 1.0);  // 1 - sum of probabilities may round below 0
   const double sigma = std::sqrt(p * (1 - p) / n);
   EXPECT_NEAR(frequency, p, 5 * sigma + 2e-4) << what;
 }
@@ -254,17 +255,16 @@ TEST(MovesTest, ProposalsAreCanonicalAndChangeWhatTheMoveSays) {
           break;
         }
         case MoveType::kReassign: {
-          // The track left its object (which keeps its class if anything is
-          // left) for part_b's object (same class) or alone; nothing else moved.
+          // The track left its object for part_b's object or alone (both
+          // objects draw their classes); nothing else moved. The old classes
+          // are kept for the reverse move.
           const int from = x.BlockOf(p.track);
           EXPECT_EQ(x.classes[from], p.old_class_a);
           std::vector<int> rest = x.blocks[from];
           rest.erase(std::find(rest.begin(), rest.end(), p.track));
           EXPECT_EQ(p.part_a, rest);
           if (!rest.empty()) {
-            const int kept = p.state.BlockOf(rest.front());
-            EXPECT_EQ(p.state.blocks[kept], rest);
-            EXPECT_EQ(p.state.classes[kept], p.old_class_a);
+            EXPECT_EQ(p.state.blocks[p.state.BlockOf(rest.front())], rest);
           }
           const int to = p.state.BlockOf(p.track);
           std::vector<int> joined = p.part_b;
@@ -273,7 +273,13 @@ TEST(MovesTest, ProposalsAreCanonicalAndChangeWhatTheMoveSays) {
           EXPECT_EQ(p.state.blocks[to], joined);
           if (!p.part_b.empty()) {
             EXPECT_EQ(x.blocks[x.BlockOf(p.part_b.front())], p.part_b);
-            EXPECT_EQ(p.state.classes[to], x.classes[x.BlockOf(p.part_b.front())]);
+            EXPECT_EQ(p.old_class_b, x.classes[x.BlockOf(p.part_b.front())]);
+          }
+          for (size_t j = 0; j < x.blocks.size(); ++j) {
+            if (x.blocks[j] == x.blocks[from] || x.blocks[j] == p.part_b) continue;
+            const int same = p.state.BlockOf(x.blocks[j].front());
+            EXPECT_EQ(p.state.blocks[same], x.blocks[j]);
+            EXPECT_EQ(p.state.classes[same], x.classes[j]);
           }
           EXPECT_EQ(p.state.blocks.size(),
                     x.blocks.size() + (p.part_b.empty() ? 1 : 0) - (rest.empty() ? 1 : 0));
@@ -324,7 +330,7 @@ TEST(MovesTest, ImpossibleMovesAreSelfTransitions) {
     EXPECT_TRUE(p.part_b.empty());
   }
   EXPECT_GT(lone_track_drawn, 20);  // about 1 in 4
-  EXPECT_EQ(LogReassignProbability(*lone_evaluation, 0, 1, 0, model, strict, {0, 0, 0, 1}),
+  EXPECT_EQ(LogReassignProbability(*lone_evaluation, 0, 1, 0, 0, model, strict, {0, 0, 0, 1}),
             kNegInf);
 }
 
