@@ -209,6 +209,30 @@ TEST_F(SlamTargetTest, RolledBackEvaluationsAreRedoneExactly) {
   EXPECT_TRUE(again_other->valid);
 }
 
+// A class switch changes its object's silhouette: the linearisations it
+// made must not stand in for the other class afterwards, or a proposal's value
+// depends on what the chain tried before (and a chain that rolls back after a
+// swap gets other values than one that did not: docs/method.md §9.4, §9.6).
+TEST_F(SlamTargetTest, AClassSwitchLeavesNothingBehindForTheOtherClass) {
+  SceneTracks s = MakeSceneTracks();
+  for (ClassPrior& prior : s.data.classes) prior.slice_model.silhouette.enabled = true;
+  s.data.classes[1].slice_model.silhouette.depth_half_extent = 0.8;
+  s.data.classes[1].slice_model.silhouette.width_half_extent = 0.9;
+  const ClassConfusionModel model = s.Model();
+  SlamEvaluator evaluator(s.data, model, Options()), fresh(s.data, model, Options());
+  const EvaluationPtr from = evaluator.Refine(s.truth, nullptr);
+  AssociationState switched = s.truth;
+  switched.classes[0] = 1 - switched.classes[0];
+  ASSERT_TRUE(evaluator.Evaluate(switched, from.get())->valid);
+  for (const AssociationState& next : {SplitOffLastTrack(s.truth), Merge(s.truth, 1, 2)}) {
+    const EvaluationPtr after = evaluator.Evaluate(next, from.get());
+    const EvaluationPtr alone = fresh.Evaluate(next, from.get());
+    ASSERT_TRUE(after->valid && alone->valid);
+    EXPECT_EQ(after->log_target, alone->log_target) << next.ToString();
+    EXPECT_EQ(after->locations, alone->locations) << next.ToString();
+  }
+}
+
 TEST_F(SlamTargetTest, ACacheBeyondItsLimitStartsAfresh) {
   SlamTargetOptions options = Options();
   options.max_cache_entries = 2;
