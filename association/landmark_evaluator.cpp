@@ -350,6 +350,7 @@ EvaluationPtr LandmarkEvaluator::Refine(const AssociationState& state,
     reference_factorised_ = true;
     reference_position_keys_ = last_refine_keys_;
     roots_.clear();  // of the factor before
+    root_bytes_ = 0;
   }
   Store(evaluation);
   return evaluation;
@@ -413,28 +414,33 @@ void LandmarkEvaluator::PrepareMerges(const std::vector<int>& blocks) {
   }
   std::sort(missing.begin(), missing.end());
   missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
-  // Dense columns of the whole problem's size: at most kMaxRootBytes kept.
-  constexpr size_t kChunk = 32;  // keys per batch of forward solves
+  // The roots' rows are their keys' elimination-tree ancestors; at most
+  // kMaxRootBytes kept.
+  constexpr size_t kChunk = 32;  // keys per call (a batch of dense solves on a supernodal factor)
   for (size_t first = 0; first < missing.size(); first += kChunk) {
     const std::vector<std::vector<int>> chunk(
         missing.begin() + first, missing.begin() + std::min(missing.size(), first + kChunk));
-    std::vector<Eigen::MatrixXd> roots;
+    std::vector<CovarianceRoot> roots;
     if (!full_.solver().CovarianceRoots(chunk, &roots)) return;  // LDL': pairwise blocks
-    const double bytes = double(roots.front().size()) * sizeof(double);
-    if (double(roots_.size() + roots.size()) * bytes > kMaxRootBytes) {
+    double bytes = 0;
+    for (const CovarianceRoot& root : roots) bytes += double(root.bytes());
+    if (root_bytes_ + bytes > kMaxRootBytes) {
       if (first > 0) return;  // keep what this call computed
       roots_.clear();
+      root_bytes_ = 0;
     }
+    root_bytes_ += bytes;
     for (size_t i = 0; i < chunk.size(); ++i) roots_[chunk[i].front()] = std::move(roots[i]);
   }
 }
 
 bool LandmarkEvaluator::JointCovariance(int ka, int kb, Eigen::Matrix4d* sigma) {
   const auto a = roots_.find(ka), b = roots_.find(kb);
-  if (a != roots_.end() && b != roots_.end() && a->second.cols() == 2 && b->second.cols() == 2) {
-    sigma->topLeftCorner<2, 2>() = a->second.transpose() * a->second;
-    sigma->bottomRightCorner<2, 2>() = b->second.transpose() * b->second;
-    sigma->topRightCorner<2, 2>() = a->second.transpose() * b->second;
+  if (a != roots_.end() && b != roots_.end() && a->second.values.cols() == 2 &&
+      b->second.values.cols() == 2) {
+    sigma->topLeftCorner<2, 2>() = RootProduct(a->second, a->second);
+    sigma->bottomRightCorner<2, 2>() = RootProduct(b->second, b->second);
+    sigma->topRightCorner<2, 2>() = RootProduct(a->second, b->second);
     sigma->bottomLeftCorner<2, 2>() = sigma->topRightCorner<2, 2>().transpose();
     return true;
   }

@@ -143,7 +143,8 @@ class LandmarkEvaluator : public StateEvaluator {
   size_t solves_ = 0, hits_ = 0, marginal_merges_ = 0;
   // Covariance roots (SparseSolver::CovarianceRoots) of landmark positions
   // at the reference's factor, by solver key; at most kMaxRootBytes kept.
-  std::unordered_map<int, Eigen::MatrixXd> roots_;
+  std::unordered_map<int, CovarianceRoot> roots_;
+  double root_bytes_ = 0;
   static constexpr double kMaxRootBytes = 256e6;
 };
 

@@ -162,24 +162,83 @@ bool CovarianceBlocks(cholmod_factor* factor, const std::vector<int>& inverse_pe
                                    forward_only ? CHOLMOD_L : CHOLMOD_A, take_block, why);
 }
 
+namespace {
+
+// Y_g of one group on a simplicial factor: L y = e_q for each of the
+// group's rows q = inverse_permutation[column], solved on the union of their
+// elimination-tree paths (the only rows where y is non-zero), in ascending
+// order (a node's ancestors come after it). `position` is scratch of the
+// factor's size, all -1 on entry and on return.
+CovarianceRoot SimplicialRoot(const cholmod_factor* factor, const std::vector<int>& rows_of_group,
+                              std::vector<int>* position) {
+  const auto* fp = static_cast<const int*>(factor->p);
+  const auto* fi = static_cast<const int*>(factor->i);
+  const auto* fnz = static_cast<const int*>(factor->nz);
+  const auto* fx = static_cast<const double*>(factor->x);
+  // Column j's first entry is its diagonal; its parent the least row below.
+  const auto parent = [&](int j) {
+    int least = -1;
+    for (int k = fp[j] + 1; k < fp[j] + fnz[j]; ++k)
+      if (least < 0 || fi[k] < least) least = fi[k];
+    return least;
+  };
+  CovarianceRoot root;
+  for (int q : rows_of_group)
+    for (int j = q; j >= 0 && (*position)[j] < 0; j = parent(j)) {
+      (*position)[j] = 0;
+      root.rows.push_back(j);
+    }
+  std::sort(root.rows.begin(), root.rows.end());
+  for (size_t r = 0; r < root.rows.size(); ++r) (*position)[root.rows[r]] = static_cast<int>(r);
+  const int width = static_cast<int>(rows_of_group.size());
+  root.values = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(root.rows.size()), width);
+  for (int c = 0; c < width; ++c) root.values((*position)[rows_of_group[c]], c) = 1.0;
+  for (size_t r = 0; r < root.rows.size(); ++r) {
+    const int j = root.rows[r];
+    auto y = root.values.row(static_cast<Eigen::Index>(r));
+    if (factor->is_ll) y /= fx[fp[j]];
+    for (int k = fp[j] + 1; k < fp[j] + fnz[j]; ++k)
+      root.values.row((*position)[fi[k]]) -= fx[k] * y;
+  }
+  // LDL': H^-1 = L^-T D^-1 L^-1, so Y = D^-1/2 L^-1 E (L unit-diagonal, D
+  // on its diagonal).
+  if (!factor->is_ll)
+    for (size_t r = 0; r < root.rows.size(); ++r)
+      root.values.row(static_cast<Eigen::Index>(r)) /= std::sqrt(std::abs(fx[fp[root.rows[r]]]));
+  for (int j : root.rows) (*position)[j] = -1;
+  return root;
+}
+
+}  // namespace
+
 bool CovarianceRoots(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
                      cholmod_common* cc, const std::vector<std::vector<int>>& columns,
-                     std::vector<Eigen::MatrixXd>* roots, std::string* why) {
+                     std::vector<CovarianceRoot>* roots, std::string* why) {
   if (!factor->is_ll && factor->is_super) {
     if (why) *why = "a supernodal LDL' factor";  // CHOLMOD makes none
     return false;
   }
   const int n = static_cast<int>(factor->n);
-  // LDL' (simplicial): H^-1 = L^-T D^-1 L^-1, so Y = D^-1/2 L^-1 E, D the
-  // factor's diagonal (CHOLMOD_L solves with the unit-diagonal L).
-  const auto* fx = static_cast<const double*>(factor->x);
-  const auto* fp = static_cast<const int*>(factor->p);
-  roots->assign(columns.size(), Eigen::MatrixXd());
+  roots->assign(columns.size(), CovarianceRoot());
+  if (!factor->is_super) {
+    std::vector<int> position(static_cast<size_t>(n), -1);
+    for (size_t h = 0; h < columns.size(); ++h) {
+      std::vector<int> rows_of_group;
+      for (int column : columns[h]) rows_of_group.push_back(inverse_permutation[column]);
+      (*roots)[h] = SimplicialRoot(factor, rows_of_group, &position);
+    }
+    return true;
+  }
+  // Supernodal LL': a dense forward solve, the rows off the reach dropped.
   const auto take_root = [&](size_t h, const double* solution) {
-    Eigen::MatrixXd& root = (*roots)[h];
-    root = Eigen::Map<const Eigen::MatrixXd>(solution, n, static_cast<int>(columns[h].size()));
-    if (!factor->is_ll)
-      for (int i = 0; i < n; ++i) root.row(i) /= std::sqrt(std::abs(fx[fp[i]]));
+    const int width = static_cast<int>(columns[h].size());
+    const Eigen::Map<const Eigen::MatrixXd> dense(solution, n, width);
+    CovarianceRoot& root = (*roots)[h];
+    for (int i = 0; i < n; ++i)
+      if (!dense.row(i).isZero(0.0)) root.rows.push_back(i);
+    root.values.resize(static_cast<Eigen::Index>(root.rows.size()), width);
+    for (size_t r = 0; r < root.rows.size(); ++r)
+      root.values.row(static_cast<Eigen::Index>(r)) = dense.row(root.rows[r]);
   };
   return SolveUnitColumnsInBatches(factor, inverse_permutation, cc, columns, CHOLMOD_L, take_root,
                                    why);

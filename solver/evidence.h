@@ -57,9 +57,12 @@ bool CovarianceBlocks(cholmod_factor_struct* factor, const std::vector<int>& inv
 // that needs many pairwise blocks among a few variables solve once per
 // variable rather than once per pair, and a forward solve only. False with
 // `why` when CHOLMOD fails.
+// A simplicial factor is solved on the reach of E_g alone (its
+// elimination-tree ancestors: a sparse forward solve, cost the sum of those
+// columns' lengths); a supernodal one densely, its zero rows dropped.
 bool CovarianceRoots(cholmod_factor_struct* factor, const std::vector<int>& inverse_permutation,
                      cholmod_common_struct* cc, const std::vector<std::vector<int>>& columns,
-                     std::vector<Eigen::MatrixXd>* roots, std::string* why);
+                     std::vector<CovarianceRoot>* roots, std::string* why);
 
 // Draws from N(0, H^{-1}) for the factored matrix H: H = P' L L' P (LL') or
 // P' L D L' P (LDL'), so y = P' L^{-T} z (LL') or P' L^{-T} D^{-1/2} z, with

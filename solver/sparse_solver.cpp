@@ -415,8 +415,25 @@ bool SparseSolver::MarginalCovariances(const std::vector<std::vector<int>>& key_
                           blocks, why);
 }
 
+Eigen::MatrixXd RootProduct(const CovarianceRoot& a, const CovarianceRoot& b) {
+  Eigen::MatrixXd product = Eigen::MatrixXd::Zero(a.values.cols(), b.values.cols());
+  size_t i = 0, j = 0;
+  while (i < a.rows.size() && j < b.rows.size()) {
+    if (a.rows[i] < b.rows[j]) {
+      ++i;
+    } else if (b.rows[j] < a.rows[i]) {
+      ++j;
+    } else {
+      product.noalias() += a.values.row(static_cast<Eigen::Index>(i)).transpose() *
+                           b.values.row(static_cast<Eigen::Index>(j));
+      ++i, ++j;
+    }
+  }
+  return product;
+}
+
 bool SparseSolver::CovarianceRoots(const std::vector<std::vector<int>>& key_groups,
-                                   std::vector<Eigen::MatrixXd>* roots, std::string* why) {
+                                   std::vector<CovarianceRoot>* roots, std::string* why) {
   const SerialOpenMpScope serial_openmp;
   const NormalEquations& normal = impl_->normal;
   if (!normal.factor_is_final()) {

@@ -157,6 +157,22 @@ struct SolveResult {
   std::vector<double> squared_errors;
 };
 
+// Square-root columns of the covariance for one group of scalar columns
+// (SparseSolver::CovarianceRoots): Y_g = L^{-1} P E_g (scaled by D^{-1/2}
+// for LDL'), non-zero only on the elimination-tree ancestors of E_g's rows,
+// so kept as those `rows` of the factor (ascending) and `values` there
+// (rows.size() x |g|).
+struct CovarianceRoot {
+  std::vector<int> rows;
+  Eigen::MatrixXd values;
+  size_t bytes() const {
+    return rows.size() * sizeof(int) + static_cast<size_t>(values.size()) * sizeof(double);
+  }
+};
+
+// Y_a^T Y_b: the covariance block between two groups.
+Eigen::MatrixXd RootProduct(const CovarianceRoot& a, const CovarianceRoot& b);
+
 class SparseSolver {
  public:
   explicit SparseSolver(const SolverOptions& options = SolverOptions());
@@ -180,10 +196,10 @@ class SparseSolver {
                            std::vector<Eigen::MatrixXd>* blocks, std::string* why = nullptr);
 
   // Per group of keys, Y_g with (J^T J)^{-1} blocks Y_a^T Y_b between any
-  // two groups (evidence.h's CovarianceRoots), at the last Solve's final
-  // point. False (with `why`) as MarginalCovariances.
+  // two groups (evidence.h's CovarianceRoots; RootProduct), at the last
+  // Solve's final point. False (with `why`) as MarginalCovariances.
   bool CovarianceRoots(const std::vector<std::vector<int>>& key_groups,
-                       std::vector<Eigen::MatrixXd>* roots, std::string* why = nullptr);
+                       std::vector<CovarianceRoot>* roots, std::string* why = nullptr);
 
   // Draws from the Gaussian at the last Solve's final point, N(0, (J^T J)^{-1})
   // (evidence.h's CovarianceSamples): per group of keys, a dimension x count

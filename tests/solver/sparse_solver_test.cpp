@@ -291,16 +291,34 @@ TEST(SolverTest, CovarianceRootsGiveTheBlocksOfTheDenseInverse) {
     ASSERT_TRUE(solver.Solve(&graph).summary.IsUsable());
     const int last = graph.num_variables() - 1;
     const std::vector<std::vector<int>> groups = {{last - 1, last}, {5}, {20, last - 2}};
-    std::vector<Eigen::MatrixXd> roots;
+    std::vector<CovarianceRoot> roots;
     ASSERT_TRUE(solver.CovarianceRoots(groups, &roots));
     ASSERT_EQ(roots.size(), groups.size());
+    // Each root is kept on the rows where it is non-zero, ascending, and
+    // holds the group's own rows; not every row of the factor.
+    size_t kept_rows = 0, all_rows = 0, n = 0;
+    for (int key = 0; key < graph.num_variables(); ++key)
+      n += static_cast<size_t>(graph.values().Dim(key));
+    for (size_t g = 0; g < groups.size(); ++g) {
+      const CovarianceRoot& root = roots[g];
+      ASSERT_EQ(root.values.rows(), static_cast<Eigen::Index>(root.rows.size()));
+      int width = 0;
+      for (int key : groups[g]) width += graph.values().Dim(key);
+      ASSERT_EQ(root.values.cols(), width);
+      EXPECT_TRUE(std::is_sorted(root.rows.begin(), root.rows.end()));
+      EXPECT_EQ(std::adjacent_find(root.rows.begin(), root.rows.end()), root.rows.end());
+      kept_rows += root.rows.size();
+      all_rows += n;
+    }
+    std::printf("%d poses: roots kept on %zu of %zu rows\n", poses, kept_rows, all_rows);
+    EXPECT_LT(kept_rows, all_rows);
     for (size_t a = 0; a < groups.size(); ++a)
       for (size_t b = a; b < groups.size(); ++b) {
         std::vector<Eigen::MatrixXd> block;  // the joint block, its (a, b) part compared
         std::vector<int> both = groups[a];
         both.insert(both.end(), groups[b].begin(), groups[b].end());
         ASSERT_TRUE(solver.MarginalCovariances({both}, &block));
-        const Eigen::MatrixXd product = roots[a].transpose() * roots[b];
+        const Eigen::MatrixXd product = RootProduct(roots[a], roots[b]);
         const Eigen::MatrixXd expected =
             block[0].block(0, block[0].cols() - product.cols(), product.rows(), product.cols());
         EXPECT_LT((product - expected).cwiseAbs().maxCoeff(), 1e-8 * expected.cwiseAbs().maxCoeff())
