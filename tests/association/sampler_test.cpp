@@ -80,6 +80,21 @@ SamplerResult RunTest(const SamplerOptions& options, const ClassConfusionModel& 
   return sampler.Run(SeparateTracksState(kTrackClass));
 }
 
+// A run whose evaluators approximate every state exactly where they
+// approximate it (the test evaluator withholds some approximations).
+SamplerResult RunExactlyApproximated(const SamplerOptions& options,
+                                     const ClassConfusionModel& model) {
+  Sampler sampler(
+      model,
+      [&model] {
+        auto evaluator = std::make_unique<TestEvaluator>(model);
+        evaluator->EnableApproximation(0.0);
+        return evaluator;
+      },
+      options);
+  return sampler.Run(SeparateTracksState(kTrackClass));
+}
+
 // Sample counts and tolerance: 200,000 MH iterations on 94 states; the
 // stated tolerance for the total variation distance is 0.03.
 TEST(DetailedBalanceTest, MetropolisHastingsMatchesEnumeratedPosterior) {
@@ -255,15 +270,7 @@ TEST(SamplerTest, SweepsEndWhereNoSingleTrackMoveOrClassSwitchImproves) {
     options.hill_climb_steps = steps;
     options.hill_climb_patience = 0;
     options.hill_climb_sweeps = 20;
-    Sampler sampler(
-        model,
-        [&model] {
-          auto evaluator = std::make_unique<TestEvaluator>(model);
-          evaluator->EnableApproximation(0.0);
-          return evaluator;
-        },
-        options);
-    const SamplerResult result = sampler.Run(SeparateTracksState(kTrackClass));
+    const SamplerResult result = RunExactlyApproximated(options, model);
     const AssociationState& end = result.hill_climbed->state;
     const double end_target = TestLogTarget(end, model);
     EXPECT_EQ(result.summary.hill_climbed_log_target, end_target);
@@ -302,15 +309,7 @@ TEST(SamplerTest, HillClimbingScreenSkipsOnlyWhatWouldBeRejected) {
   std::vector<SamplerResult> results;
   for (double margin : {std::numeric_limits<double>::infinity(), 0.0}) {
     options.hill_climb_screen_nats = margin;
-    Sampler sampler(
-        model,
-        [&model] {
-          auto evaluator = std::make_unique<TestEvaluator>(model);
-          evaluator->EnableApproximation(0.0);
-          return evaluator;
-        },
-        options);
-    results.push_back(sampler.Run(SeparateTracksState(kTrackClass)));
+    results.push_back(RunExactlyApproximated(options, model));
   }
   EXPECT_EQ(results[0].summary.hill_climb_trace, results[1].summary.hill_climb_trace);
   long screened = 0;
