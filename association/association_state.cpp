@@ -33,7 +33,7 @@ int AssociationState::BlockOf(int track) const {
 }
 
 AssociationState AssociationState::WithTrackMoved(int track, int target_block,
-                                                  int alone_class) const {
+                                                  int joined_class) const {
   AssociationState moved = *this;
   const int from = BlockOf(track);
   if (from >= 0) {
@@ -42,9 +42,10 @@ AssociationState AssociationState::WithTrackMoved(int track, int target_block,
   }
   if (target_block >= 0) {
     moved.blocks[target_block].push_back(track);
+    moved.classes[target_block] = joined_class;
   } else {
     moved.blocks.push_back({track});
-    moved.classes.push_back(alone_class);
+    moved.classes.push_back(joined_class);
   }
   moved.Canonicalize();
   return moved;

@@ -26,8 +26,8 @@ struct AssociationState {
   int BlockOf(int track) const;  // -1 when absent
   // The canonical state with `track` moved out of its object (which keeps its
   // class, or goes when empty) into object `target_block` (an index of this
-  // state, which keeps its class) or, for -1, alone with class `alone_class`.
-  AssociationState WithTrackMoved(int track, int target_block, int alone_class) const;
+  // state) or, for -1, alone; the object it ends in takes `joined_class`.
+  AssociationState WithTrackMoved(int track, int target_block, int joined_class) const;
   size_t num_tracks() const;
   bool operator==(const AssociationState& other) const {
     return blocks == other.blocks && classes == other.classes;

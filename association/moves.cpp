@@ -337,7 +337,6 @@ Proposal ProposeReassign(const StateEvaluation& s, const ClassConfusionModel& mo
   const int rest_class =
       p.part_a.empty() ? 0 : SampleLog(LogClassProposal(model, p.part_a, options), rng);
   p.state = s.state.WithTrackMoved(track, alone ? -1 : target, joined_class);
-  p.state.classes[p.state.BlockOf(track)] = joined_class;
   if (!p.part_a.empty()) p.state.classes[p.state.BlockOf(p.part_a.front())] = rest_class;
   p.log_q_forward = LogReassignProbability(s, track, alone ? -1 : target, joined_class, rest_class,
                                            model, options, probabilities);

@@ -560,9 +560,10 @@ int LikeliestClass(const ClassConfusionModel& model, const std::vector<int>& blo
 
 // The states one change away from `current` that a sweep tries for `track`:
 // into every other object within `radius_m` of its own, or, when it has
-// company, alone (at its object's class or its detections' likeliest). The object it joins and the
-// one it leaves each keep their class or take the one their tracks' detections speak for most: a
-// wrong track can hold its object at a class that only fits with it.
+// company, alone (at its object's class or its detections' likeliest). The
+// object it joins and the one it leaves each keep their class or take the
+// one their tracks' detections speak for most: a wrong track can hold its
+// object at a class that only fits with it.
 std::vector<AssociationState> TrackChanges(const StateEvaluation& current, int track,
                                            const ClassConfusionModel& model, double radius_m) {
   const AssociationState& state = current.state;
@@ -577,8 +578,9 @@ std::vector<AssociationState> TrackChanges(const StateEvaluation& current, int t
     if (likeliest != rest_classes.front()) rest_classes.push_back(likeliest);
   }
   std::vector<AssociationState> changes;
-  auto add = [&](AssociationState moved, int joined_class) {
-    moved.classes[moved.BlockOf(track)] = joined_class;
+  // Into `target` (-1: alone) at `joined_class`, what it leaves at each of rest_classes.
+  auto add = [&](int target, int joined_class) {
+    AssociationState moved = state.WithTrackMoved(track, target, joined_class);
     if (rest.empty()) {
       changes.push_back(std::move(moved));
       return;
@@ -588,24 +590,25 @@ std::vector<AssociationState> TrackChanges(const StateEvaluation& current, int t
       changes.push_back(moved);
     }
   };
+  // The class the detections of `tracks` plus `track` speak for most.
+  const auto likeliest_with_track = [&](std::vector<int> tracks) {
+    tracks.insert(std::upper_bound(tracks.begin(), tracks.end(), track), track);
+    return LikeliestClass(model, tracks);
+  };
   for (size_t k = 0; k < state.blocks.size(); ++k) {
     if (static_cast<int>(k) == from ||
         !((current.locations[k] - current.locations[from]).norm() < radius_m))
       continue;
-    const AssociationState moved = state.WithTrackMoved(track, static_cast<int>(k), 0);
-    std::vector<int> joined = state.blocks[k];
-    joined.insert(std::upper_bound(joined.begin(), joined.end(), track), track);
-    add(moved, state.classes[k]);
-    const int likeliest = LikeliestClass(model, joined);
-    if (likeliest != state.classes[k]) add(moved, likeliest);
+    const int target = static_cast<int>(k);
+    add(target, state.classes[k]);
+    const int likeliest = likeliest_with_track(state.blocks[k]);
+    if (likeliest != state.classes[k]) add(target, likeliest);
   }
   if (!rest.empty()) {
-    // Alone at its object's class or at the one its detections speak for
-    // most; the class sweep tries the others.
-    const int likeliest = LikeliestClass(model, {track});
-    add(state.WithTrackMoved(track, -1, state.classes[from]), state.classes[from]);
-    if (likeliest != state.classes[from])
-      add(state.WithTrackMoved(track, -1, likeliest), likeliest);
+    // The class sweep tries the other classes of a track alone.
+    add(-1, state.classes[from]);
+    const int likeliest = likeliest_with_track({});
+    if (likeliest != state.classes[from]) add(-1, likeliest);
   }
   return changes;
 }

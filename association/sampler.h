@@ -32,11 +32,12 @@ struct SamplerOptions {
   double hill_climb_screen_nats = 10.0;
   int refine_every = 50;  // K_NL: full optimisation of the current state
   // Beyond the thesis (docs/method.md §9.7): after the random climb, at most
-  // this many sweeps over every track (moved to each object within
-  // 3 sigma_R, or alone at each class) and every object (each other class),
-  // each taking its best single change when it raises the target. The random
+  // this many sweeps over every track (moved into each object within
+  // 3 sigma_R or alone, the objects it joins and leaves at their class or
+  // their detections' likeliest) and every object (each other class), each
+  // taking its best single change when it raises the target. The random
   // climb proposes such changes too seldom to finish them: on long_loop MC³
-  // went on climbing 10-20 nats for its whole run. 0 = thesis.
+  // went on finding states 5-20 nats above it for its whole run. 0 = thesis.
   int hill_climb_sweeps = 5;
   MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
   MoveProbabilities sampling_moves{0.4, 0.4, 0.2};  // 0.5/0.5/0 with known classes

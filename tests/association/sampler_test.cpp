@@ -282,8 +282,9 @@ TEST(SamplerTest, SweepsEndWhereNoSingleTrackMoveOrClassSwitchImproves) {
       const int from = end.BlockOf(track);
       for (size_t k = 0; k < end.blocks.size(); ++k) {
         if (static_cast<int>(k) == from) continue;
-        EXPECT_LE(TestLogTarget(end.WithTrackMoved(track, static_cast<int>(k), 0), model),
-                  end_target);
+        EXPECT_LE(
+            TestLogTarget(end.WithTrackMoved(track, static_cast<int>(k), end.classes[k]), model),
+            end_target);
       }
       if (end.blocks[from].size() > 1) {
         for (int c = 0; c < 2; ++c)
