@@ -253,6 +253,10 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&u.joint_max_shift_m, "joint-max-shift", "M",
         "unknown association: joint merges only for alignments shifting the recent landmarks "
         "at most this far (0: no limit)");
+  b.AddChoice<bool>(&u.joint_loop_anchor, {{"on", true}, {"off", false}}, "joint-loop-anchor",
+                    "on|off",
+                    "unknown association: joint merges also try the correction spread along the "
+                    "whole loop, from where its old landmarks were last seen");
   b.AddChoice<bool>(&u.calibrate_on_tracks, {{"on", true}, {"off", false}}, "calibrate-tracks",
                     "on|off",
                     "unknown association: estimate the noise's variance components with every "

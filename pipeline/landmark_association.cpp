@@ -504,7 +504,14 @@ long LandmarkAssociation::TryJointMerge(int n) {
     driven[i] = driven[i - 1] + std::hypot(trajectory[i].x - trajectory[i - 1].x,
                                            trajectory[i].y - trajectory[i - 1].y);
   EvaluationPtr best;
-  int best_anchor = 0;
+  int best_anchor = 0, last_anchor = n;
+  const auto try_anchor = [&](int anchor) {
+    const EvaluationPtr e = TryAnchor(*before, *alignment, driven, anchor, n);
+    if (e && e->valid && (!best || e->log_target > best->log_target)) {
+      best = e;
+      best_anchor = anchor;
+    }
+  };
   for (int k = 0, previous_anchor = -1; k < options_.joint_anchors; ++k) {
     const int anchor = std::max(0, StretchStart(n, options_.joint_recent_m * (1 << k)) - 1);
     if (anchor == previous_anchor) break;
@@ -512,13 +519,26 @@ long LandmarkAssociation::TryJointMerge(int n) {
     // The correction moves every pose after the anchor: poses held in the
     // window's solves would stay bent, their odometry broken.
     if (anchor + 1 < held_poses_) break;
-    const EvaluationPtr e = TryAnchor(*before, *alignment, driven, anchor, n);
-    if (e && e->valid && (!best || e->log_target > best->log_target)) {
-      best = e;
-      best_anchor = anchor;
-    }
+    try_anchor(anchor);
+    last_anchor = anchor;
   }
+  const int loop_anchor = options_.joint_loop_anchor ? LoopStart(*alignment) - 1 : -1;
+  if (loop_anchor + 1 >= held_poses_ && loop_anchor >= 0 && loop_anchor < last_anchor)
+    try_anchor(loop_anchor);
   return KeepJointMerge(before, best, best_anchor, n, pairs.size());
+}
+
+// The median over the aligned pairs of the pose at which the old landmark
+// was last seen: where the loop the alignment closes began.
+int LandmarkAssociation::LoopStart(const JointAlignment& alignment) const {
+  std::vector<int> last_seen;
+  for (const auto& pair : alignment.match.pairs) {
+    int last = 0;
+    for (int t : alignment.old[pair.second].tracks) last = std::max(last, last_pose_[t]);
+    last_seen.push_back(last);
+  }
+  std::nth_element(last_seen.begin(), last_seen.begin() + last_seen.size() / 2, last_seen.end());
+  return last_seen[last_seen.size() / 2];
 }
 
 // The units aligned: the recent part of each landmark (its tracks first seen

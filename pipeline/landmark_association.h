@@ -111,7 +111,8 @@ struct UnknownAssociationOptions {
   // joint_min_inliers inliers (a dense park offers random ones of 4-7) that
   // moves something by more than joint_inlier_m and merges something new is
   // tried: per anchor pose (joint_recent_m times 1, 2, 4, ... back,
-  // joint_anchors of them) the tracks first seen after the anchor are
+  // joint_anchors of them, and the loop's start: joint_loop_anchor) the
+  // tracks first seen after the anchor are
   // released from their landmarks, every inlier pair merged, and the whole
   // problem solved from the trajectory with the correction spread along the
   // drive since the anchor (linearly in the distance driven). The best
@@ -136,6 +137,12 @@ struct UnknownAssociationOptions {
   double joint_max_shift_m = 0;
   int joint_ransac_iterations = 300;
   int joint_anchors = 2;
+  // One more anchor at the start of the loop the alignment closes: the
+  // median pose at which its old landmarks were last seen. The heading drift
+  // of a long loop (0.3 rad after 1.3 km) spread over the last few hundred
+  // metres only bends the trajectory into a worse optimum than the drift
+  // spread along the whole loop (docs/benchmarks.md).
+  bool joint_loop_anchor = true;
   int joint_retry_inliers = 2;
   int joint_every_poses = 50;  // RANSAC at most once per this many poses
   // After a joint merge's solve, the worst-fitting pairs are split off again
@@ -264,6 +271,7 @@ class LandmarkAssociation {
   EvaluationPtr WithoutMisfitPairs(EvaluationPtr e, const JointAlignment& alignment, int n);
   AssociationState ReleasedAndMerged(const AssociationState& s, const JointAlignment& alignment,
                                      int anchor) const;
+  int LoopStart(const JointAlignment& alignment) const;
   long KeepJointMerge(const EvaluationPtr& before, const EvaluationPtr& best, int best_anchor,
                       int n, size_t pairs);
   // The first pose within `metres` driven (by the dead reckoning) of pose
