@@ -38,6 +38,11 @@ Rigid2 PartOf(const Rigid2& rigid, const Eigen::Vector2d& pivot, double fraction
 
 namespace {
 
+struct Support {
+  int count = 0;     // inliers
+  double score = 0;  // weighted by fit
+};
+
 // The candidates of each `from` point and the inliers of a transform. The
 // `to` points sit on a grid of inlier_m cells: a transform's inliers are then
 // found in the 3 x 3 cells around each moved point instead of among all its
@@ -46,16 +51,18 @@ namespace {
 class InlierCounter {
  public:
   InlierCounter(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
-                const RigidRansacOptions& options)
+                const RigidRansacOptions& options, const std::set<std::pair<int, int>>& excluded)
       : from_(from),
         to_(to),
         inlier_m_(options.inlier_m),
         inlier2_(inlier_m_ * inlier_m_),
+        score_std2_(options.score_std_m * options.score_std_m),
         reach_(options.search_m + inlier_m_),
+        excluded_(excluded),
         near_(from.size()) {
     for (size_t i = 0; i < from_.size(); ++i) {
       for (size_t o = 0; o < to_.size(); ++o)
-        if ((to_[o] - from_[i]).squaredNorm() <= reach_ * reach_)
+        if (IsCandidate(static_cast<int>(i), static_cast<int>(o)))
           near_[i].push_back(static_cast<int>(o));
       with_candidates_ += !near_[i].empty();
     }
@@ -64,13 +71,14 @@ class InlierCounter {
   int with_candidates() const { return with_candidates_; }
   const std::vector<int>& near(size_t i) const { return near_[i]; }
 
-  // Builds the grid; needed before Inliers().
+  // Builds the grid; needed before Measure().
   void Index() {
     for (size_t o = 0; o < to_.size(); ++o) grid_[CellOf(to_[o])].push_back(static_cast<int>(o));
   }
 
-  // The number of inliers of `rigid`, and with `pairs` the pairs.
-  int Inliers(const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) const {
+  // The inliers of `rigid` and their score (RigidRansacOptions::score_std_m),
+  // with `pairs` the pairs.
+  Support Measure(const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) const {
     std::map<int, std::pair<double, int>> by_to;  // to point -> (distance², from point)
     for (size_t i = 0; i < from_.size(); ++i) {
       if (near_[i].empty()) continue;
@@ -83,7 +91,7 @@ class InlierCounter {
           const auto cell = grid_.find({x, y});
           if (cell == grid_.end()) continue;
           for (int o : cell->second) {
-            if ((to_[o] - from_[i]).squaredNorm() > reach_ * reach_) continue;  // not in near_[i]
+            if (!IsCandidate(static_cast<int>(i), o)) continue;  // not in near_[i]
             const double d2 = (to_[o] - p).squaredNorm();
             if (d2 < best || (d2 == best && o > nearest)) {
               best = d2;
@@ -100,10 +108,19 @@ class InlierCounter {
       pairs->clear();
       for (const auto& [o, value] : by_to) pairs->push_back({value.second, o});
     }
-    return static_cast<int>(by_to.size());
+    Support support;
+    support.count = static_cast<int>(by_to.size());
+    for (const auto& entry : by_to)
+      support.score += score_std2_ > 0 ? std::exp(-0.5 * entry.second.first / score_std2_) : 1.0;
+    return support;
   }
 
  private:
+  bool IsCandidate(int i, int o) const {
+    return (to_[o] - from_[i]).squaredNorm() <= reach_ * reach_ &&
+           (excluded_.empty() || excluded_.count({i, o}) == 0);
+  }
+
   std::pair<long, long> CellOf(const Eigen::Vector2d& p) const {
     return std::make_pair(static_cast<long>(std::floor(p.x() / inlier_m_)),
                           static_cast<long>(std::floor(p.y() / inlier_m_)));
@@ -111,20 +128,23 @@ class InlierCounter {
 
   const std::vector<Eigen::Vector2d>& from_;
   const std::vector<Eigen::Vector2d>& to_;
-  const double inlier_m_, inlier2_, reach_;
+  const double inlier_m_, inlier2_, score_std2_, reach_;
+  const std::set<std::pair<int, int>>& excluded_;
   std::vector<std::vector<int>> near_;  // candidates (to points within reach) per from point
   int with_candidates_ = 0;
   std::map<std::pair<long, long>, std::vector<int>> grid_;
 };
 
-// The sampled transform with the most inliers (count 0: none).
-std::pair<Rigid2, int> Sample(const std::vector<Eigen::Vector2d>& from,
-                              const std::vector<Eigen::Vector2d>& to, const InlierCounter& counter,
-                              const RigidRansacOptions& options, std::mt19937_64& rng) {
+// The sampled transform with at least min_inliers inliers and the highest
+// score (count 0: none).
+std::pair<Rigid2, Support> Sample(const std::vector<Eigen::Vector2d>& from,
+                                  const std::vector<Eigen::Vector2d>& to,
+                                  const InlierCounter& counter, const RigidRansacOptions& options,
+                                  std::mt19937_64& rng) {
   const double inlier_m = options.inlier_m;
   std::uniform_int_distribution<size_t> pick(0, from.size() - 1);
   Rigid2 best_rigid;
-  int best_count = 0;
+  Support best;
   for (int sample = 0; sample < options.iterations; ++sample) {
     const size_t a = pick(rng), b = pick(rng);
     if (a == b || counter.near(a).empty() || counter.near(b).empty()) continue;
@@ -145,41 +165,48 @@ std::pair<Rigid2, int> Sample(const std::vector<Eigen::Vector2d>& from,
         Rigid2 rigid;
         rigid.angle = angle;
         rigid.t = 0.5 * (to[oa] + to[ob]) - Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
-        const int count = counter.Inliers(rigid, nullptr);
-        if (count > best_count) {
-          best_count = count;
+        const Support support = counter.Measure(rigid, nullptr);
+        const bool better =
+            options.rank_by_score ? support.score > best.score : support.count > best.count;
+        if (support.count >= options.min_inliers && better) {
+          best = support;
           best_rigid = rigid;
         }
       }
   }
-  return {best_rigid, best_count};
+  return {best_rigid, best};
 }
 
 }  // namespace
 
 std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
                                        const std::vector<Eigen::Vector2d>& to,
-                                       const RigidRansacOptions& options, std::mt19937_64& rng) {
+                                       const RigidRansacOptions& options, std::mt19937_64& rng,
+                                       const std::set<std::pair<int, int>>& excluded) {
   if (from.size() < 2) return std::nullopt;
-  InlierCounter counter(from, to, options);
+  InlierCounter counter(from, to, options, excluded);
   if (counter.with_candidates() < options.min_inliers) return std::nullopt;
   counter.Index();
   RigidMatch match;
-  int count = 0;
-  std::tie(match.rigid, count) = Sample(from, to, counter, options, rng);
-  if (count < options.min_inliers) return std::nullopt;
+  Support support;
+  std::tie(match.rigid, support) = Sample(from, to, counter, options, rng);
+  if (support.count == 0) return std::nullopt;
   for (int refit = 0; refit < 2; ++refit) {
-    counter.Inliers(match.rigid, &match.pairs);
+    counter.Measure(match.rigid, &match.pairs);
     std::vector<Eigen::Vector2d> matched_from, matched_to;
     for (const auto& [r, o] : match.pairs) {
       matched_from.push_back(from[r]);
       matched_to.push_back(to[o]);
     }
     const Rigid2 fitted = FitRigid(matched_from, matched_to);
-    if (counter.Inliers(fitted, nullptr) < static_cast<int>(match.pairs.size())) break;
+    const Support refitted = counter.Measure(fitted, nullptr);
+    // Refitted on every inlier, a drift that bends the recent points takes
+    // in more of them at a lower score: the count decides here.
+    if (refitted.count < static_cast<int>(match.pairs.size())) break;
     match.rigid = fitted;
+    support = refitted;
   }
-  counter.Inliers(match.rigid, &match.pairs);
+  match.score = counter.Measure(match.rigid, &match.pairs).score;
   if (static_cast<int>(match.pairs.size()) < options.min_inliers ||
       std::abs(match.rigid.angle) > options.max_rotation_rad)
     return std::nullopt;

@@ -7,6 +7,7 @@
 
 #include <optional>
 #include <random>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -45,21 +46,33 @@ struct RigidRansacOptions {
   double max_shift_m = 0;
   int iterations = 300;
   int min_inliers = 3;
+  // A transform's score: its inliers weighted by fit, a pair at distance d
+  // counting exp(-d² / (2 score_std_m²)) (0: every inlier 1, the plain
+  // count). In a regular layout (a city grid) a transform shifted by a block
+  // collects inliers at random distances within inlier_m; the true one may
+  // collect fewer, but close.
+  double score_std_m = 0;
+  // Sampled transforms are ranked by their inlier count, or by their score.
+  bool rank_by_score = false;
 };
 
 struct RigidMatch {
   Rigid2 rigid;
   std::vector<std::pair<int, int>> pairs;  // (from, to) indices, by ascending `to`
+  double score = 0;                        // the pairs weighted by fit
 };
 
 // RANSAC: `iterations` samples of two `from` points, each with every pair of
 // their candidates whose spacing matches theirs within inlier_m and whose
-// rotation is within max_rotation_rad; the transform with the most inliers
-// is refitted to its inliers (while that keeps as many). nullopt when fewer
-// than min_inliers points have a candidate (then nothing is drawn from
-// `rng`), or the best transform has fewer inliers or too large a rotation.
+// rotation is within max_rotation_rad; the best transform with at least
+// min_inliers inliers (by count or score: rank_by_score) is refitted to its
+// inliers while that keeps as many. Pairs in `excluded` (from, to) are never
+// candidates. nullopt when fewer than min_inliers points have a candidate
+// (then nothing is drawn from `rng`), or no transform has enough inliers, or
+// the refitted one too large a rotation.
 std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
                                        const std::vector<Eigen::Vector2d>& to,
-                                       const RigidRansacOptions& options, std::mt19937_64& rng);
+                                       const RigidRansacOptions& options, std::mt19937_64& rng,
+                                       const std::set<std::pair<int, int>>& excluded = {});
 
 }  // namespace oslam

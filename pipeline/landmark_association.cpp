@@ -1,4 +1,6 @@
 #include "pipeline/landmark_association.h"
+#include <cstdlib>
+#include <map>
 
 #include <algorithm>
 #include <cmath>
@@ -60,12 +62,14 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
       (joint_min_inliers > 0 &&
        (joint_min_inliers < 3 || !(joint_recent_m > 0) || !(joint_search_m > 0) ||
         !(joint_inlier_m > 0) || !(joint_max_rotation_rad >= 0) || joint_ransac_iterations < 1 ||
-        joint_anchors < 1 || joint_retry_inliers < 0 || joint_every_poses < 1 ||
-        joint_repair_rounds < 0 || !(joint_misfit_z > 0) || !(joint_max_shift_m >= 0)))) {
+        joint_anchors < 1 || joint_every_poses < 1 || joint_repair_rounds < 0 ||
+        !(joint_misfit_z > 0) || !(joint_max_shift_m >= 0) || !(joint_score_std_m >= 0) ||
+        !(joint_close_ratio >= 0) || (joint_close_ratio > 0 && !(joint_score_std_m > 0))))) {
     if (why)
       *why =
           "joint merges need >= 3 inliers (0: off), RANSAC samples, anchors and a pose "
-          "spacing >= 1, repair rounds >= 0, a recent span, distances and a misfit z > 0";
+          "spacing >= 1, repair rounds >= 0, a recent span, distances and a misfit z > 0, a "
+          "close ratio >= 0 and, with one, a score std > 0";
     return false;
   }
   return true;
@@ -84,8 +88,7 @@ LandmarkAssociation::LandmarkAssociation(const LandmarkDataset& data,
       options_(options),
       progress_(std::move(progress)),
       rng_(options.seed),
-      last_ransac_(std::numeric_limits<int>::min() / 2),
-      joint_needed_(options.joint_min_inliers) {
+      last_ransac_(std::numeric_limits<int>::min() / 2) {
   std::string why;
   if (!options.Validate(&why)) throw Error("unknown-association landmark SLAM: " + why);
 }
@@ -489,12 +492,11 @@ long LandmarkAssociation::JointMerge(int n) {
 
 long LandmarkAssociation::TryJointMerge(int n) {
   const int recent_from = StretchStart(n, options_.joint_recent_m);
-  if (last_failure_ < recent_from) joint_needed_ = options_.joint_min_inliers;
+  if (last_failure_ < recent_from) refused_pairs_.clear();
   if (recent_from <= 0) return 0;  // not driven that far yet
   const EvaluationPtr before = current_;
   const std::optional<JointAlignment> alignment = AlignRecentOntoOld(*before, n);
   if (!alignment) return 0;
-  const std::vector<std::pair<int, int>>& pairs = alignment->match.pairs;
   // Per anchor pose: the merges made since it are undone (they were made
   // under the drift), every pair merged, and the state solved from the
   // trajectory with the correction spread along the drive since the anchor.
@@ -525,7 +527,7 @@ long LandmarkAssociation::TryJointMerge(int n) {
   const int loop_anchor = options_.joint_loop_anchor ? LoopStart(*alignment) - 1 : -1;
   if (loop_anchor + 1 >= held_poses_ && loop_anchor >= 0 && loop_anchor < last_anchor)
     try_anchor(loop_anchor);
-  return KeepJointMerge(before, best, best_anchor, n, pairs.size());
+  return KeepJointMerge(before, best, best_anchor, n, *alignment);
 }
 
 // The median over the aligned pairs of the pose at which the old landmark
@@ -544,15 +546,13 @@ int LandmarkAssociation::LoopStart(const JointAlignment& alignment) const {
 // The units aligned: the recent part of each landmark (its tracks first seen
 // in the last joint_recent_m metres, placed by their own sightings: a merge made
 // under the drift may be wrong) and the old part (tracks last seen before
-// that, at the landmark's position). nullopt when no alignment is worth a
-// try.
+// that, at the landmark's position), by RANSAC (joint_close_ratio). nullopt
+// when no alignment is worth a try.
 std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRecentOntoOld(
     const StateEvaluation& before, int n) {
   const int recent_from = StretchStart(n, options_.joint_recent_m);
   const AssociationState& s = before.state;
-  JointAlignment alignment;
-  std::vector<Unit>& recent = alignment.recent;
-  std::vector<Unit>& old = alignment.old;
+  JointAlignment units;
   for (size_t j = 0; j < s.blocks.size(); ++j) {
     Unit r, o;
     for (int t : s.blocks[j]) {
@@ -561,45 +561,73 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRec
     }
     if (!r.tracks.empty()) {
       r.position_m = PlacedBy(r.tracks, before.solution->trajectory, n);
-      recent.push_back(r);
+      units.recent.push_back(r);
     }
     if (!o.tracks.empty()) {
       o.position_m = before.locations[j].head<2>();
-      old.push_back(o);
+      units.old.push_back(o);
     }
   }
-  if (static_cast<int>(recent.size()) < joint_needed_) return std::nullopt;
+  if (static_cast<int>(units.recent.size()) < options_.joint_min_inliers) return std::nullopt;
   RigidRansacOptions ransac;
   ransac.search_m = options_.joint_search_m;
   ransac.inlier_m = options_.joint_inlier_m;
   ransac.max_rotation_rad = options_.joint_max_rotation_rad;
   ransac.max_shift_m = options_.joint_max_shift_m;
   ransac.iterations = options_.joint_ransac_iterations;
-  ransac.min_inliers = joint_needed_;
+  ransac.min_inliers = options_.joint_min_inliers;
   std::vector<Eigen::Vector2d> from, to;
-  for (const Unit& u : recent) from.push_back(u.position_m);
-  for (const Unit& u : old) to.push_back(u.position_m);
-  std::optional<RigidMatch> match = MatchRigidly(from, to, ransac, rng_);
+  for (const Unit& u : units.recent) from.push_back(u.position_m);
+  for (const Unit& u : units.old) to.push_back(u.position_m);
+  const std::set<std::pair<int, int>> refused = RefusedUnitPairs(units.recent, units.old);
+  ransac.score_std_m = options_.joint_score_std_m;
+  std::optional<RigidMatch> match = MatchRigidly(from, to, ransac, rng_, refused);
+  if (options_.joint_close_ratio > 0) {
+    ransac.rank_by_score = true;
+    std::optional<RigidMatch> close = MatchRigidly(from, to, ransac, rng_, refused);
+    if (close && (!match || close->score > options_.joint_close_ratio * match->score))
+      match = std::move(close);
+  }
   if (!match) return std::nullopt;
+  JointAlignment alignment = std::move(units);
   alignment.match = std::move(*match);
-  // Nothing for a joint merge when the alignment hardly moves the recent
-  // landmarks (the single merges can make the pairs) or the pairs are
-  // already merged.
-  const Rigid2& rigid = alignment.match.rigid;
-  const auto& pairs = alignment.match.pairs;
+  if (!WorthATry(s, &alignment)) return std::nullopt;
+  return alignment;
+}
+
+// Sets the alignment's pivot; false when it hardly moves the recent
+// landmarks (the single merges can make the pairs), the pairs are already
+// merged, or it shifts them beyond joint_max_shift_m.
+bool LandmarkAssociation::WorthATry(const AssociationState& s, JointAlignment* alignment) const {
+  const Rigid2& rigid = alignment->match.rigid;
+  const auto& pairs = alignment->match.pairs;
   double largest_move = 0;
   int unmerged = 0;
   for (const auto& [r, o] : pairs) {
-    alignment.pivot += recent[r].position_m / double(pairs.size());
-    largest_move =
-        std::max(largest_move, (rigid(recent[r].position_m) - recent[r].position_m).norm());
-    unmerged += s.BlockOf(recent[r].tracks.front()) != s.BlockOf(old[o].tracks.front());
+    const Eigen::Vector2d& position = alignment->recent[r].position_m;
+    alignment->pivot += position / double(pairs.size());
+    largest_move = std::max(largest_move, (rigid(position) - position).norm());
+    unmerged += s.BlockOf(alignment->recent[r].tracks.front()) !=
+                s.BlockOf(alignment->old[o].tracks.front());
   }
-  if (largest_move < options_.joint_inlier_m || unmerged == 0) return std::nullopt;
-  if (options_.joint_max_shift_m > 0 &&
-      (rigid(alignment.pivot) - alignment.pivot).norm() > options_.joint_max_shift_m)
-    return std::nullopt;
-  return alignment;
+  if (largest_move < options_.joint_inlier_m || unmerged == 0) return false;
+  return !(options_.joint_max_shift_m > 0 &&
+           (rigid(alignment->pivot) - alignment->pivot).norm() > options_.joint_max_shift_m);
+}
+
+// refused_pairs_ as pairs of (recent, old) units.
+std::set<std::pair<int, int>> LandmarkAssociation::RefusedUnitPairs(
+    const std::vector<Unit>& recent, const std::vector<Unit>& old) const {
+  std::set<std::pair<int, int>> refused;
+  if (refused_pairs_.empty()) return refused;
+  std::vector<int> recent_unit(num_tracks_, -1), old_unit(num_tracks_, -1);
+  for (size_t r = 0; r < recent.size(); ++r)
+    for (int t : recent[r].tracks) recent_unit[t] = static_cast<int>(r);
+  for (size_t o = 0; o < old.size(); ++o)
+    for (int t : old[o].tracks) old_unit[t] = static_cast<int>(o);
+  for (const auto& [t, u] : refused_pairs_)
+    if (recent_unit[t] >= 0 && old_unit[u] >= 0) refused.insert({recent_unit[t], old_unit[u]});
+  return refused;
 }
 
 // The joint merge with the correction from `anchor`: the tracks first seen
@@ -637,9 +665,10 @@ EvaluationPtr LandmarkAssociation::TryAnchor(const StateEvaluation& before,
   const EvaluationPtr repaired = e->valid ? WithoutMisfitPairs(e, alignment, n) : e;
   const Rigid2& rigid = alignment.match.rigid;
   Say(Format("joint merge at %.0f poses: %.0f of %.0f recent landmarks onto old ones "
-             "(rotation %.3f rad, shift %.1f m),",
+             "(score %.1f, rotation %.3f rad, shift %.1f m),",
              double(n), double(alignment.match.pairs.size()), double(alignment.recent.size()),
-             rigid.angle, (rigid(alignment.pivot) - alignment.pivot).norm()) +
+             alignment.match.score, rigid.angle,
+             (rigid(alignment.pivot) - alignment.pivot).norm()) +
       Format(" correction from pose %.0f: log target %.1f -> %.1f", double(anchor),
              before.log_target,
              e->valid ? e->log_target : -std::numeric_limits<double>::infinity()) +
@@ -741,7 +770,7 @@ AssociationState LandmarkAssociation::ReleasedAndMerged(const AssociationState& 
 // redoing the targeted merges of the released tracks if needed; else
 // restores the state before and asks more inliers of the next try.
 long LandmarkAssociation::KeepJointMerge(const EvaluationPtr& before, const EvaluationPtr& best,
-                                         int best_anchor, int n, size_t pairs) {
+                                         int best_anchor, int n, const JointAlignment& alignment) {
   const double base = before->log_target;
   if (best) {
     // The merges undone since the anchor may be redone (right this time)
@@ -756,13 +785,16 @@ long LandmarkAssociation::KeepJointMerge(const EvaluationPtr& before, const Eval
                  double(n), current_->log_target, base));
     }
     if (current_->valid && current_->log_target > base) {
-      joint_needed_ = options_.joint_min_inliers;
-      result_.joint_merges += static_cast<long>(pairs);
-      return static_cast<long>(pairs);
+      refused_pairs_.clear();
+      const long pairs = static_cast<long>(alignment.match.pairs.size());
+      result_.joint_merges += pairs;
+      return pairs;
     }
     current_ = Refine(before->state, before.get());  // back to before
   }
-  joint_needed_ = static_cast<int>(pairs) + options_.joint_retry_inliers;
+  for (const auto& [r, o] : alignment.match.pairs)
+    for (int t : alignment.recent[r].tracks)
+      for (int u : alignment.old[o].tracks) refused_pairs_.insert({t, u});
   last_failure_ = n;
   return 0;
 }

@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -118,8 +119,8 @@ struct UnknownAssociationOptions {
   // drive since the anchor (linearly in the distance driven). The best
   // anchor's state is kept when the whole-problem evidence rises, after
   // redoing the targeted merges of the released tracks if needed; else the
-  // state before is restored and the next try needs joint_retry_inliers
-  // more inliers. joint_min_inliers 0: off.
+  // state before is restored and its pairs are not paired again while their
+  // stretch is recent. joint_min_inliers 0: off.
   int joint_min_inliers = 8;
   // In metres driven, not poses, so that the span means the same at any
   // pose rate: Victoria Park's 300 poses (0.57 m apart) were about 170 m; on
@@ -143,7 +144,15 @@ struct UnknownAssociationOptions {
   // metres only bends the trajectory into a worse optimum than the drift
   // spread along the whole loop (docs/benchmarks.md).
   bool joint_loop_anchor = true;
-  int joint_retry_inliers = 2;
+  // RANSAC's alignment is the one with the most pairs, unless the one with
+  // the most pairs weighted by fit (each exp(-d² / (2 joint_score_std_m²)))
+  // scores more than joint_close_ratio times as much (0: never). A city grid
+  // repeats itself every block: an alignment shifted by one collects more
+  // pairs at random distances within joint_inlier_m than the first few of a
+  // true re-entry, all close. A drift that bends the recent stretch leaves a
+  // true alignment's far pairs loose; the plain count takes them all in.
+  double joint_score_std_m = 0.8;
+  double joint_close_ratio = 1.5;
   int joint_every_poses = 50;  // RANSAC at most once per this many poses
   // After a joint merge's solve, the worst-fitting pairs are split off again
   // and the problem re-solved while their landmarks' standardised residuals
@@ -266,14 +275,17 @@ class LandmarkAssociation {
   long JointMerge(int n);
   long TryJointMerge(int n);
   std::optional<JointAlignment> AlignRecentOntoOld(const StateEvaluation& before, int n);
+  bool WorthATry(const AssociationState& s, JointAlignment* alignment) const;
   EvaluationPtr TryAnchor(const StateEvaluation& before, const JointAlignment& alignment,
                           const std::vector<double>& driven, int anchor, int n);
   EvaluationPtr WithoutMisfitPairs(EvaluationPtr e, const JointAlignment& alignment, int n);
   AssociationState ReleasedAndMerged(const AssociationState& s, const JointAlignment& alignment,
                                      int anchor) const;
   int LoopStart(const JointAlignment& alignment) const;
+  std::set<std::pair<int, int>> RefusedUnitPairs(const std::vector<Unit>& recent,
+                                                 const std::vector<Unit>& old) const;
   long KeepJointMerge(const EvaluationPtr& before, const EvaluationPtr& best, int best_anchor,
-                      int n, size_t pairs);
+                      int n, const JointAlignment& alignment);
   // The first pose within `metres` driven (by the dead reckoning) of pose
   // n - 1: the start of the stretch that long ending at pose n.
   int StretchStart(int n, double metres) const;
@@ -328,8 +340,12 @@ class LandmarkAssociation {
   std::unique_ptr<LandmarkEvaluator> evaluator_;
   int held_poses_ = 0;  // the current window's (free_poses)
 
-  int last_ransac_;   // window end of the last RANSAC
-  int joint_needed_;  // inliers the next joint merge needs
+  int last_ransac_;  // window end of the last RANSAC
+  // (recent track, old track) of the pairs of the alignments refused since
+  // the last joint merge kept, while their stretch is recent: never paired
+  // again (a city grid offers the same wrong alignment, a block off, at
+  // every try).
+  std::set<std::pair<int, int>> refused_pairs_;
   int last_failure_ = 0;
 };
 

@@ -1,6 +1,7 @@
 // Rigid planar alignment: the least-squares fit recovers a known transform,
 // a part of a transform interpolates it, and RANSAC finds the transform and
-// its correspondences among outliers, or declines when there is none.
+// its correspondences among outliers (by their count, or weighted by fit in a
+// layout that repeats itself), or declines when there is none.
 #include "association/rigid_alignment.h"
 
 #include <cmath>
@@ -125,6 +126,79 @@ TEST(RigidAlignmentTest, RansacFindsTheDriftAmongOutliers) {
   EXPECT_NEAR(match->rigid.angle, drift.angle, 0.01);
   EXPECT_LT((match->rigid.t - drift.t).norm(), 0.5);
   EXPECT_EQ(match->pairs, scene.truth);
+}
+
+// A layout that repeats itself: the recent points are 6 old ones seen again
+// (5 cm noise) and 12 more that look like another old group 40 m away (1.2 m
+// off each). The plain count takes the 40 m shift; the pairs weighted by fit
+// take the 6 close ones.
+TEST(RigidAlignmentTest, TheScoreWeightedByFitPrefersFewCloseInliersToManyLooseOnes) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> close(0.0, 0.05), loose(0.0, 1.2);
+  const std::vector<Eigen::Vector2d> points = Scatter(18, 8.0, rng);
+  const Eigen::Vector2d block(40.0, 0.0);
+  std::vector<Eigen::Vector2d> old, recent;
+  for (int i = 0; i < 6; ++i) {
+    old.push_back(points[i]);
+    recent.push_back(points[i] + Eigen::Vector2d(close(rng), close(rng)));
+  }
+  for (int i = 6; i < 18; ++i) {
+    old.push_back(points[i] + block);
+    recent.push_back(points[i] + Eigen::Vector2d(loose(rng), loose(rng)));
+  }
+  RigidRansacOptions options;
+  options.search_m = 60;
+  options.inlier_m = 2.5;
+  options.min_inliers = 5;
+  std::mt19937_64 count_rng(4), score_rng(4);
+  const std::optional<RigidMatch> by_count = MatchRigidly(recent, old, options, count_rng);
+  options.score_std_m = 0.8;
+  options.rank_by_score = true;
+  const std::optional<RigidMatch> by_score = MatchRigidly(recent, old, options, score_rng);
+  ASSERT_TRUE(by_count.has_value());
+  ASSERT_TRUE(by_score.has_value());
+  EXPECT_GT(by_count->pairs.size(), 6u);
+  EXPECT_NEAR(by_count->rigid.t.x(), block.x(), 1.0);
+  EXPECT_DOUBLE_EQ(by_count->score, static_cast<double>(by_count->pairs.size()));
+  // Ranked by count, the score weighs the same pairs by fit: a loose match.
+  options.rank_by_score = false;
+  std::mt19937_64 weighed_rng(4);
+  const std::optional<RigidMatch> weighed = MatchRigidly(recent, old, options, weighed_rng);
+  ASSERT_TRUE(weighed.has_value());
+  EXPECT_EQ(weighed->pairs, by_count->pairs);
+  EXPECT_LT(weighed->score, 0.6 * weighed->pairs.size());
+  EXPECT_LT(by_score->rigid.t.norm(), 0.2);
+  EXPECT_NEAR(by_score->rigid.angle, 0.0, 0.01);
+  ASSERT_EQ(by_score->pairs.size(), 6u);
+  for (const auto& [r, o] : by_score->pairs) EXPECT_EQ(r, o);
+  EXPECT_GT(by_score->score, 5.9);
+  EXPECT_LE(by_score->score, 6.0);
+}
+
+// Pairs refused before are never candidates: with the true pairs excluded the
+// drift is not found; with the look-alikes' pairs excluded it is.
+TEST(RigidAlignmentTest, ExcludedPairsAreNeverPaired) {
+  const Rigid2 drift = MakeRigid(0.1, 8.0, -5.0);
+  const Scene scene = MakeScene(drift, 3);
+  RigidRansacOptions options;
+  options.search_m = 20;
+  options.inlier_m = 1.5;
+  options.min_inliers = 8;
+  const std::set<std::pair<int, int>> truth(scene.truth.begin(), scene.truth.end());
+  std::mt19937_64 rng(4);
+  const std::optional<RigidMatch> without_truth =
+      MatchRigidly(scene.recent, scene.old, options, rng, truth);
+  EXPECT_FALSE(without_truth.has_value() &&
+               std::abs(without_truth->rigid.angle - drift.angle) < 0.05);
+  std::set<std::pair<int, int>> others;
+  for (int r = 0; r < static_cast<int>(scene.recent.size()); ++r)
+    for (int o = 0; o < static_cast<int>(scene.old.size()); ++o)
+      if (truth.count({r, o}) == 0) others.insert({r, o});
+  std::mt19937_64 rng2(4);
+  const std::optional<RigidMatch> only_truth =
+      MatchRigidly(scene.recent, scene.old, options, rng2, others);
+  ASSERT_TRUE(only_truth.has_value());
+  EXPECT_EQ(only_truth->pairs, scene.truth);
 }
 
 TEST(RigidAlignmentTest, RansacDeclinesWithoutEnoughSupport) {
