@@ -51,14 +51,13 @@ struct Support {
 class InlierCounter {
  public:
   InlierCounter(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
-                const RigidRansacOptions& options, const std::set<std::pair<int, int>>& excluded)
+                const RigidRansacOptions& options)
       : from_(from),
         to_(to),
         inlier_m_(options.inlier_m),
         inlier2_(inlier_m_ * inlier_m_),
         score_std2_(options.score_std_m * options.score_std_m),
         reach_(options.search_m + inlier_m_),
-        excluded_(excluded),
         near_(from.size()) {
     for (size_t i = 0; i < from_.size(); ++i) {
       for (size_t o = 0; o < to_.size(); ++o)
@@ -117,8 +116,7 @@ class InlierCounter {
 
  private:
   bool IsCandidate(int i, int o) const {
-    return (to_[o] - from_[i]).squaredNorm() <= reach_ * reach_ &&
-           (excluded_.empty() || excluded_.count({i, o}) == 0);
+    return (to_[o] - from_[i]).squaredNorm() <= reach_ * reach_;
   }
 
   std::pair<long, long> CellOf(const Eigen::Vector2d& p) const {
@@ -129,7 +127,6 @@ class InlierCounter {
   const std::vector<Eigen::Vector2d>& from_;
   const std::vector<Eigen::Vector2d>& to_;
   const double inlier_m_, inlier2_, score_std2_, reach_;
-  const std::set<std::pair<int, int>>& excluded_;
   std::vector<std::vector<int>> near_;  // candidates (to points within reach) per from point
   int with_candidates_ = 0;
   std::map<std::pair<long, long>, std::vector<int>> grid_;
@@ -181,10 +178,9 @@ std::pair<Rigid2, Support> Sample(const std::vector<Eigen::Vector2d>& from,
 
 std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
                                        const std::vector<Eigen::Vector2d>& to,
-                                       const RigidRansacOptions& options, std::mt19937_64& rng,
-                                       const std::set<std::pair<int, int>>& excluded) {
+                                       const RigidRansacOptions& options, std::mt19937_64& rng) {
   if (from.size() < 2) return std::nullopt;
-  InlierCounter counter(from, to, options, excluded);
+  InlierCounter counter(from, to, options);
   if (counter.with_candidates() < options.min_inliers) return std::nullopt;
   counter.Index();
   RigidMatch match;

@@ -7,7 +7,6 @@
 
 #include <optional>
 #include <random>
-#include <set>
 #include <utility>
 #include <vector>
 
@@ -66,13 +65,11 @@ struct RigidMatch {
 // their candidates whose spacing matches theirs within inlier_m and whose
 // rotation is within max_rotation_rad; the best transform with at least
 // min_inliers inliers (by count or score: rank_by_score) is refitted to its
-// inliers while that keeps as many. Pairs in `excluded` (from, to) are never
-// candidates. nullopt when fewer than min_inliers points have a candidate
+// inliers while that keeps as many. nullopt when fewer than min_inliers points have a candidate
 // (then nothing is drawn from `rng`), or no transform has enough inliers, or
 // the refitted one too large a rotation.
 std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
                                        const std::vector<Eigen::Vector2d>& to,
-                                       const RigidRansacOptions& options, std::mt19937_64& rng,
-                                       const std::set<std::pair<int, int>>& excluded = {});
+                                       const RigidRansacOptions& options, std::mt19937_64& rng);
 
 }  // namespace oslam

@@ -64,12 +64,13 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
         !(joint_inlier_m > 0) || !(joint_max_rotation_rad >= 0) || joint_ransac_iterations < 1 ||
         joint_anchors < 1 || joint_every_poses < 1 || joint_repair_rounds < 0 ||
         !(joint_misfit_z > 0) || !(joint_max_shift_m >= 0) || !(joint_score_std_m >= 0) ||
-        !(joint_close_ratio >= 0) || (joint_close_ratio > 0 && !(joint_score_std_m > 0))))) {
+        !(joint_close_ratio >= 0) || !(joint_retry_score >= 0) ||
+        (joint_close_ratio > 0 && !(joint_score_std_m > 0))))) {
     if (why)
       *why =
           "joint merges need >= 3 inliers (0: off), RANSAC samples, anchors and a pose "
           "spacing >= 1, repair rounds >= 0, a recent span, distances and a misfit z > 0, a "
-          "close ratio >= 0 and, with one, a score std > 0";
+          "close ratio and retry score >= 0 and, with a close ratio, a score std > 0";
     return false;
   }
   return true;
@@ -492,7 +493,7 @@ long LandmarkAssociation::JointMerge(int n) {
 
 long LandmarkAssociation::TryJointMerge(int n) {
   const int recent_from = StretchStart(n, options_.joint_recent_m);
-  if (last_failure_ < recent_from) refused_pairs_.clear();
+  if (last_failure_ < recent_from) joint_needed_score_ = 0;
   if (recent_from <= 0) return 0;  // not driven that far yet
   const EvaluationPtr before = current_;
   const std::optional<JointAlignment> alignment = AlignRecentOntoOld(*before, n);
@@ -579,16 +580,15 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRec
   std::vector<Eigen::Vector2d> from, to;
   for (const Unit& u : units.recent) from.push_back(u.position_m);
   for (const Unit& u : units.old) to.push_back(u.position_m);
-  const std::set<std::pair<int, int>> refused = RefusedUnitPairs(units.recent, units.old);
   ransac.score_std_m = options_.joint_score_std_m;
-  std::optional<RigidMatch> match = MatchRigidly(from, to, ransac, rng_, refused);
+  std::optional<RigidMatch> match = MatchRigidly(from, to, ransac, rng_);
   if (options_.joint_close_ratio > 0) {
     ransac.rank_by_score = true;
-    std::optional<RigidMatch> close = MatchRigidly(from, to, ransac, rng_, refused);
+    std::optional<RigidMatch> close = MatchRigidly(from, to, ransac, rng_);
     if (close && (!match || close->score > options_.joint_close_ratio * match->score))
       match = std::move(close);
   }
-  if (!match) return std::nullopt;
+  if (!match || match->score < joint_needed_score_) return std::nullopt;
   JointAlignment alignment = std::move(units);
   alignment.match = std::move(*match);
   if (!WorthATry(s, &alignment)) return std::nullopt;
@@ -613,21 +613,6 @@ bool LandmarkAssociation::WorthATry(const AssociationState& s, JointAlignment* a
   if (largest_move < options_.joint_inlier_m || unmerged == 0) return false;
   return !(options_.joint_max_shift_m > 0 &&
            (rigid(alignment->pivot) - alignment->pivot).norm() > options_.joint_max_shift_m);
-}
-
-// refused_pairs_ as pairs of (recent, old) units.
-std::set<std::pair<int, int>> LandmarkAssociation::RefusedUnitPairs(
-    const std::vector<Unit>& recent, const std::vector<Unit>& old) const {
-  std::set<std::pair<int, int>> refused;
-  if (refused_pairs_.empty()) return refused;
-  std::vector<int> recent_unit(num_tracks_, -1), old_unit(num_tracks_, -1);
-  for (size_t r = 0; r < recent.size(); ++r)
-    for (int t : recent[r].tracks) recent_unit[t] = static_cast<int>(r);
-  for (size_t o = 0; o < old.size(); ++o)
-    for (int t : old[o].tracks) old_unit[t] = static_cast<int>(o);
-  for (const auto& [t, u] : refused_pairs_)
-    if (recent_unit[t] >= 0 && old_unit[u] >= 0) refused.insert({recent_unit[t], old_unit[u]});
-  return refused;
 }
 
 // The joint merge with the correction from `anchor`: the tracks first seen
@@ -785,16 +770,14 @@ long LandmarkAssociation::KeepJointMerge(const EvaluationPtr& before, const Eval
                  double(n), current_->log_target, base));
     }
     if (current_->valid && current_->log_target > base) {
-      refused_pairs_.clear();
+      joint_needed_score_ = 0;
       const long pairs = static_cast<long>(alignment.match.pairs.size());
       result_.joint_merges += pairs;
       return pairs;
     }
     current_ = Refine(before->state, before.get());  // back to before
   }
-  for (const auto& [r, o] : alignment.match.pairs)
-    for (int t : alignment.recent[r].tracks)
-      for (int u : alignment.old[o].tracks) refused_pairs_.insert({t, u});
+  joint_needed_score_ = alignment.match.score + options_.joint_retry_score;
   last_failure_ = n;
   return 0;
 }

@@ -119,8 +119,8 @@ struct UnknownAssociationOptions {
   // drive since the anchor (linearly in the distance driven). The best
   // anchor's state is kept when the whole-problem evidence rises, after
   // redoing the targeted merges of the released tracks if needed; else the
-  // state before is restored and its pairs are not paired again while their
-  // stretch is recent. joint_min_inliers 0: off.
+  // state before is restored and, while its stretch is recent, the next
+  // alignment must score joint_retry_score more. joint_min_inliers 0: off.
   int joint_min_inliers = 8;
   // In metres driven, not poses, so that the span means the same at any
   // pose rate: Victoria Park's 300 poses (0.57 m apart) were about 170 m; on
@@ -153,6 +153,11 @@ struct UnknownAssociationOptions {
   // true alignment's far pairs loose; the plain count takes them all in.
   double joint_score_std_m = 0.8;
   double joint_close_ratio = 1.5;
+  // After a refused try the next alignment's weighted score must exceed the
+  // refused one's by this much (the same alignment is not tried again, a
+  // better one is; asking more pairs instead locked out a true re-entry with
+  // fewer pairs than a refused block-shifted one).
+  double joint_retry_score = 2;
   int joint_every_poses = 50;  // RANSAC at most once per this many poses
   // After a joint merge's solve, the worst-fitting pairs are split off again
   // and the problem re-solved while their landmarks' standardised residuals
@@ -282,8 +287,6 @@ class LandmarkAssociation {
   AssociationState ReleasedAndMerged(const AssociationState& s, const JointAlignment& alignment,
                                      int anchor) const;
   int LoopStart(const JointAlignment& alignment) const;
-  std::set<std::pair<int, int>> RefusedUnitPairs(const std::vector<Unit>& recent,
-                                                 const std::vector<Unit>& old) const;
   long KeepJointMerge(const EvaluationPtr& before, const EvaluationPtr& best, int best_anchor,
                       int n, const JointAlignment& alignment);
   // The first pose within `metres` driven (by the dead reckoning) of pose
@@ -340,12 +343,8 @@ class LandmarkAssociation {
   std::unique_ptr<LandmarkEvaluator> evaluator_;
   int held_poses_ = 0;  // the current window's (free_poses)
 
-  int last_ransac_;  // window end of the last RANSAC
-  // (recent track, old track) of the pairs of the alignments refused since
-  // the last joint merge kept, while their stretch is recent: never paired
-  // again (a city grid offers the same wrong alignment, a block off, at
-  // every try).
-  std::set<std::pair<int, int>> refused_pairs_;
+  int last_ransac_;                // window end of the last RANSAC
+  double joint_needed_score_ = 0;  // RANSAC score the next joint merge needs
   int last_failure_ = 0;
 };
 

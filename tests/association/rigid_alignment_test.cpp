@@ -175,32 +175,6 @@ TEST(RigidAlignmentTest, TheScoreWeightedByFitPrefersFewCloseInliersToManyLooseO
   EXPECT_LE(by_score->score, 6.0);
 }
 
-// Pairs refused before are never candidates: with the true pairs excluded the
-// drift is not found; with the look-alikes' pairs excluded it is.
-TEST(RigidAlignmentTest, ExcludedPairsAreNeverPaired) {
-  const Rigid2 drift = MakeRigid(0.1, 8.0, -5.0);
-  const Scene scene = MakeScene(drift, 3);
-  RigidRansacOptions options;
-  options.search_m = 20;
-  options.inlier_m = 1.5;
-  options.min_inliers = 8;
-  const std::set<std::pair<int, int>> truth(scene.truth.begin(), scene.truth.end());
-  std::mt19937_64 rng(4);
-  const std::optional<RigidMatch> without_truth =
-      MatchRigidly(scene.recent, scene.old, options, rng, truth);
-  EXPECT_FALSE(without_truth.has_value() &&
-               std::abs(without_truth->rigid.angle - drift.angle) < 0.05);
-  std::set<std::pair<int, int>> others;
-  for (int r = 0; r < static_cast<int>(scene.recent.size()); ++r)
-    for (int o = 0; o < static_cast<int>(scene.old.size()); ++o)
-      if (truth.count({r, o}) == 0) others.insert({r, o});
-  std::mt19937_64 rng2(4);
-  const std::optional<RigidMatch> only_truth =
-      MatchRigidly(scene.recent, scene.old, options, rng2, others);
-  ASSERT_TRUE(only_truth.has_value());
-  EXPECT_EQ(only_truth->pairs, scene.truth);
-}
-
 TEST(RigidAlignmentTest, RansacDeclinesWithoutEnoughSupport) {
   const Rigid2 drift = MakeRigid(0.1, 8.0, -5.0);
   const Scene scene = MakeScene(drift, 3);
