@@ -132,16 +132,19 @@ class InlierCounter {
   std::map<std::pair<long, long>, std::vector<int>> grid_;
 };
 
-// The sampled transform with at least min_inliers inliers and the highest
-// score (count 0: none).
-std::pair<Rigid2, Support> Sample(const std::vector<Eigen::Vector2d>& from,
-                                  const std::vector<Eigen::Vector2d>& to,
-                                  const InlierCounter& counter, const RigidRansacOptions& options,
-                                  std::mt19937_64& rng) {
+// The sampled transforms with at least min_inliers inliers and the most of
+// them, and the highest score (count 0: none).
+struct Sampled {
+  Rigid2 most_rigid, best_fit_rigid;
+  Support most, best_fit;
+};
+
+Sampled Sample(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
+               const InlierCounter& counter, const RigidRansacOptions& options,
+               std::mt19937_64& rng) {
   const double inlier_m = options.inlier_m;
   std::uniform_int_distribution<size_t> pick(0, from.size() - 1);
-  Rigid2 best_rigid;
-  Support best;
+  Sampled best;
   for (int sample = 0; sample < options.iterations; ++sample) {
     const size_t a = pick(rng), b = pick(rng);
     if (a == b || counter.near(a).empty() || counter.near(b).empty()) continue;
@@ -163,30 +166,30 @@ std::pair<Rigid2, Support> Sample(const std::vector<Eigen::Vector2d>& from,
         rigid.angle = angle;
         rigid.t = 0.5 * (to[oa] + to[ob]) - Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
         const Support support = counter.Measure(rigid, nullptr);
-        const bool better =
-            options.rank_by_score ? support.score > best.score : support.count > best.count;
-        if (support.count >= options.min_inliers && better) {
-          best = support;
-          best_rigid = rigid;
+        if (support.count < options.min_inliers) continue;
+        if (support.count > best.most.count) {
+          best.most = support;
+          best.most_rigid = rigid;
+        }
+        if (support.score > best.best_fit.score) {
+          best.best_fit = support;
+          best.best_fit_rigid = rigid;
         }
       }
   }
-  return {best_rigid, best};
+  return best;
 }
 
-}  // namespace
-
-std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
-                                       const std::vector<Eigen::Vector2d>& to,
-                                       const RigidRansacOptions& options, std::mt19937_64& rng) {
-  if (from.size() < 2) return std::nullopt;
-  InlierCounter counter(from, to, options);
-  if (counter.with_candidates() < options.min_inliers) return std::nullopt;
-  counter.Index();
+// `rigid` refitted to its inliers while that keeps as many (a drift that
+// bends the recent points takes in more of them at a lower score: the count
+// decides here), with its pairs and score; nullopt when it has too few
+// inliers or too large a rotation.
+std::optional<RigidMatch> Refitted(const std::vector<Eigen::Vector2d>& from,
+                                   const std::vector<Eigen::Vector2d>& to,
+                                   const InlierCounter& counter, const RigidRansacOptions& options,
+                                   const Rigid2& rigid) {
   RigidMatch match;
-  Support support;
-  std::tie(match.rigid, support) = Sample(from, to, counter, options, rng);
-  if (support.count == 0) return std::nullopt;
+  match.rigid = rigid;
   for (int refit = 0; refit < 2; ++refit) {
     counter.Measure(match.rigid, &match.pairs);
     std::vector<Eigen::Vector2d> matched_from, matched_to;
@@ -195,18 +198,38 @@ std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
       matched_to.push_back(to[o]);
     }
     const Rigid2 fitted = FitRigid(matched_from, matched_to);
-    const Support refitted = counter.Measure(fitted, nullptr);
-    // Refitted on every inlier, a drift that bends the recent points takes
-    // in more of them at a lower score: the count decides here.
-    if (refitted.count < static_cast<int>(match.pairs.size())) break;
+    if (counter.Measure(fitted, nullptr).count < static_cast<int>(match.pairs.size())) break;
     match.rigid = fitted;
-    support = refitted;
   }
   match.score = counter.Measure(match.rigid, &match.pairs).score;
   if (static_cast<int>(match.pairs.size()) < options.min_inliers ||
       std::abs(match.rigid.angle) > options.max_rotation_rad)
     return std::nullopt;
   return match;
+}
+
+}  // namespace
+
+RigidMatches MatchRigidlyBothWays(const std::vector<Eigen::Vector2d>& from,
+                                  const std::vector<Eigen::Vector2d>& to,
+                                  const RigidRansacOptions& options, std::mt19937_64& rng) {
+  RigidMatches matches;
+  if (from.size() < 2) return matches;
+  InlierCounter counter(from, to, options);
+  if (counter.with_candidates() < options.min_inliers) return matches;
+  counter.Index();
+  const Sampled best = Sample(from, to, counter, options, rng);
+  if (best.most.count == 0) return matches;
+  matches.most_pairs = Refitted(from, to, counter, options, best.most_rigid);
+  matches.best_fit = Refitted(from, to, counter, options, best.best_fit_rigid);
+  return matches;
+}
+
+std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
+                                       const std::vector<Eigen::Vector2d>& to,
+                                       const RigidRansacOptions& options, std::mt19937_64& rng) {
+  RigidMatches matches = MatchRigidlyBothWays(from, to, options, rng);
+  return options.rank_by_score ? std::move(matches.best_fit) : std::move(matches.most_pairs);
 }
 
 }  // namespace oslam

@@ -72,4 +72,13 @@ std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
                                        const std::vector<Eigen::Vector2d>& to,
                                        const RigidRansacOptions& options, std::mt19937_64& rng);
 
+// Both best transforms of one RANSAC run (the same samples), each refitted
+// and checked as above: by count and by score.
+struct RigidMatches {
+  std::optional<RigidMatch> most_pairs, best_fit;
+};
+RigidMatches MatchRigidlyBothWays(const std::vector<Eigen::Vector2d>& from,
+                                  const std::vector<Eigen::Vector2d>& to,
+                                  const RigidRansacOptions& options, std::mt19937_64& rng);
+
 }  // namespace oslam

@@ -581,13 +581,12 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRec
   for (const Unit& u : units.recent) from.push_back(u.position_m);
   for (const Unit& u : units.old) to.push_back(u.position_m);
   ransac.score_std_m = options_.joint_score_std_m;
-  std::optional<RigidMatch> match = MatchRigidly(from, to, ransac, rng_);
-  if (options_.joint_close_ratio > 0) {
-    ransac.rank_by_score = true;
-    std::optional<RigidMatch> close = MatchRigidly(from, to, ransac, rng_);
-    if (close && (!match || close->score > options_.joint_close_ratio * match->score))
-      match = std::move(close);
-  }
+  RigidMatches matches = MatchRigidlyBothWays(from, to, ransac, rng_);
+  std::optional<RigidMatch>& match = matches.most_pairs;
+  const std::optional<RigidMatch>& close = matches.best_fit;
+  if (options_.joint_close_ratio > 0 && close &&
+      (!match || close->score > options_.joint_close_ratio * match->score))
+    match = close;
   if (!match || match->score < joint_needed_score_) return std::nullopt;
   JointAlignment alignment = std::move(units);
   alignment.match = std::move(*match);

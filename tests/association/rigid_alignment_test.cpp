@@ -173,6 +173,14 @@ TEST(RigidAlignmentTest, TheScoreWeightedByFitPrefersFewCloseInliersToManyLooseO
   for (const auto& [r, o] : by_score->pairs) EXPECT_EQ(r, o);
   EXPECT_GT(by_score->score, 5.9);
   EXPECT_LE(by_score->score, 6.0);
+  // One run gives both, from the same samples.
+  std::mt19937_64 both_rng(4);
+  const RigidMatches both = MatchRigidlyBothWays(recent, old, options, both_rng);
+  ASSERT_TRUE(both.most_pairs.has_value());
+  ASSERT_TRUE(both.best_fit.has_value());
+  EXPECT_EQ(both.most_pairs->pairs, by_count->pairs);
+  EXPECT_EQ(both.best_fit->pairs, by_score->pairs);
+  EXPECT_DOUBLE_EQ(both.best_fit->score, by_score->score);
 }
 
 TEST(RigidAlignmentTest, RansacDeclinesWithoutEnoughSupport) {
