@@ -64,13 +64,13 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
         !(joint_inlier_m > 0) || !(joint_max_rotation_rad >= 0) || joint_ransac_iterations < 1 ||
         joint_anchors < 1 || joint_every_poses < 1 || joint_repair_rounds < 0 ||
         !(joint_misfit_z > 0) || !(joint_max_shift_m >= 0) || !(joint_score_std_m >= 0) ||
-        !(joint_close_ratio >= 0) || !(joint_retry_score >= 0) ||
+        !(joint_close_ratio >= 0) || !(joint_retry_score >= 0) || !(joint_min_score >= 0) ||
         (joint_close_ratio > 0 && !(joint_score_std_m > 0))))) {
     if (why)
       *why =
           "joint merges need >= 3 inliers (0: off), RANSAC samples, anchors and a pose "
           "spacing >= 1, repair rounds >= 0, a recent span, distances and a misfit z > 0, a "
-          "close ratio and retry score >= 0 and, with a close ratio, a score std > 0";
+          "close ratio, retry and least score >= 0 and, with a close ratio, a score std > 0";
     return false;
   }
   return true;
@@ -587,7 +587,8 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRec
   if (options_.joint_close_ratio > 0 && close &&
       (!match || close->score > options_.joint_close_ratio * match->score))
     match = close;
-  if (!match || match->score < joint_needed_score_) return std::nullopt;
+  if (!match || match->score < std::max(joint_needed_score_, options_.joint_min_score))
+    return std::nullopt;
   JointAlignment alignment = std::move(units);
   alignment.match = std::move(*match);
   if (!WorthATry(s, &alignment)) return std::nullopt;

@@ -158,6 +158,10 @@ struct UnknownAssociationOptions {
   // better one is; asking more pairs instead locked out a true re-entry with
   // fewer pairs than a refused block-shifted one).
   double joint_retry_score = 2;
+  // An alignment scoring less than this is not tried (0: any). Alignments a
+  // block off in a city grid score 2-7, true re-entries 10 and more
+  // (docs/benchmarks.md); each try costs two or three solves.
+  double joint_min_score = 7;
   int joint_every_poses = 50;  // RANSAC at most once per this many poses
   // After a joint merge's solve, the worst-fitting pairs are split off again
   // and the problem re-solved while their landmarks' standardised residuals

@@ -156,7 +156,8 @@ TEST(LandmarkAssociationTest, JointMergeSplitsItsMisfitPairs) {
     worst_unrepaired_recall = std::min(worst_unrepaired_recall, a.recall);
     EXPECT_DOUBLE_EQ(b.agreement, 1.0) << "drive " << seed;
     EXPECT_GT(with.joint_merges, 0) << "drive " << seed;
-    EXPECT_GE(with.log_target, without.log_target) << "drive " << seed;
+    // (The same state reached by other solves may differ in the last digits.)
+    EXPECT_GE(with.log_target, without.log_target - 1e-3) << "drive " << seed;
   }
   EXPECT_LT(worst_unrepaired_recall, 0.8);
 }
