@@ -228,8 +228,7 @@ RigidMatches MatchRigidlyBothWays(const std::vector<Eigen::Vector2d>& from,
 std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
                                        const std::vector<Eigen::Vector2d>& to,
                                        const RigidRansacOptions& options, std::mt19937_64& rng) {
-  RigidMatches matches = MatchRigidlyBothWays(from, to, options, rng);
-  return options.rank_by_score ? std::move(matches.best_fit) : std::move(matches.most_pairs);
+  return MatchRigidlyBothWays(from, to, options, rng).most_pairs;
 }
 
 }  // namespace oslam

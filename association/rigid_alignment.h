@@ -51,8 +51,6 @@ struct RigidRansacOptions {
   // collects inliers at random distances within inlier_m; the true one may
   // collect fewer, but close.
   double score_std_m = 0;
-  // Sampled transforms are ranked by their inlier count, or by their score.
-  bool rank_by_score = false;
 };
 
 struct RigidMatch {
@@ -63,17 +61,18 @@ struct RigidMatch {
 
 // RANSAC: `iterations` samples of two `from` points, each with every pair of
 // their candidates whose spacing matches theirs within inlier_m and whose
-// rotation is within max_rotation_rad; the best transform with at least
-// min_inliers inliers (by count or score: rank_by_score) is refitted to its
-// inliers while that keeps as many. nullopt when fewer than min_inliers points have a candidate
-// (then nothing is drawn from `rng`), or no transform has enough inliers, or
-// the refitted one too large a rotation.
+// rotation is within max_rotation_rad; the transform with the most inliers
+// (at least min_inliers) is refitted to its inliers while that keeps as many.
+// nullopt when fewer than min_inliers points have a candidate (then nothing is
+// drawn from `rng`), or no transform has enough inliers, or the refitted one
+// too large a rotation.
 std::optional<RigidMatch> MatchRigidly(const std::vector<Eigen::Vector2d>& from,
                                        const std::vector<Eigen::Vector2d>& to,
                                        const RigidRansacOptions& options, std::mt19937_64& rng);
 
 // Both best transforms of one RANSAC run (the same samples), each refitted
-// and checked as above: by count and by score.
+// and checked as above: the one with the most inliers and the one with the
+// highest score.
 struct RigidMatches {
   std::optional<RigidMatch> most_pairs, best_fit;
 };

@@ -1,6 +1,4 @@
 #include "pipeline/landmark_association.h"
-#include <cstdlib>
-#include <map>
 
 #include <algorithm>
 #include <cmath>
