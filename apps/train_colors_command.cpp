@@ -56,15 +56,15 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
             ? arguments.Get("camera")
             : (std::filesystem::path(classes_path).parent_path() / "camera.yaml").string();
     if (!std::filesystem::exists(camera_path))
-      throw Error::InFile(camera_path,
-                          "not found: outline examples need the camera (give --camera CAMERA.yaml)");
+      throw Error::InFile(
+          camera_path, "not found: outline examples need the camera (give --camera CAMERA.yaml)");
     trained = LearnImageShapesFromExamples(trained, examples, *LoadCamera(camera_path));
   }
   if (arguments.Has("from-ground-truth")) {
     const std::string run_dir = arguments.Get("from-ground-truth");
     // Runs simulated before visible_slices.csv existed still train colours.
     if (std::filesystem::exists(run_dir + "/ground_truth/visible_slices.csv"))
-      trained = LearnImageShapes(trained, run_dir);
+      trained = MeasureDetectorArcErrors(LearnImageShapes(trained, run_dir), run_dir);
     else if (!arguments.Flag("quiet"))
       std::fprintf(
           stderr,
@@ -85,8 +85,9 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
                   trained[c].name.c_str(), box.yuv_mean[0], box.yuv_mean[1], box.yuv_mean[2],
                   box.yuv_std[0], box.yuv_std[1], box.yuv_std[2], confusion[c][c]);
       if (trained[c].image_shape)
-        std::printf("  elongation %.2f ± %.2f", trained[c].image_shape->elongation_mean,
-                    trained[c].image_shape->elongation_std);
+        std::printf("  elongation %.2f ± %.2f, arc error %.1f px",
+                    trained[c].image_shape->elongation_mean, trained[c].image_shape->elongation_std,
+                    trained[c].image_shape->arc_error_px);
       std::printf("\n");
     }
     std::printf("wrote %s\n", output.c_str());

@@ -51,6 +51,7 @@ namespace {
 constexpr double kMaxSigmas = 100.0;
 // Radial length over arc width of an object's image: far beyond any object.
 constexpr double kMaxElongation = 1000.0;
+constexpr double kMaxArcErrorPx = 1e4;  // pixels: beyond any image
 
 const std::vector<std::string> kClassKeys = {
     "name",           "display_rgb",       "shape",        "diameter_mean_m",
@@ -129,7 +130,7 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
   if (!shape.empty() && !shape.isNone()) {
     const std::string shape_key = key + "image_shape.";
     if (!shape.isMap()) file.Fail(key + "image_shape", "must be a mapping");
-    file.RequireOnlyKeys(shape, shape_key, {"elongation_mean", "elongation_std"});
+    file.RequireOnlyKeys(shape, shape_key, {"elongation_mean", "elongation_std", "arc_error_px"});
     ImageShapeModel model;
     model.elongation_mean = file.Double(shape, "elongation_mean", shape_key);
     model.elongation_std = file.Double(shape, "elongation_std", shape_key);
@@ -137,6 +138,9 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
     if (!(model.elongation_std > 0)) file.Fail(shape_key + "elongation_std", "must be positive");
     file.Within(model.elongation_mean, shape_key + "elongation_mean", 0, kMaxElongation);
     file.Within(model.elongation_std, shape_key + "elongation_std", 0, kMaxElongation);
+    model.arc_error_px = file.OptionalDouble(shape, "arc_error_px", 0.0, shape_key);
+    if (!(model.arc_error_px >= 0)) file.Fail(shape_key + "arc_error_px", "must be >= 0");
+    file.Within(model.arc_error_px, shape_key + "arc_error_px", 0, kMaxArcErrorPx);
     object_class.image_shape = model;
   }
   return object_class;
@@ -244,6 +248,8 @@ void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& pa
       out << "    image_shape:\n";
       out << "      elongation_mean: " << Number(c.image_shape->elongation_mean) << "\n";
       out << "      elongation_std: " << Number(c.image_shape->elongation_std) << "\n";
+      if (c.image_shape->arc_error_px > 0)
+        out << "      arc_error_px: " << Number(c.image_shape->arc_error_px) << "\n";
     }
   }
   if (confusion) {

@@ -36,6 +36,12 @@ struct ColourBox {
 struct ImageShapeModel {
   double elongation_mean = 1.0;
   double elongation_std = 0.1;
+  // Root mean square error of the detector's arc width for the class's whole
+  // views, in pixels, measured in training (0: not measured; the view checks
+  // then assume ViewCheckOptions::arc_std_px). A plain object's colour blob
+  // is about 1 px wider than its silhouette; a striped one's edges can lose
+  // several pixels.
+  double arc_error_px = 0.0;
 };
 
 // The volume a class is drawn as in the exported files (docs/export.md). The

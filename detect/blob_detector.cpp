@@ -120,12 +120,11 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
 }
 
 double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice,
-                            double pixel_std_px) {
+                            double radial_std_px, double arc_std_px) {
   const double elongation = SliceElongation(slice);
   const double arc_width_px = SliceArcWidth(slice);
-  const double quantisation = elongation * pixel_std_px *
-                              std::sqrt(1.0 / std::max(1.0, slice.s_r_px * slice.s_r_px) +
-                                        1.0 / std::max(1.0, arc_width_px * arc_width_px));
+  const double quantisation = elongation * std::hypot(radial_std_px / std::max(1.0, slice.s_r_px),
+                                                      arc_std_px / std::max(1.0, arc_width_px));
   const double variance = model.elongation_std * model.elongation_std + quantisation * quantisation;
   const double error = elongation - model.elongation_mean;
   return error * error / variance;
@@ -138,8 +137,14 @@ double ViewSquaredDistance(const CameraModel& camera, const ObjectClass& object_
                    (annulus.rim_radius_px > 0 &&
                     slice.u_r_px + slice.s_r_px >= annulus.rim_radius_px - options.edge_margin_px);
   double distance2 = SupportedSizeSquaredDistance(camera, object_class, slice, 0.0, options);
-  if (object_class.image_shape && !cut)
-    distance2 += ShapeSquaredDistance(*object_class.image_shape, slice, options.pixel_std_px);
+  if (!object_class.image_shape) return distance2;
+  // A cut shortens the radial extent, and the elongation grows with it at a
+  // fixed inner (rim cut) or outer (blind-disc cut) end: a cut slice's
+  // elongation is a lower bound, evidence only when already above the mean
+  // (as for a cut height, SupportedSizeSquaredDistance).
+  if (!cut || SliceElongation(slice) > object_class.image_shape->elongation_mean)
+    distance2 += ShapeSquaredDistance(*object_class.image_shape, slice, options.pixel_std_px,
+                                      ArcStdPx(object_class, options));
   return distance2;
 }
 

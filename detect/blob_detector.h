@@ -81,17 +81,19 @@ struct BlobDetectorOptions {
 };
 
 // (elongation − mean)² / variance of a slice under a class's image shape
-// model; the variance adds `pixel_std_px` of error on each extent (one pixel
-// of quantisation when comparing two blobs of the same pixels; the detector's
-// slice error, ViewCheckOptions::pixel_std_px, when comparing with the model).
+// model; the variance adds `radial_std_px` of error on the radial length and
+// `arc_std_px` on the arc width (one pixel of quantisation when comparing two
+// blobs of the same pixels; the detector's slice errors, ViewCheckOptions,
+// when comparing with the model).
 double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice,
-                            double pixel_std_px = 1.0);
+                            double radial_std_px = 1.0, double arc_std_px = 1.0);
 
 // The view distance of a detection's slice under its class: the shape
-// distance (when the class has an image shape model and the slice is not cut
-// by the blind disc or the mirror rim, whose cut changes the shape) plus
-// SupportedSizeSquaredDistance with the base on the floor. A chi-square of up
-// to 3 degrees of freedom for an object of the class.
+// distance (when the class has an image shape model; for a slice cut by the
+// blind disc or the mirror rim, whose true elongation is larger, only when its
+// elongation is above the class's mean) plus SupportedSizeSquaredDistance with
+// the base on the floor. A chi-square of up to 3 degrees of freedom for an
+// object of the class.
 double ViewSquaredDistance(const CameraModel& camera, const ObjectClass& object_class,
                            const BoundingSlice& slice, const ViewCheckOptions& options);
 

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -15,6 +18,7 @@
 #include "core/error.h"
 #include "core/image_file.h"
 #include "core/yaml.h"
+#include "detect/blob_detector.h"
 #include "detect/colour_classifier.h"
 #include "detect/static_mask.h"
 
@@ -201,18 +205,30 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
   return examples;
 }
 
-std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classes,
-                                          const std::string& run_dir, int min_views) {
+namespace {
+
+// A whole view of an object of a trained class in a simulated run.
+struct TrueView {
+  long frame = 0;
+  int class_index = 0;
+  BoundingSlice slice;
+};
+
+// The views of ground_truth/visible_slices.csv that show an object of one of
+// `classes` whole: at least 95 % visible, 8 px long and 8 px wide.
+std::vector<TrueView> WholeTrueViews(const std::vector<ObjectClass>& classes,
+                                     const std::string& run_dir) {
   const std::optional<GroundTruth> truth = ReadGroundTruth(run_dir);
   if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder to learn image shapes from");
   const CsvTable views = CsvTable::Read(
       (std::filesystem::path(run_dir) / "ground_truth" / "visible_slices.csv").string());
-  const int object_column = views.ColumnIndex("object_id"),
+  const int frame_column = views.ColumnIndex("frame"),
+            object_column = views.ColumnIndex("object_id"),
             visible_column = views.ColumnIndex("visible_px"),
             footprint_column = views.ColumnIndex("footprint_px"),
             u_r_column = views.ColumnIndex("u_r_px"), u_phi_column = views.ColumnIndex("u_phi_rad"),
             s_r_column = views.ColumnIndex("s_r_px"), s_phi_column = views.ColumnIndex("s_phi_rad");
-  std::vector<std::vector<double>> elongations(classes.size());
+  std::vector<TrueView> whole;
   for (size_t row = 0; row < views.num_rows(); ++row) {
     const long object_id = views.Integer(row, object_column);
     const auto object = std::find_if(truth->objects.begin(), truth->objects.end(),
@@ -226,10 +242,64 @@ std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classe
     const BoundingSlice slice{views.Double(row, u_r_column), views.Double(row, u_phi_column),
                               views.Double(row, s_r_column), views.Double(row, s_phi_column)};
     if (slice.s_r_px < 8 || SliceArcWidth(slice) < 8) continue;
-    elongations[class_index].push_back(SliceElongation(slice));
+    whole.push_back({views.Integer(row, frame_column), class_index, slice});
   }
+  return whole;
+}
+
+}  // namespace
+
+std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classes,
+                                          const std::string& run_dir, int min_views) {
+  std::vector<std::vector<double>> elongations(classes.size());
+  for (const TrueView& view : WholeTrueViews(classes, run_dir))
+    elongations[view.class_index].push_back(SliceElongation(view.slice));
   // A floor: a rigid object's views vary at least this much with where it stands.
   return WithShapeModels(classes, elongations, min_views, 0.02);
+}
+
+std::vector<ObjectClass> MeasureDetectorArcErrors(const std::vector<ObjectClass>& classes,
+                                                  const std::string& run_dir, int min_views) {
+  std::map<long, std::vector<TrueView>> views_by_frame;
+  for (const TrueView& view : WholeTrueViews(classes, run_dir))
+    views_by_frame[view.frame].push_back(view);
+  const std::unique_ptr<CameraModel> camera =
+      LoadCamera((fs::path(run_dir) / "camera.yaml").string());
+  BlobDetectorOptions colour_only;  // the colour blobs themselves, before any check
+  colour_only.separate_look_alikes = false;
+  colour_only.max_view_distance = std::numeric_limits<double>::infinity();
+  const BlobDetector detector(*camera, classes, colour_only);
+  const FrameSource frames(run_dir);
+  std::vector<std::vector<double>> errors(classes.size());
+  for (const auto& [frame, views] : views_by_frame) {
+    if (frame < 0 || static_cast<size_t>(frame) >= frames.size())
+      throw Error::InFile(run_dir, "ground_truth/visible_slices.csv names frame " +
+                                       std::to_string(frame) + ", which the run does not have");
+    const std::vector<Detection> found = detector.Detect(frames.Read(frame), frame);
+    for (const TrueView& view : views) {
+      // The class's largest blob that lies mostly on the view (as eval-detect
+      // matches a sighting).
+      const Detection* largest = nullptr;
+      for (const Detection& d : found)
+        if (d.class_index == view.class_index && SliceCoverage(d.slice, view.slice) >= 0.5 &&
+            (!largest || d.area_px > largest->area_px))
+          largest = &d;
+      if (!largest) continue;
+      const double middle_radius = view.slice.u_r_px + 0.5 * view.slice.s_r_px;
+      errors[view.class_index].push_back((largest->slice.s_phi_rad - view.slice.s_phi_rad) *
+                                         middle_radius);
+    }
+  }
+  std::vector<ObjectClass> measured = classes;
+  for (size_t c = 0; c < classes.size(); ++c) {
+    const std::vector<double>& e = errors[c];
+    if (!measured[c].image_shape || static_cast<int>(e.size()) < std::max(2, min_views)) continue;
+    double sum_squares = 0;
+    for (double x : e) sum_squares += x * x;
+    // Not below half a pixel: the blob's edges are whole pixels.
+    measured[c].image_shape->arc_error_px = std::max(0.5, std::sqrt(sum_squares / e.size()));
+  }
+  return measured;
 }
 
 std::vector<ObjectClass> LearnImageShapesFromExamples(const std::vector<ObjectClass>& classes,

@@ -41,6 +41,10 @@ bool ViewCheckOptions::Validate(std::string* why) const {
     if (why) *why = "the pixel error of the view checks must be positive";
     return false;
   }
+  if (!(arc_std_px > 0) || std::isinf(arc_std_px)) {
+    if (why) *why = "the arc-width error of the view checks must be positive";
+    return false;
+  }
   if (!(edge_margin_px >= 0) || std::isinf(edge_margin_px)) {
     if (why) *why = "the edge margin of the view checks must be >= 0 px";
     return false;
@@ -83,6 +87,11 @@ bool SizeFromSupport(const CameraModel& camera, const BoundingSlice& slice, doub
   return true;
 }
 
+double ArcStdPx(const ObjectClass& object_class, const ViewCheckOptions& options) {
+  const auto& shape = object_class.image_shape;
+  return shape && shape->arc_error_px > 0 ? shape->arc_error_px : options.arc_std_px;
+}
+
 double SupportedSizeSquaredDistance(const CameraModel& camera, const ObjectClass& object_class,
                                     const BoundingSlice& slice, double base_height_m,
                                     const ViewCheckOptions& options) {
@@ -94,7 +103,7 @@ double SupportedSizeSquaredDistance(const CameraModel& camera, const ObjectClass
   const bool top_cut = size.top_cut || (annulus.rim_radius_px > 0 &&
                                         slice.u_r_px + slice.s_r_px >=
                                             annulus.rim_radius_px - options.edge_margin_px);
-  // What one pixel of error on u_r, s_r and the arc width does to the size:
+  // What the pixel error on u_r, s_r and the arc width does to the size:
   // finite differences of the same inversion.
   const double e = options.pixel_std_px;
   const double middle_radius = slice.u_r_px + 0.5 * slice.s_r_px;
@@ -113,7 +122,7 @@ double SupportedSizeSquaredDistance(const CameraModel& camera, const ObjectClass
   moved.s_r_px += e;
   add_variance(moved);
   moved = slice;
-  moved.s_phi_rad += e / std::max(1.0, middle_radius);
+  moved.s_phi_rad += ArcStdPx(object_class, options) / std::max(1.0, middle_radius);
   add_variance(moved);
   const double d_error = size.diameter_m - object_class.diameter_mean_m;
   double distance2 =

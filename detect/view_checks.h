@@ -33,10 +33,15 @@ bool SizeFromSupport(const CameraModel& camera, const BoundingSlice& slice, doub
                      SupportedViewSize* size);
 
 struct ViewCheckOptions {
-  // Pixel error assumed on the slice's radii and on its arc width when its
-  // size is compared with the class's (the detector's base position error is
-  // about 2.6 px median on the simulated runs, docs/detection.md).
+  // Pixel error assumed on the slice's radii when its size and shape are
+  // compared with the class's (the detector's base position error is about
+  // 2.6 px median on the simulated runs, docs/detection.md).
   double pixel_std_px = 3.0;
+  // The same on its arc width, for a class whose detector arc error was not
+  // measured in training (ImageShapeModel::arc_error_px, which replaces it:
+  // a plain object's blob edges are within about 1 px, so a thin
+  // look-alike's shape is then measured well even where it is 5 px wide).
+  double arc_std_px = 3.0;
   // Slice ends this close to the blind disc or the mirror rim are cut there.
   double edge_margin_px = 1.5;
   bool Validate(std::string* why) const;
@@ -49,6 +54,10 @@ struct ViewCheckOptions {
 // it exceeds the prior mean. Infinity when the base cannot stand at that
 // height (it images beyond the horizon); 0 when the slice's base touches the
 // blind disc (its base is hidden, the range unknown).
+// The arc-width error the view checks assume for `object_class`: its measured
+// ImageShapeModel::arc_error_px, else options.arc_std_px.
+double ArcStdPx(const ObjectClass& object_class, const ViewCheckOptions& options);
+
 double SupportedSizeSquaredDistance(const CameraModel& camera, const ObjectClass& object_class,
                                     const BoundingSlice& slice, double base_height_m,
                                     const ViewCheckOptions& options);

@@ -46,7 +46,7 @@ TEST(Classes, WriteThenReadRoundTrips) {
   ObjectClass ball = GreenBox();
   ball.name = "pink ball";
   ball.colour = ColourBox{{150, 120, 170}, {8, 3, 4}, 3.0};
-  ball.image_shape = ImageShapeModel{1.02, 0.04};
+  ball.image_shape = ImageShapeModel{1.02, 0.04, 1.25};
   ball.shape = ObjectShape::kSphere;
   WriteClasses({GreenBox(), ball}, dir.Path("classes.yaml"));
   const std::vector<ObjectClass> read = ReadClasses(dir.Path("classes.yaml"));
@@ -61,6 +61,7 @@ TEST(Classes, WriteThenReadRoundTrips) {
   ASSERT_TRUE(read[1].image_shape.has_value());
   EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_mean, 1.02);
   EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_std, 0.04);
+  EXPECT_DOUBLE_EQ(read[1].image_shape->arc_error_px, 1.25);
   EXPECT_EQ(read[0].shape, ObjectShape::kCylinder);
   EXPECT_EQ(read[1].shape, ObjectShape::kSphere);
   EXPECT_EQ(FindClass(read, "pink ball"), 1);
@@ -142,6 +143,9 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
             path + ": classes[0].image_shape.elongation_std: must be positive");
   EXPECT_TRUE(Contains(error_for(good + "    image_shape: {elongation_mean: 1.0}\n"),
                        "classes[0].image_shape.elongation_std"));
+  EXPECT_EQ(error_for(good + "    image_shape: {elongation_mean: 1.0, elongation_std: 0.1, "
+                             "arc_error_px: -1}\n"),
+            path + ": classes[0].image_shape.arc_error_px: must be >= 0");
   std::string huge = good;
   huge.replace(huge.find("2.2"), 3, "2e9");
   EXPECT_EQ(error_for(huge), path +

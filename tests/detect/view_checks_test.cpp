@@ -99,6 +99,41 @@ TEST(ViewChecks, SupportedSizeDistanceSeparatesTheClassFromLookAlikes) {
   EXPECT_TRUE(std::isinf(SupportedSizeSquaredDistance(camera, box, above, 0.0, options)));
 }
 
+// A slice cut by the mirror rim shows less than the object's radial length,
+// so its elongation is a lower bound: the shape counts against the class only
+// when the cut slice is already longer than the class's mean. A measured arc
+// error of 1 px (a plain object's blob) makes a thin slice's shape sharper
+// evidence than the 3 px assumed without a measurement.
+TEST(ViewChecks, ACutSliceCountsItsShapeOnlyWhenAlreadyTooLong) {
+  const HyperbolicCamera camera = HyperbolicCamera::Preset("lpa");
+  const ViewCheckOptions options;
+  ObjectClass bucket = ClassOfSize(0.3, 0.2, 0.4, 0.2);
+  bucket.image_shape = ImageShapeModel{1.33, 0.08};
+  const double rim = camera.annulus().rim_radius_px;
+  auto cut_slice = [&](double elongation) {
+    BoundingSlice slice;
+    slice.s_r_px = 40.0;
+    slice.u_r_px = rim - slice.s_r_px;  // reaches the rim
+    slice.s_phi_rad = slice.s_r_px / (elongation * (slice.u_r_px + 0.5 * slice.s_r_px));
+    return slice;
+  };
+  auto shape_part = [&](const ObjectClass& c, const BoundingSlice& slice) {
+    return ViewSquaredDistance(camera, c, slice, options) -
+           SupportedSizeSquaredDistance(camera, c, slice, 0.0, options);
+  };
+  const BoundingSlice short_cut = cut_slice(0.9), long_cut = cut_slice(4.0);
+  EXPECT_NEAR(SliceElongation(long_cut), 4.0, 1e-9);
+  EXPECT_EQ(shape_part(bucket, short_cut), 0.0);  // could be a bucket's top cut off
+  EXPECT_NEAR(shape_part(bucket, long_cut),
+              ShapeSquaredDistance(*bucket.image_shape, long_cut, options.pixel_std_px, 3.0), 1e-9);
+  ObjectClass measured = bucket;
+  measured.image_shape->arc_error_px = 1.0;
+  EXPECT_DOUBLE_EQ(ArcStdPx(bucket, options), options.arc_std_px);
+  EXPECT_DOUBLE_EQ(ArcStdPx(measured, options), 1.0);
+  EXPECT_GT(shape_part(measured, long_cut), 9.0);
+  EXPECT_GT(shape_part(measured, long_cut), 2.0 * shape_part(bucket, long_cut));
+}
+
 TEST(ViewChecks, OptionsAreValidated) {
   ViewCheckOptions options;
   std::string why;
@@ -107,6 +142,9 @@ TEST(ViewChecks, OptionsAreValidated) {
   EXPECT_FALSE(options.Validate(&why));
   options = {};
   options.edge_margin_px = -1;
+  EXPECT_FALSE(options.Validate(&why));
+  options = {};
+  options.arc_std_px = 0;
   EXPECT_FALSE(options.Validate(&why));
   BlobDetectorOptions detector;
   detector.max_view_distance = 0;
