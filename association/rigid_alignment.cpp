@@ -1,8 +1,9 @@
 #include "association/rigid_alignment.h"
 
+#include <algorithm>
 #include <cmath>
-#include <map>
 #include <tuple>
+#include <unordered_map>
 
 #include "core/angles.h"
 
@@ -47,7 +48,10 @@ struct Support {
 // `to` points sit on a grid of inlier_m cells: a transform's inliers are then
 // found in the 3 x 3 cells around each moved point instead of among all its
 // candidates (thousands with clutter); the same pairs as a scan of the
-// candidates (ties to the higher index, as that scan).
+// candidates (ties to the higher index, as that scan). Measure runs for every
+// candidate transform of every sample, so the cells are an array over the
+// `to` points' bounding box (a hash beyond kMaxDenseCells), and its per-call
+// buffers are kept (a counter serves one thread).
 class InlierCounter {
  public:
   InlierCounter(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
@@ -70,26 +74,63 @@ class InlierCounter {
   int with_candidates() const { return with_candidates_; }
   const std::vector<int>& near(size_t i) const { return near_[i]; }
 
-  // Builds the grid; needed before Measure().
+  // Builds the grid; needed before Measure(). Each cell lists its points by
+  // ascending index.
   void Index() {
-    for (size_t o = 0; o < to_.size(); ++o) grid_[CellOf(to_[o])].push_back(static_cast<int>(o));
+    best_of_to_.assign(to_.size(), {0.0, -1});
+    if (to_.empty()) return;
+    long min_x = CellOf(to_[0]).first, max_x = min_x, min_y = CellOf(to_[0]).second, max_y = min_y;
+    for (const Eigen::Vector2d& p : to_) {
+      const auto [x, y] = CellOf(p);
+      min_x = std::min(min_x, x);
+      max_x = std::max(max_x, x);
+      min_y = std::min(min_y, y);
+      max_y = std::max(max_y, y);
+    }
+    std::vector<std::pair<long long, int>> keyed;  // (cell, point), sorted
+    keyed.reserve(to_.size());
+    const double cells = (double(max_x - min_x) + 1) * (double(max_y - min_y) + 1);
+    dense_ = cells <= kMaxDenseCells;
+    origin_x_ = min_x;
+    origin_y_ = min_y;
+    width_ = max_x - min_x + 1;
+    height_ = max_y - min_y + 1;
+    for (size_t o = 0; o < to_.size(); ++o) {
+      const auto [x, y] = CellOf(to_[o]);
+      keyed.push_back({dense_ ? (x - min_x) * height_ + (y - min_y) : Key(x, y), int(o)});
+    }
+    std::sort(keyed.begin(), keyed.end());
+    cell_points_.clear();
+    for (const auto& entry : keyed) cell_points_.push_back(entry.second);
+    if (dense_) {
+      cell_begin_.assign(static_cast<size_t>(cells) + 1, 0);
+      for (const auto& entry : keyed) ++cell_begin_[entry.first + 1];
+      for (size_t c = 1; c < cell_begin_.size(); ++c) cell_begin_[c] += cell_begin_[c - 1];
+      return;
+    }
+    for (size_t k = 0; k < keyed.size(); ++k) {
+      if (k == 0 || keyed[k].first != keyed[k - 1].first)
+        cells_[keyed[k].first] = {static_cast<int>(k), static_cast<int>(k)};
+      ++cells_[keyed[k].first].second;
+    }
   }
 
   // The inliers of `rigid` and their score (RigidRansacOptions::score_std_m),
   // with `pairs` the pairs.
   Support Measure(const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) const {
-    std::map<int, std::pair<double, int>> by_to;  // to point -> (distance², from point)
+    touched_.clear();  // the to points reached; best_of_to_ holds (distance², from point)
+    const Eigen::Matrix2d rotation = Eigen::Rotation2Dd(rigid.angle).toRotationMatrix();
     for (size_t i = 0; i < from_.size(); ++i) {
       if (near_[i].empty()) continue;
-      const Eigen::Vector2d p = rigid(from_[i]);
+      const Eigen::Vector2d p = rotation * from_[i] + rigid.t;  // rigid(from_[i])
       const auto [cx, cy] = CellOf(p);
       int nearest = -1;
       double best = inlier2_;
       for (long x = cx - 1; x <= cx + 1; ++x)
         for (long y = cy - 1; y <= cy + 1; ++y) {
-          const auto cell = grid_.find({x, y});
-          if (cell == grid_.end()) continue;
-          for (int o : cell->second) {
+          const std::pair<int, int> cell = Cell(x, y);
+          for (int k = cell.first; k < cell.second; ++k) {
+            const int o = cell_points_[k];
             if (!IsCandidate(static_cast<int>(i), o)) continue;  // not in near_[i]
             const double d2 = (to_[o] - p).squaredNorm();
             if (d2 < best || (d2 == best && o > nearest)) {
@@ -99,24 +140,48 @@ class InlierCounter {
           }
         }
       if (nearest < 0) continue;
-      const auto it = by_to.find(nearest);
-      if (it == by_to.end() || best < it->second.first)
-        by_to[nearest] = {best, static_cast<int>(i)};
+      std::pair<double, int>& at = best_of_to_[nearest];
+      if (at.second < 0) {
+        touched_.push_back(nearest);
+        at = {best, static_cast<int>(i)};
+      } else if (best < at.first) {
+        at = {best, static_cast<int>(i)};
+      }
     }
-    if (pairs) {
-      pairs->clear();
-      for (const auto& [o, value] : by_to) pairs->push_back({value.second, o});
-    }
+    // By ascending to point, as the pairs are reported and the score summed.
+    std::sort(touched_.begin(), touched_.end());
+    if (pairs) pairs->clear();
     Support support;
-    support.count = static_cast<int>(by_to.size());
-    for (const auto& entry : by_to)
-      support.score += score_std2_ > 0 ? std::exp(-0.5 * entry.second.first / score_std2_) : 1.0;
+    support.count = static_cast<int>(touched_.size());
+    for (int o : touched_) {
+      std::pair<double, int>& at = best_of_to_[o];
+      if (pairs) pairs->push_back({at.second, o});
+      support.score += score_std2_ > 0 ? std::exp(-0.5 * at.first / score_std2_) : 1.0;
+      at = {0.0, -1};
+    }
     return support;
   }
 
  private:
   bool IsCandidate(int i, int o) const {
     return (to_[o] - from_[i]).squaredNorm() <= reach_ * reach_;
+  }
+
+  // The range of cell_points_ in cell (x, y); empty outside the grid.
+  std::pair<int, int> Cell(long x, long y) const {
+    if (dense_) {
+      const long dx = x - origin_x_, dy = y - origin_y_;
+      if (dx < 0 || dy < 0 || dx >= width_ || dy >= height_) return {0, 0};
+      const size_t c = static_cast<size_t>(dx * height_ + dy);
+      return {cell_begin_[c], cell_begin_[c + 1]};
+    }
+    const auto cell = cells_.find(Key(x, y));
+    return cell == cells_.end() ? std::pair<int, int>{0, 0} : cell->second;
+  }
+
+  static long long Key(long x, long y) {
+    return static_cast<long long>((static_cast<unsigned long long>(x) << 32) ^
+                                  (static_cast<unsigned long long>(y) & 0xffffffffULL));
   }
 
   std::pair<long, long> CellOf(const Eigen::Vector2d& p) const {
@@ -129,7 +194,16 @@ class InlierCounter {
   const double inlier_m_, inlier2_, score_std2_, reach_;
   std::vector<std::vector<int>> near_;  // candidates (to points within reach) per from point
   int with_candidates_ = 0;
-  std::map<std::pair<long, long>, std::vector<int>> grid_;
+  // A grid larger than this (4 million cells of inlier_m: a 5 km square at
+  // 2.5 m) is hashed instead.
+  static constexpr double kMaxDenseCells = 4e6;
+  bool dense_ = true;
+  long origin_x_ = 0, origin_y_ = 0, width_ = 0, height_ = 0;
+  std::vector<int> cell_begin_;  // dense: cell c's points are cell_points_[begin[c], begin[c+1])
+  std::unordered_map<long long, std::pair<int, int>> cells_;  // hashed: cell -> its range
+  std::vector<int> cell_points_;                              // to points, cell by cell
+  mutable std::vector<std::pair<double, int>> best_of_to_;    // Measure's buffers
+  mutable std::vector<int> touched_;
 };
 
 // The sampled transforms with at least min_inliers inliers and the most of
