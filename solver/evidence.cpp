@@ -220,28 +220,27 @@ bool CovarianceRoots(cholmod_factor* factor, const std::vector<int>& inverse_per
   }
   const int n = static_cast<int>(factor->n);
   roots->assign(columns.size(), CovarianceRoot());
-  if (!factor->is_super) {
-    std::vector<int> position(static_cast<size_t>(n), -1);
-    for (size_t h = 0; h < columns.size(); ++h) {
-      std::vector<int> rows_of_group;
-      for (int column : columns[h]) rows_of_group.push_back(inverse_permutation[column]);
-      (*roots)[h] = SimplicialRoot(factor, rows_of_group, &position);
+  // A supernodal factor is copied to a simplicial one (the same L), whose
+  // columns a sparse solve can follow: a dense solve per batch of 64 columns
+  // costs the whole factor each time and page-faults n x 64 buffers in anew.
+  cholmod_factor* simplicial = factor;
+  if (factor->is_super) {
+    simplicial = cholmod_copy_factor(factor, cc);
+    if (!simplicial ||
+        !cholmod_change_factor(CHOLMOD_REAL, true, false, true, true, simplicial, cc)) {
+      cholmod_free_factor(&simplicial, cc);
+      if (why) *why = "CHOLMOD could not make a simplicial copy of the factor";
+      return false;
     }
-    return true;
   }
-  // Supernodal LL': a dense forward solve, the rows off the reach dropped.
-  const auto take_root = [&](size_t h, const double* solution) {
-    const int width = static_cast<int>(columns[h].size());
-    const Eigen::Map<const Eigen::MatrixXd> dense(solution, n, width);
-    CovarianceRoot& root = (*roots)[h];
-    for (int i = 0; i < n; ++i)
-      if (!dense.row(i).isZero(0.0)) root.rows.push_back(i);
-    root.values.resize(static_cast<Eigen::Index>(root.rows.size()), width);
-    for (size_t r = 0; r < root.rows.size(); ++r)
-      root.values.row(static_cast<Eigen::Index>(r)) = dense.row(root.rows[r]);
-  };
-  return SolveUnitColumnsInBatches(factor, inverse_permutation, cc, columns, CHOLMOD_L, take_root,
-                                   why);
+  std::vector<int> position(static_cast<size_t>(n), -1);
+  for (size_t h = 0; h < columns.size(); ++h) {
+    std::vector<int> rows_of_group;
+    for (int column : columns[h]) rows_of_group.push_back(inverse_permutation[column]);
+    (*roots)[h] = SimplicialRoot(simplicial, rows_of_group, &position);
+  }
+  if (simplicial != factor) cholmod_free_factor(&simplicial, cc);
+  return true;
 }
 
 bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_permutation,

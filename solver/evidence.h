@@ -57,9 +57,9 @@ bool CovarianceBlocks(cholmod_factor_struct* factor, const std::vector<int>& inv
 // that needs many pairwise blocks among a few variables solve once per
 // variable rather than once per pair, and a forward solve only. False with
 // `why` when CHOLMOD fails.
-// A simplicial factor is solved on the reach of E_g alone (its
-// elimination-tree ancestors: a sparse forward solve, cost the sum of those
-// columns' lengths); a supernodal one densely, its zero rows dropped.
+// Solved on the reach of E_g alone (its elimination-tree ancestors: a sparse
+// forward solve, cost the sum of those columns' lengths); a supernodal factor
+// is first copied to a simplicial one.
 bool CovarianceRoots(cholmod_factor_struct* factor, const std::vector<int>& inverse_permutation,
                      cholmod_common_struct* cc, const std::vector<std::vector<int>>& columns,
                      std::vector<CovarianceRoot>* roots, std::string* why);
