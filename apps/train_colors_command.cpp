@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
 #include "apps/arguments.h"
 #include "apps/commands.h"
@@ -58,7 +59,9 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
     if (!std::filesystem::exists(camera_path))
       throw Error::InFile(
           camera_path, "not found: outline examples need the camera (give --camera CAMERA.yaml)");
-    trained = LearnImageShapesFromExamples(trained, examples, *LoadCamera(camera_path));
+    const std::unique_ptr<CameraModel> camera = LoadCamera(camera_path);
+    trained = MeasureDetectorArcErrorsFromExamples(
+        LearnImageShapesFromExamples(trained, examples, *camera), examples, *camera);
   }
   if (arguments.Has("from-ground-truth")) {
     const std::string run_dir = arguments.Get("from-ground-truth");

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -258,6 +259,78 @@ std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classe
   return WithShapeModels(classes, elongations, min_views, 0.02);
 }
 
+namespace {
+
+// The colour detector alone, before any check: the blobs whose widths the
+// view checks must allow for.
+BlobDetector ColourOnlyDetector(const CameraModel& camera,
+                                const std::vector<ObjectClass>& classes) {
+  BlobDetectorOptions colour_only;
+  colour_only.separate_look_alikes = false;
+  colour_only.max_view_distance = std::numeric_limits<double>::infinity();
+  return BlobDetector(camera, classes, colour_only);
+}
+
+// Per class, the arc-width errors of the detector's blobs against known views.
+class ArcErrors {
+ public:
+  explicit ArcErrors(size_t num_classes) : errors_(num_classes) {}
+
+  // The class's largest blob of `found` lying mostly on `view` (as eval-detect
+  // matches a sighting), if any: its arc width less the view's, in pixels at
+  // the view's middle radius.
+  void Add(const std::vector<Detection>& found, int class_index, const BoundingSlice& view) {
+    const Detection* largest = nullptr;
+    for (const Detection& d : found)
+      if (d.class_index == class_index && SliceCoverage(d.slice, view) >= 0.5 &&
+          (!largest || d.area_px > largest->area_px))
+        largest = &d;
+    if (!largest) return;
+    const double middle_radius = view.u_r_px + 0.5 * view.s_r_px;
+    errors_[class_index].push_back((largest->slice.s_phi_rad - view.s_phi_rad) * middle_radius);
+  }
+
+  // `classes` with arc_error_px, the root mean square (at least 0.5 px: the
+  // blob's edges are whole pixels), for every class with a shape model and
+  // at least min_views errors.
+  std::vector<ObjectClass> Apply(const std::vector<ObjectClass>& classes, int min_views) const {
+    std::vector<ObjectClass> measured = classes;
+    for (size_t c = 0; c < classes.size(); ++c) {
+      const std::vector<double>& e = errors_[c];
+      if (!measured[c].image_shape || static_cast<int>(e.size()) < std::max(2, min_views)) continue;
+      double sum_squares = 0;
+      for (double x : e) sum_squares += x * x;
+      measured[c].image_shape->arc_error_px = std::max(0.5, std::sqrt(sum_squares / e.size()));
+    }
+    return measured;
+  }
+
+ private:
+  std::vector<std::vector<double>> errors_;
+};
+
+// The slice of an outline example's mask (read when not in memory); nullopt
+// for an empty mask. Throws naming the mask when its size is not the camera's.
+std::optional<BoundingSlice> OutlineSlice(const ColourExample& example, const CameraModel& camera) {
+  const cv::Mat mask =
+      example.mask.empty() ? ReadImage(example.mask_path, ImageColour::kGray) : example.mask;
+  if (mask.cols != camera.image_width() || mask.rows != camera.image_height())
+    throw Error::InFile(example.mask_path.empty() ? example.image_path : example.mask_path,
+                        "outline mask size differs from the camera's image size");
+  std::vector<double> radii, angles;
+  for (int y = 0; y < mask.rows; ++y)
+    for (int x = 0; x < mask.cols; ++x) {
+      if (mask.at<uint8_t>(y, x) == 0) continue;
+      const PolarPoint polar = camera.PixelToPolar(Eigen::Vector2d(x, y));
+      radii.push_back(polar.radius_px);
+      angles.push_back(polar.angle_rad);
+    }
+  if (radii.empty()) return std::nullopt;
+  return SliceOfPixelCentres(radii, angles);
+}
+
+}  // namespace
+
 std::vector<ObjectClass> MeasureDetectorArcErrors(const std::vector<ObjectClass>& classes,
                                                   const std::string& run_dir, int min_views) {
   std::map<long, std::vector<TrueView>> views_by_frame;
@@ -265,41 +338,34 @@ std::vector<ObjectClass> MeasureDetectorArcErrors(const std::vector<ObjectClass>
     views_by_frame[view.frame].push_back(view);
   const std::unique_ptr<CameraModel> camera =
       LoadCamera((fs::path(run_dir) / "camera.yaml").string());
-  BlobDetectorOptions colour_only;  // the colour blobs themselves, before any check
-  colour_only.separate_look_alikes = false;
-  colour_only.max_view_distance = std::numeric_limits<double>::infinity();
-  const BlobDetector detector(*camera, classes, colour_only);
+  const BlobDetector detector = ColourOnlyDetector(*camera, classes);
   const FrameSource frames(run_dir);
-  std::vector<std::vector<double>> errors(classes.size());
+  ArcErrors errors(classes.size());
   for (const auto& [frame, views] : views_by_frame) {
     if (frame < 0 || static_cast<size_t>(frame) >= frames.size())
       throw Error::InFile(run_dir, "ground_truth/visible_slices.csv names frame " +
                                        std::to_string(frame) + ", which the run does not have");
     const std::vector<Detection> found = detector.Detect(frames.Read(frame), frame);
-    for (const TrueView& view : views) {
-      // The class's largest blob that lies mostly on the view (as eval-detect
-      // matches a sighting).
-      const Detection* largest = nullptr;
-      for (const Detection& d : found)
-        if (d.class_index == view.class_index && SliceCoverage(d.slice, view.slice) >= 0.5 &&
-            (!largest || d.area_px > largest->area_px))
-          largest = &d;
-      if (!largest) continue;
-      const double middle_radius = view.slice.u_r_px + 0.5 * view.slice.s_r_px;
-      errors[view.class_index].push_back((largest->slice.s_phi_rad - view.slice.s_phi_rad) *
-                                         middle_radius);
-    }
+    for (const TrueView& view : views) errors.Add(found, view.class_index, view.slice);
   }
-  std::vector<ObjectClass> measured = classes;
-  for (size_t c = 0; c < classes.size(); ++c) {
-    const std::vector<double>& e = errors[c];
-    if (!measured[c].image_shape || static_cast<int>(e.size()) < std::max(2, min_views)) continue;
-    double sum_squares = 0;
-    for (double x : e) sum_squares += x * x;
-    // Not below half a pixel: the blob's edges are whole pixels.
-    measured[c].image_shape->arc_error_px = std::max(0.5, std::sqrt(sum_squares / e.size()));
+  return errors.Apply(classes, min_views);
+}
+
+std::vector<ObjectClass> MeasureDetectorArcErrorsFromExamples(
+    const std::vector<ObjectClass>& classes, const std::vector<ColourExample>& examples,
+    const CameraModel& camera, int min_views) {
+  const BlobDetector detector = ColourOnlyDetector(camera, classes);
+  ArcErrors errors(classes.size());
+  for (const ColourExample& example : examples) {
+    if (!example.outline) continue;
+    const int class_index = FindClass(classes, example.class_name);
+    if (class_index < 0) continue;
+    const std::optional<BoundingSlice> view = OutlineSlice(example, camera);
+    if (!view) continue;
+    const cv::Mat image = ReadImage(example.image_path);
+    errors.Add(detector.Detect(image, 0), class_index, *view);
   }
-  return measured;
+  return errors.Apply(classes, min_views);
 }
 
 std::vector<ObjectClass> LearnImageShapesFromExamples(const std::vector<ObjectClass>& classes,
@@ -310,23 +376,8 @@ std::vector<ObjectClass> LearnImageShapesFromExamples(const std::vector<ObjectCl
     if (!example.outline) continue;
     const int class_index = FindClass(classes, example.class_name);
     if (class_index < 0) continue;
-    cv::Mat mask = example.mask;
-    if (mask.empty()) {
-      mask = ReadImage(example.mask_path, ImageColour::kGray);
-    }
-    if (mask.cols != camera.image_width() || mask.rows != camera.image_height())
-      throw Error::InFile(example.mask_path.empty() ? example.image_path : example.mask_path,
-                          "outline mask size differs from the camera's image size");
-    std::vector<double> radii, angles;
-    for (int y = 0; y < mask.rows; ++y)
-      for (int x = 0; x < mask.cols; ++x) {
-        if (mask.at<uint8_t>(y, x) == 0) continue;
-        const PolarPoint polar = camera.PixelToPolar(Eigen::Vector2d(x, y));
-        radii.push_back(polar.radius_px);
-        angles.push_back(polar.angle_rad);
-      }
-    if (radii.empty()) continue;
-    elongations[class_index].push_back(SliceElongation(SliceOfPixelCentres(radii, angles)));
+    const std::optional<BoundingSlice> view = OutlineSlice(example, camera);
+    if (view) elongations[class_index].push_back(SliceElongation(*view));
   }
   return WithShapeModels(classes, elongations, min_views, 0.05);
 }

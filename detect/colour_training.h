@@ -69,6 +69,13 @@ std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classe
 std::vector<ObjectClass> MeasureDetectorArcErrors(const std::vector<ObjectClass>& classes,
                                                   const std::string& run_dir, int min_views = 5);
 
+// The same from outline examples (ColourExample::outline, as
+// LearnImageShapesFromExamples takes them): the colour detector runs on each
+// example's image, and its blob is compared with the outline's slice.
+std::vector<ObjectClass> MeasureDetectorArcErrorsFromExamples(
+    const std::vector<ObjectClass>& classes, const std::vector<ColourExample>& examples,
+    const CameraModel& camera, int min_views = 3);
+
 // Returns `classes` with an image shape model for every class with at least
 // `min_views` outline examples (ColourExample::outline): mean and standard
 // deviation (floored at 0.05, as a few views say little about the spread) of

@@ -241,6 +241,12 @@ TEST(ImageShapes, LearntFromOutlineExamplesAsTheDetectorMeasuresBlobs) {
   EXPECT_NEAR(learnt[1].image_shape->elongation_mean, 1.4, 0.08);
   EXPECT_GE(learnt[1].image_shape->elongation_std, 0.05);  // the floor for few views
   EXPECT_FALSE(learnt[0].image_shape.has_value());
+  // The painted views are one flat colour: the colour blob is the outline
+  // itself, so the detector's arc error is the floor of half a pixel.
+  const std::vector<ObjectClass> measured =
+      MeasureDetectorArcErrorsFromExamples(learnt, examples, camera);
+  EXPECT_DOUBLE_EQ(measured[1].image_shape->arc_error_px, 0.5);
+  EXPECT_FALSE(measured[0].image_shape.has_value());
   // Fewer than three outlines: no model.
   const std::vector<ColourExample> two(examples.begin(), examples.begin() + 2);
   EXPECT_FALSE(LearnImageShapesFromExamples(classes, two, camera)[1].image_shape);
