@@ -2,13 +2,14 @@
 // joint re-entry merges on a park drive (pipeline/landmark_association.h,
 // docs/method.md §16.2): old landmarks scattered over a 300 m square, the
 // recent ones a part of them seen again under a drift (a rotation and a
-// shift) plus clutter, with the pipeline's RANSAC options.
+// shift) plus clutter, with the joint merges' default RANSAC options.
 #include <random>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include "association/rigid_alignment.h"
+#include "pipeline/landmark_association.h"
 
 namespace oslam {
 namespace {
@@ -35,22 +36,11 @@ Scene ParkScene(int num_old, int num_recent, int num_clutter) {
   return scene;
 }
 
-RigidRansacOptions PipelineOptions() {
-  RigidRansacOptions options;  // LandmarkAssociationOptions' joint_* defaults
-  options.search_m = 60;
-  options.inlier_m = 2.5;
-  options.max_rotation_rad = 0.5;
-  options.iterations = 300;
-  options.min_inliers = 8;
-  options.score_std_m = 0.8;
-  return options;
-}
-
 // Arguments: old landmarks, recent ones, recent clutter.
 void BM_MatchRigidlyBothWays(benchmark::State& state) {
   const Scene scene = ParkScene(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
                                 static_cast<int>(state.range(2)));
-  const RigidRansacOptions options = PipelineOptions();
+  const RigidRansacOptions options = JointRansacOptions(UnknownAssociationOptions{});
   int pairs = 0;
   for (auto _ : state) {
     std::mt19937_64 rng(1);

@@ -222,6 +222,9 @@ struct UnknownAssociationResult {
 
 using LandmarkProgress = std::function<void(const std::string& line)>;
 
+// The RANSAC options of the joint re-entry merges (the joint_* options).
+RigidRansacOptions JointRansacOptions(const UnknownAssociationOptions& options);
+
 // Throws oslam::Error on invalid options or an unsolvable start.
 UnknownAssociationResult SolveUnknownAssociation(const LandmarkDataset& data,
                                                  const UnknownAssociationOptions& options,

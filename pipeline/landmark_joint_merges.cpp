@@ -16,6 +16,18 @@ namespace oslam {
 
 // ---- joint re-entry merges (see UnknownAssociationOptions::joint_*) ----
 
+RigidRansacOptions JointRansacOptions(const UnknownAssociationOptions& options) {
+  RigidRansacOptions ransac;
+  ransac.search_m = options.joint_search_m;
+  ransac.inlier_m = options.joint_inlier_m;
+  ransac.max_rotation_rad = options.joint_max_rotation_rad;
+  ransac.max_shift_m = options.joint_max_shift_m;
+  ransac.iterations = options.joint_ransac_iterations;
+  ransac.min_inliers = options.joint_min_inliers;
+  ransac.score_std_m = options.joint_score_std_m;
+  return ransac;
+}
+
 long LandmarkAssociation::JointMerge(int n) {
   if (options_.joint_min_inliers <= 0 || n - last_ransac_ < options_.joint_every_poses) return 0;
   last_ransac_ = n;
@@ -104,18 +116,10 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRec
     }
   }
   if (static_cast<int>(units.recent.size()) < options_.joint_min_inliers) return std::nullopt;
-  RigidRansacOptions ransac;
-  ransac.search_m = options_.joint_search_m;
-  ransac.inlier_m = options_.joint_inlier_m;
-  ransac.max_rotation_rad = options_.joint_max_rotation_rad;
-  ransac.max_shift_m = options_.joint_max_shift_m;
-  ransac.iterations = options_.joint_ransac_iterations;
-  ransac.min_inliers = options_.joint_min_inliers;
   std::vector<Eigen::Vector2d> from, to;
   for (const Unit& u : units.recent) from.push_back(u.position_m);
   for (const Unit& u : units.old) to.push_back(u.position_m);
-  ransac.score_std_m = options_.joint_score_std_m;
-  RigidMatches matches = MatchRigidlyBothWays(from, to, ransac, rng_);
+  RigidMatches matches = MatchRigidlyBothWays(from, to, JointRansacOptions(options_), rng_);
   std::optional<RigidMatch>& match = matches.most_pairs;
   const std::optional<RigidMatch>& close = matches.best_fit;
   if (options_.joint_close_ratio > 0 && close &&
