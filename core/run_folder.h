@@ -36,8 +36,9 @@ struct ColourBox {
 struct ImageShapeModel {
   double elongation_mean = 1.0;
   double elongation_std = 0.1;
-  // Root mean square error of the detector's arc width for the class's whole
-  // views, in pixels, measured in training (0: not measured; the view checks
+  // The detector's arc-width error for the class's whole views (68th
+  // percentile of its size, about one standard deviation), in pixels,
+  // measured in training (0: not measured; the view checks
   // then assume ViewCheckOptions::arc_std_px). A plain object's colour blob
   // is about 1 px wider than its silhouette; a striped one's edges can lose
   // several pixels.

@@ -290,17 +290,21 @@ class ArcErrors {
     errors_[class_index].push_back((largest->slice.s_phi_rad - view.s_phi_rad) * middle_radius);
   }
 
-  // `classes` with arc_error_px, the root mean square (at least 0.5 px: the
-  // blob's edges are whole pixels), for every class with a shape model and
-  // at least min_views errors.
+  // `classes` with arc_error_px for every class with a shape model and at
+  // least min_views errors: the 68th percentile of |error| (one standard
+  // deviation of a normal error; a textured object's few views that lose a
+  // whole edge would inflate a root mean square several times), at least
+  // 0.5 px (the blob's edges are whole pixels).
   std::vector<ObjectClass> Apply(const std::vector<ObjectClass>& classes, int min_views) const {
     std::vector<ObjectClass> measured = classes;
     for (size_t c = 0; c < classes.size(); ++c) {
       const std::vector<double>& e = errors_[c];
       if (!measured[c].image_shape || static_cast<int>(e.size()) < std::max(2, min_views)) continue;
-      double sum_squares = 0;
-      for (double x : e) sum_squares += x * x;
-      measured[c].image_shape->arc_error_px = std::max(0.5, std::sqrt(sum_squares / e.size()));
+      std::vector<double> size(e.size());
+      for (size_t k = 0; k < e.size(); ++k) size[k] = std::abs(e[k]);
+      const size_t rank = static_cast<size_t>(0.68 * (size.size() - 1));
+      std::nth_element(size.begin(), size.begin() + rank, size.end());
+      measured[c].image_shape->arc_error_px = std::max(0.5, size[rank]);
     }
     return measured;
   }

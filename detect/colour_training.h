@@ -60,10 +60,12 @@ std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classe
 
 // Returns `classes` with ImageShapeModel::arc_error_px measured for every
 // class that has an image shape model and at least `min_views` whole views
-// (as LearnImageShapes takes them) matched by a blob: the root mean square of
-// (blob arc width − visible arc width), in pixels at the view's middle radius,
-// of the class's largest colour blob lying mostly on the view (the colour
-// detector alone, with `classes`' colour models; floored at 0.5 px). The
+// (as LearnImageShapes takes them) matched by a blob: the 68th percentile of
+// |blob arc width − visible arc width| (one standard deviation of a normal
+// error, robust to the few views whose blob loses a whole edge), in pixels
+// at the view's middle radius, of the class's largest colour blob lying
+// mostly on the view (the colour detector alone, with `classes`' colour
+// models; floored at 0.5 px). The
 // view checks then know how well the detector measures the class's width.
 // Throws oslam::Error naming the file when the run is missing or malformed.
 std::vector<ObjectClass> MeasureDetectorArcErrors(const std::vector<ObjectClass>& classes,
