@@ -45,6 +45,7 @@ solver        build/bench/solver_bench (timed cases, not the fixed-count ones)  
 ceres         build/bench/ceres_bench                                libceres-dev at build time
 sampler       build/bench/sampler_bench                              -
 landmark      build/bench/landmark_bench, landmark_association_bench ../shared/data/victoria_park
+              (and rigid_alignment_bench, which needs no data)
 run           oslam run on lab and long_loop, oslam slam long runs   - (simulates the runs once)
 export        build/bench/export_bench on lab and long_loop          - (runs oslam run once)
 victoria      oslam map --landmarks (known, unknown association)     ../shared/data/victoria_park
@@ -354,6 +355,16 @@ group_sampler() {
 }
 
 group_landmark() {
+  section "RANSAC of the joint re-entry merges (rigid_alignment_bench)"
+  if run_bench rigid_alignment_bench; then
+    echo "| benchmark (old / recent / clutter) | CPU per call | pairs |"
+    echo "|---|---:|---:|"
+    while IFS= read -r r; do
+      printf '| `%s` | %s ms | %s |\n' "$(get "$r" name)" \
+        "$(fmt "$(to_unit "$(get "$r" cpu_time)" "$(get "$r" time_unit)" ms)" 1)" \
+        "$(fmt "$(get "$r" pairs)" 0)"
+    done < <(records_of rigid_alignment_bench .)
+  fi
   section "Landmark SLAM on Victoria Park (landmark_bench)"
   if have_bench_data && run_bench landmark_bench; then
     echo "| benchmark | poses / sightings / landmarks | cold, CPU | staged init | final solve | final LM iterations | χ² per residual |"
