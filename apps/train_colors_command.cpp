@@ -87,10 +87,11 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
       std::printf("%-16s YUV mean (%.1f, %.1f, %.1f) std (%.1f, %.1f, %.1f)  P(correct) %.3f",
                   trained[c].name.c_str(), box.yuv_mean[0], box.yuv_mean[1], box.yuv_mean[2],
                   box.yuv_std[0], box.yuv_std[1], box.yuv_std[2], confusion[c][c]);
-      if (trained[c].image_shape)
-        std::printf("  elongation %.2f ± %.2f, arc error %.1f px",
-                    trained[c].image_shape->elongation_mean, trained[c].image_shape->elongation_std,
-                    trained[c].image_shape->arc_error_px);
+      if (const auto& shape = trained[c].image_shape) {
+        std::printf("  elongation %.2f ± %.2f", shape->elongation_mean, shape->elongation_std);
+        // 0: not measured (too few views matched by a blob), not a perfect detector.
+        if (shape->arc_error_px > 0) std::printf(", arc error %.1f px", shape->arc_error_px);
+      }
       std::printf("\n");
     }
     std::printf("wrote %s\n", output.c_str());
