@@ -132,10 +132,7 @@ double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& s
 
 double ViewSquaredDistance(const CameraModel& camera, const ObjectClass& object_class,
                            const BoundingSlice& slice, const ViewCheckOptions& options) {
-  const MirrorAnnulus& annulus = camera.annulus();
-  const bool cut = slice.u_r_px <= annulus.blind_radius_px + options.edge_margin_px ||
-                   (annulus.rim_radius_px > 0 &&
-                    slice.u_r_px + slice.s_r_px >= annulus.rim_radius_px - options.edge_margin_px);
+  const bool cut = CutsOf(camera.annulus(), slice, options).any();
   double distance2 = SupportedSizeSquaredDistance(camera, object_class, slice, 0.0, options);
   if (!object_class.image_shape) return distance2;
   // A cut shortens the radial extent, and the elongation grows with it at a

@@ -92,17 +92,24 @@ double ArcStdPx(const ObjectClass& object_class, const ViewCheckOptions& options
   return shape && shape->arc_error_px > 0 ? shape->arc_error_px : options.arc_std_px;
 }
 
+SliceCuts CutsOf(const MirrorAnnulus& annulus, const BoundingSlice& slice,
+                 const ViewCheckOptions& options) {
+  SliceCuts cuts;
+  cuts.base = slice.u_r_px <= annulus.blind_radius_px + options.edge_margin_px;
+  cuts.top = annulus.rim_radius_px > 0 &&
+             slice.u_r_px + slice.s_r_px >= annulus.rim_radius_px - options.edge_margin_px;
+  return cuts;
+}
+
 double SupportedSizeSquaredDistance(const CameraModel& camera, const ObjectClass& object_class,
                                     const BoundingSlice& slice, double base_height_m,
                                     const ViewCheckOptions& options) {
   if (!(object_class.diameter_std_m > 0) || !(object_class.height_std_m > 0)) return 0.0;
-  const MirrorAnnulus& annulus = camera.annulus();
-  if (slice.u_r_px <= annulus.blind_radius_px + options.edge_margin_px) return 0.0;
+  const SliceCuts cuts = CutsOf(camera.annulus(), slice, options);
+  if (cuts.base) return 0.0;
   SupportedViewSize size;
   if (!SizeFromSupport(camera, slice, base_height_m, &size)) return kInfinity;
-  const bool top_cut = size.top_cut || (annulus.rim_radius_px > 0 &&
-                                        slice.u_r_px + slice.s_r_px >=
-                                            annulus.rim_radius_px - options.edge_margin_px);
+  const bool top_cut = size.top_cut || cuts.top;
   // What the pixel error on u_r, s_r and the arc width does to the size:
   // finite differences of the same inversion.
   const double e = options.pixel_std_px;

@@ -47,6 +47,20 @@ struct ViewCheckOptions {
   bool Validate(std::string* why) const;
 };
 
+// The arc-width error the view checks assume for `object_class`: its measured
+// ImageShapeModel::arc_error_px, else options.arc_std_px.
+double ArcStdPx(const ObjectClass& object_class, const ViewCheckOptions& options);
+
+// The ends of a slice that lie within options.edge_margin_px of an image
+// limit: there the object goes on beyond what the slice shows.
+struct SliceCuts {
+  bool base = false;  // the inner end at the blind disc: the base is hidden
+  bool top = false;   // the outer end at the mirror rim (when the camera has one)
+  bool any() const { return base || top; }
+};
+SliceCuts CutsOf(const MirrorAnnulus& annulus, const BoundingSlice& slice,
+                 const ViewCheckOptions& options);
+
 // Squared distance, in standard deviations, of the size a slice shows if its
 // base stands at `base_height_m` from the class's size prior (diameter and
 // height): per coordinate (size − prior mean)² / (prior variance + the
@@ -54,10 +68,6 @@ struct ViewCheckOptions {
 // it exceeds the prior mean. Infinity when the base cannot stand at that
 // height (it images beyond the horizon); 0 when the slice's base touches the
 // blind disc (its base is hidden, the range unknown).
-// The arc-width error the view checks assume for `object_class`: its measured
-// ImageShapeModel::arc_error_px, else options.arc_std_px.
-double ArcStdPx(const ObjectClass& object_class, const ViewCheckOptions& options);
-
 double SupportedSizeSquaredDistance(const CameraModel& camera, const ObjectClass& object_class,
                                     const BoundingSlice& slice, double base_height_m,
                                     const ViewCheckOptions& options);

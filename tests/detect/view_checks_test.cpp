@@ -134,6 +134,34 @@ TEST(ViewChecks, ACutSliceCountsItsShapeOnlyWhenAlreadyTooLong) {
   EXPECT_GT(shape_part(measured, long_cut), 2.0 * shape_part(bucket, long_cut));
 }
 
+// The ends within the margin of the blind disc and of the mirror rim are the
+// cut ones; a camera without a rim cuts no top.
+TEST(ViewChecks, CutsAreTheEndsAtTheBlindDiscAndTheRim) {
+  const ViewCheckOptions options;  // margin 1.5 px
+  MirrorAnnulus annulus;
+  annulus.blind_radius_px = 50.0;
+  annulus.rim_radius_px = 200.0;
+  auto slice = [](double inner, double outer) {
+    BoundingSlice s;
+    s.u_r_px = inner;
+    s.s_r_px = outer - inner;
+    s.s_phi_rad = 0.1;
+    return s;
+  };
+  const SliceCuts middle = CutsOf(annulus, slice(60, 150), options);
+  EXPECT_FALSE(middle.base);
+  EXPECT_FALSE(middle.top);
+  EXPECT_FALSE(middle.any());
+  EXPECT_TRUE(CutsOf(annulus, slice(51, 150), options).base);
+  EXPECT_FALSE(CutsOf(annulus, slice(52, 150), options).base);
+  EXPECT_TRUE(CutsOf(annulus, slice(60, 199), options).top);
+  EXPECT_FALSE(CutsOf(annulus, slice(60, 198), options).top);
+  const SliceCuts both = CutsOf(annulus, slice(50, 200), options);
+  EXPECT_TRUE(both.base && both.top && both.any());
+  annulus.rim_radius_px = 0.0;  // no rim known
+  EXPECT_FALSE(CutsOf(annulus, slice(60, 1000), options).top);
+}
+
 TEST(ViewChecks, OptionsAreValidated) {
   ViewCheckOptions options;
   std::string why;
