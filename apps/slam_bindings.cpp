@@ -97,6 +97,15 @@ void BindSampling(SlamStageOptions* o, Bindings* b) {
          "Metropolis-Hastings steps of the cold chain per MC3 iteration (1 = thesis)")
       .Key("cold_chain_steps",
            "steps of the cold chain per MC3 iteration, 1 = thesis (docs/method.md §9.4)");
+  b->Add(&s.track_scan_max, "track-scan", "N",
+         "MC3's cold chain also updates up to N contested tracks each iteration (0 = off)")
+      .Key("track_scan",
+           "cold chain: update up to N contested tracks in turn each MC3 iteration, 0 = off "
+           "(docs/method.md §9.4)");
+  b->Add(&s.track_scan_nats, "track-scan-nats", "NATS",
+         "a track is contested when one change of it is within NATS of the hill-climbed state")
+      .Key("track_scan_nats",
+           "track scan: contested when a single change is within this many nats (approximate)");
   b->Add(&s.delta_temperature, "delta-t", "DT", "temperature step between chains")
       .Key("delta_t", "temperature step between chains (docs/method.md §9.4)");
   b->AddFlag(&o->known_classes, "known-classes",

@@ -55,6 +55,9 @@ OMapReport SamplerReport(const SamplerSummary& s) {
                        {"hill_climb_steps", s.hill_climb_steps},
                        {"sweeps", s.sweeps},
                        {"sweep_changes", s.sweep_changes},
+                       {"track_scan_tracks", s.scan_tracks},
+                       {"track_scan_updates", s.track_scan.proposed},
+                       {"track_scan_moves", s.track_scan.accepted},
                        {"hill_climb_log_target", hill_trace},
                        {"cold_chain_log_target", trace}};
   return {"sampler", report.dump()};

@@ -6,6 +6,8 @@
 #include <condition_variable>
 #include <deque>
 #include <exception>
+#include <limits>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <unordered_map>
@@ -55,6 +57,24 @@ double LogScreenAcceptance(const EvaluationPtr& approximate, const StateEvaluati
   return std::isnan(log_alpha) ? 0.0 : std::min(0.0, log_alpha);
 }
 
+std::vector<AssociationState> TrackChanges(const StateEvaluation& current, int track,
+                                           const ClassConfusionModel& model, double radius_m);
+
+// Where a track scan may put a track from a state: the state itself first,
+// then its TrackChanges, each weighted beta (approximate log target - the
+// state's), minus infinity where the evaluator has no approximation.
+struct TrackDraw {
+  std::vector<AssociationState> states;
+  std::vector<double> log_weights;
+  double log_total = 0;
+};
+
+// The draws from one evaluated state, by track.
+struct TrackDrawCache {
+  EvaluationPtr from;
+  std::unordered_map<int, TrackDraw> by_track;
+};
+
 // One MC3 chain: its state, temperature, random stream, statistics and evaluator.
 struct Chain {
   EvaluationPtr state;
@@ -62,6 +82,13 @@ struct Chain {
   Rng rng;
   std::array<MoveStatistics, kNumMoveTypes> stats{};
   StateEvaluator* evaluator = nullptr;
+  // The tracks it updates one by one after its steps in each iteration
+  // (SamplerOptions::track_scan_max; the cold chain only) and how that went.
+  std::vector<int> scan_tracks;
+  MoveStatistics scan{};
+  // The track scan's draws from `state`, by track (computed once per state:
+  // most updates leave the state as it was).
+  std::shared_ptr<TrackDrawCache> draws;
 };
 
 // A chain after a block of iterations: what going back to it needs.
@@ -69,9 +96,97 @@ struct ChainCheckpoint {
   EvaluationPtr state;
   Rng rng;
   std::array<MoveStatistics, kNumMoveTypes> stats{};
+  MoveStatistics scan{};
   size_t mark = 0;                         // the evaluator's
   std::vector<EvaluationPtr> cold_states;  // chain 0: its state after each iteration
 };
+
+double LogSumExp(const std::vector<double>& v) {
+  double max = -std::numeric_limits<double>::infinity();
+  for (double x : v) max = std::max(max, x);
+  if (!std::isfinite(max)) return max;
+  double sum = 0;
+  for (double x : v) sum += std::exp(x - max);
+  return max + std::log(sum);
+}
+
+TrackDraw TrackDrawFrom(const EvaluationPtr& at, int track, double beta, double radius_m,
+                        StateEvaluator& evaluator, const ClassConfusionModel& model) {
+  TrackDraw draw;
+  draw.states.push_back(at->state);
+  draw.log_weights.push_back(0.0);
+  for (AssociationState& change : TrackChanges(*at, track, model, radius_m)) {
+    const EvaluationPtr approximate = evaluator.Approximate(change, *at);
+    const bool usable = approximate && approximate->valid && std::isfinite(approximate->log_target);
+    draw.log_weights.push_back(usable ? beta * (approximate->log_target - at->log_target)
+                                      : -std::numeric_limits<double>::infinity());
+    draw.states.push_back(std::move(change));
+  }
+  draw.log_total = LogSumExp(draw.log_weights);
+  return draw;
+}
+
+// One update of `track` (beyond the thesis, docs/method.md §9.4): the track
+// stays or makes one of its TrackChanges, drawn in proportion to
+// exp(beta x the evaluator's approximate target), and Metropolis-Hastings
+// with the exact target corrects the draw, the reverse draw's probability
+// taken from the proposed state. Where the approximation is close this is a
+// Gibbs update of the track's place; a wrong one only costs acceptance.
+EvaluationPtr TrackScanStep(const EvaluationPtr& current, int track, double beta, double radius_m,
+                            StateEvaluator& evaluator, const ClassConfusionModel& model, Rng& rng,
+                            TrackDrawCache* cache, MoveStatistics* stats) {
+  ++stats->proposed;
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double u_draw = uniform(rng), log_u = std::log(uniform(rng));
+  if (current->state.BlockOf(track) < 0) {
+    ++stats->self_transitions;
+    return current;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  if (cache->from != current) *cache = {current, {}};
+  auto cached = cache->by_track.find(track);
+  if (cached == cache->by_track.end())
+    cached = cache->by_track
+                 .emplace(track, TrackDrawFrom(current, track, beta, radius_m, evaluator, model))
+                 .first;
+  const TrackDraw& forward = cached->second;
+  size_t chosen = 0;
+  double left = u_draw;
+  for (size_t k = 0; k < forward.log_weights.size(); ++k) {
+    left -= std::exp(forward.log_weights[k] - forward.log_total);
+    if (left < 0) {
+      chosen = k;
+      break;
+    }
+  }
+  if (chosen == 0 || !std::isfinite(forward.log_weights[chosen])) {
+    ++stats->self_transitions;
+    stats->time_s += SecondsSince(start);
+    return current;
+  }
+  const size_t hits_before = evaluator.num_cache_hits();
+  const EvaluationPtr proposed = evaluator.Evaluate(forward.states[chosen], current.get());
+  stats->cache_hits += static_cast<long>(evaluator.num_cache_hits() - hits_before);
+  if (!proposed || !proposed->valid) {
+    stats->time_s += SecondsSince(start);
+    return current;
+  }
+  TrackDraw reverse = TrackDrawFrom(proposed, track, beta, radius_m, evaluator, model);
+  const auto back = std::find(reverse.states.begin(), reverse.states.end(), current->state);
+  const double log_reverse =
+      back == reverse.states.end()
+          ? -std::numeric_limits<double>::infinity()
+          : reverse.log_weights[back - reverse.states.begin()] - reverse.log_total;
+  const double log_forward = forward.log_weights[chosen] - forward.log_total;
+  const double log_alpha =
+      beta * (proposed->log_target - current->log_target) + log_reverse - log_forward;
+  stats->time_s += SecondsSince(start);
+  if (!std::isfinite(log_reverse) || !(log_u < std::min(0.0, log_alpha))) return current;
+  ++stats->accepted;
+  *cache = {proposed, {}};
+  cache->by_track.emplace(track, std::move(reverse));
+  return proposed;
+}
 
 // The iterations of a block: chains may swap after each block of
 // `swap_every` iterations (the last block may be shorter).
@@ -100,15 +215,22 @@ ChainCheckpoint StepBlock(Chain* chain, bool cold, int block, const ClassConfusi
   // The cold chain may take several steps per iteration (thinning): any
   // number of steps between swaps keeps its target invariant.
   const int steps = cold ? options.cold_chain_steps : 1;
+  const double radius_m = 3.0 * options.moves.reassign_sigma_m;
   for (int t = iterations.first; t <= iterations.last; ++t) {
     for (int k = 0; k < steps; ++k)
       chain->state = MetropolisStep(chain->state, sample, *chain->evaluator, model, options.moves,
                                     options.sampling_moves, chain->rng, &chain->stats);
+    if (!chain->scan_tracks.empty() && !chain->draws)
+      chain->draws = std::make_shared<TrackDrawCache>();
+    for (int track : chain->scan_tracks)
+      chain->state = TrackScanStep(chain->state, track, chain->beta, radius_m, *chain->evaluator,
+                                   model, chain->rng, chain->draws.get(), &chain->scan);
     if (cold) done.cold_states.push_back(chain->state);
   }
   done.state = chain->state;
   done.rng = chain->rng;
   done.stats = chain->stats;
+  done.scan = chain->scan;
   done.mark = chain->evaluator->Mark();
   return done;
 }
@@ -313,6 +435,7 @@ size_t SendBack(Chain* chain, const ChainCheckpoint& at, const EvaluationPtr& re
   chain->state = received;
   chain->rng = at.rng;
   chain->stats = at.stats;
+  chain->scan = at.scan;
   return undone;
 }
 
@@ -369,6 +492,8 @@ bool SamplerOptions::Validate(std::string* why) const {
   if (!(delta_temperature >= 0) || std::isinf(delta_temperature))
     return fail("the temperature step dT must be >= 0");
   if (num_iterations < 1) return fail("at least one iteration is needed");
+  if (track_scan_max < 0) return fail("the number of scanned tracks must be >= 0");
+  if (!(track_scan_nats >= 0)) return fail("the track scan's margin must be >= 0 nats");
   if (burn_in < 0 || burn_in >= num_iterations)
     return fail("the burn-in must be >= 0 and below the number of iterations");
   return moves.Validate(why);
@@ -494,6 +619,7 @@ SamplerResult Sampler::Run(const AssociationState& start, const ProgressCallback
   SamplerSummary& summary = result.summary;
   // The cold chain climbs with its own evaluator and random stream.
   result.hill_climbed = HillClimb(start, evaluators[0].get(), &rngs[0], &summary, progress);
+  summary.scan_tracks = ContestedTracks(*result.hill_climbed, evaluators[0].get());
   SampleChains(evaluators, rngs, &result, progress);
   for (const auto& evaluator : evaluators) {
     summary.num_solves += evaluator->num_solves();
@@ -677,6 +803,30 @@ EvaluationPtr Sampler::Sweep(EvaluationPtr current, StateEvaluator* evaluator,
   return current;
 }
 
+std::vector<int> Sampler::ContestedTracks(const StateEvaluation& at,
+                                          StateEvaluator* evaluator) const {
+  if (options_.track_scan_max <= 0) return {};
+  const double radius_m = 3.0 * options_.moves.reassign_sigma_m;
+  std::vector<std::pair<double, int>> contested;  // (-best approximate gain, track)
+  for (int track = 0; track < model_.num_tracks(); ++track) {
+    if (at.state.BlockOf(track) < 0) continue;
+    double best = -std::numeric_limits<double>::infinity();
+    for (const AssociationState& change : TrackChanges(at, track, model_, radius_m)) {
+      const EvaluationPtr approximate = evaluator->Approximate(change, at);
+      if (approximate && approximate->valid)
+        best = std::max(best, approximate->log_target - at.log_target);
+    }
+    if (best >= -options_.track_scan_nats) contested.emplace_back(-best, track);
+  }
+  std::sort(contested.begin(), contested.end());
+  if (contested.size() > static_cast<size_t>(options_.track_scan_max))
+    contested.resize(options_.track_scan_max);
+  std::vector<int> tracks;
+  for (const auto& entry : contested) tracks.push_back(entry.second);
+  std::sort(tracks.begin(), tracks.end());
+  return tracks;
+}
+
 void Sampler::SampleChains(const std::vector<std::unique_ptr<StateEvaluator>>& evaluators,
                            const std::vector<Rng>& rngs, SamplerResult* result,
                            const ProgressCallback& progress) const {
@@ -692,6 +842,7 @@ void Sampler::SampleChains(const std::vector<std::unique_ptr<StateEvaluator>>& e
     chains[i].rng = rngs[i];
     chains[i].evaluator = evaluators[i].get();
     chains[i].evaluator->Remember(result->hill_climbed);
+    if (i == 0) chains[i].scan_tracks = summary.scan_tracks;
     all_roll_back = all_roll_back && chains[i].evaluator->SupportsRollBack();
   }
   result->best = result->hill_climbed;
@@ -724,6 +875,7 @@ void Sampler::SampleChains(const std::vector<std::unique_ptr<StateEvaluator>>& e
   }
   stepper.Stop();
   summary.sampling = chains[0].stats;
+  summary.track_scan = chains[0].scan;
   summary.sampling_time_s = SecondsSince(clock);
   summary.num_solves += recorder.num_solves();
 }

@@ -78,6 +78,16 @@ struct SamplerOptions {
   // stationary distribution; proposals the screen rejects cost no solve.
   // Hill climbing never screens. Off: plain Metropolis-Hastings (thesis).
   bool delayed_acceptance = true;
+  // Beyond the thesis (docs/method.md §9.4): after its steps in each
+  // iteration the cold chain updates each contested track in turn, drawing
+  // where it goes (stay, into an object within 3 sigma_R, or alone) in
+  // proportion to the approximate target and correcting with the exact one.
+  // Contested: a single change of the track is within track_scan_nats of the
+  // hill-climbed state by the approximation; at most track_scan_max tracks,
+  // the closest first (0 = off). The tracks are fixed before MC3 starts, so
+  // the chain's target is unchanged.
+  int track_scan_max = 0;
+  double track_scan_nats = 10.0;
 
   bool Validate(std::string* why) const;
 };
@@ -101,6 +111,8 @@ struct SamplerSummary {
   size_t speculative_solves_undone = 0;
   int hill_climb_steps = 0;              // taken (patience may add to the minimum)
   int sweeps = 0, sweep_changes = 0;     // the sweeps after the climb and what they changed
+  std::vector<int> scan_tracks;          // the contested tracks MC3's cold chain updates
+  MoveStatistics track_scan{};           // their updates (proposed = updates, accepted = moves)
   std::vector<double> hill_climb_trace;  // log target of the current state per step
   std::vector<double> cold_trace;        // cold chain's log target per iteration
   double initial_log_target = 0, hill_climbed_log_target = 0;
@@ -134,6 +146,8 @@ class Sampler {
   // The sweeps of SamplerOptions::hill_climb_sweeps from `current`.
   EvaluationPtr Sweep(EvaluationPtr current, StateEvaluator* evaluator,
                       SamplerSummary* summary) const;
+  // The tracks of SamplerOptions::track_scan_max at `at`, by track id.
+  std::vector<int> ContestedTracks(const StateEvaluation& at, StateEvaluator* evaluator) const;
   // Algorithm 8 from result->hill_climbed: chain i steps with evaluators[i]
   // and a copy of rngs[i]; fills the samples, the best state and the summary's
   // sampling part.

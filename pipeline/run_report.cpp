@@ -134,7 +134,13 @@ void SamplerSection(const RunPipelineOptions& options, const SamplerSummary& s,
         "initial positive sequence) |\n"
      << "| distinct log-target values after burn-in | " << distinct.size() << " |\n"
      << "| chain swaps accepted | " << s.swaps_accepted << " of " << s.swaps_proposed << " ("
-     << Percent(s.swaps_accepted, s.swaps_proposed) << ") |\n\n";
+     << Percent(s.swaps_accepted, s.swaps_proposed) << ") |\n";
+  if (!s.scan_tracks.empty())
+    md << "| track scan of the cold chain | " << s.scan_tracks.size() << " contested tracks, "
+       << s.track_scan.proposed << " updates, " << s.track_scan.self_transitions
+       << " drawing the track's own place, " << s.track_scan.accepted << " moving it ("
+       << Fixed(s.track_scan.time_s, 2) << " s) |\n";
+  md << "\n";
   md << "Moves of the cold chain. Acceptance = accepted / proposed; a no-op proposal (nothing "
         "to propose, such as a merge with no partner) counts as proposed and not accepted; "
         "screened out = "

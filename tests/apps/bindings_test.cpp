@@ -78,6 +78,8 @@ std::vector<KeyCase> Cases() {
        }},
       {"slam.chains", "2", [](O o) { return o.slam.sampler.num_chains == 2; }},
       {"slam.cold_chain_steps", "2", [](O o) { return o.slam.sampler.cold_chain_steps == 2; }},
+      {"slam.track_scan", "6", [](O o) { return o.slam.sampler.track_scan_max == 6; }},
+      {"slam.track_scan_nats", "4.5", [](O o) { return o.slam.sampler.track_scan_nats == 4.5; }},
       {"slam.delta_t", "1.5", [](O o) { return o.slam.sampler.delta_temperature == 1.5; }},
       {"slam.known_classes", "1", [](O o) { return o.slam.known_classes; }},
       {"slam.min_track_length", "4", [](O o) { return o.slam.tracks.min_length == 4; }},
