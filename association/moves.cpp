@@ -17,26 +17,6 @@ double LogSumExp(const std::vector<double>& v) {
   return max + std::log(sum);
 }
 
-// Normalises log weights in place; false when every weight is zero.
-bool NormaliseLog(std::vector<double>* log_w) {
-  const double total = LogSumExp(*log_w);
-  if (total == kNegInf) return false;
-  for (double& x : *log_w) x -= total;
-  return true;
-}
-
-int SampleLog(const std::vector<double>& log_p, Rng& rng) {
-  double u = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
-  int last = -1;
-  for (size_t i = 0; i < log_p.size(); ++i) {
-    if (log_p[i] == kNegInf) continue;
-    last = static_cast<int>(i);
-    u -= std::exp(log_p[i]);
-    if (u < 0) return last;
-  }
-  return last;  // rounding: the last possible index
-}
-
 double LogOf(double p) {
   return p > 0 ? std::log(p) : kNegInf;
 }
@@ -372,6 +352,25 @@ double LogSplitIntoParts(const StateEvaluation& s, const std::vector<int>& part_
 }
 
 }  // namespace
+
+bool NormaliseLog(std::vector<double>* log_w) {
+  const double total = LogSumExp(*log_w);
+  if (total == kNegInf) return false;
+  for (double& x : *log_w) x -= total;
+  return true;
+}
+
+int SampleLog(const std::vector<double>& log_p, Rng& rng) {
+  double u = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+  int last = -1;
+  for (size_t i = 0; i < log_p.size(); ++i) {
+    if (log_p[i] == kNegInf) continue;
+    last = static_cast<int>(i);
+    u -= std::exp(log_p[i]);
+    if (u < 0) return last;
+  }
+  return last;  // rounding: the last possible index
+}
 
 const char* MoveName(MoveType type) {
   switch (type) {

@@ -81,6 +81,12 @@ struct Proposal {
 
 using Rng = std::mt19937_64;
 
+// Normalises log weights in place (log-sum-exp); false when every weight is zero.
+bool NormaliseLog(std::vector<double>* log_weights);
+// Draws an index from normalised log probabilities (one uniform from `rng`);
+// indices of probability zero are never drawn.
+int SampleLog(const std::vector<double>& log_p, Rng& rng);
+
 // Draws a move from `current` (whose evaluation is `evaluation`).
 Proposal ProposeMove(const StateEvaluation& current, const ClassConfusionModel& model,
                      const MoveOptions& options, const MoveProbabilities& probabilities, Rng& rng);

@@ -61,12 +61,12 @@ std::vector<AssociationState> TrackChanges(const StateEvaluation& current, int t
                                            const ClassConfusionModel& model, double radius_m);
 
 // Where a track scan may put a track from a state: the state itself first,
-// then its TrackChanges, each weighted beta (approximate log target - the
-// state's), minus infinity where the evaluator has no approximation.
+// then its TrackChanges, with log probabilities in proportion to beta
+// (approximate log target - the state's), minus infinity where the evaluator
+// has no approximation.
 struct TrackDraw {
   std::vector<AssociationState> states;
-  std::vector<double> log_weights;
-  double log_total = 0;
+  std::vector<double> log_p;
 };
 
 // The draws from one evaluated state, by track.
@@ -88,7 +88,7 @@ struct Chain {
   MoveStatistics scan{};
   // The track scan's draws from `state`, by track (computed once per state:
   // most updates leave the state as it was).
-  std::shared_ptr<TrackDrawCache> draws;
+  TrackDrawCache draws;
 };
 
 // A chain after a block of iterations: what going back to it needs.
@@ -101,28 +101,19 @@ struct ChainCheckpoint {
   std::vector<EvaluationPtr> cold_states;  // chain 0: its state after each iteration
 };
 
-double LogSumExp(const std::vector<double>& v) {
-  double max = -std::numeric_limits<double>::infinity();
-  for (double x : v) max = std::max(max, x);
-  if (!std::isfinite(max)) return max;
-  double sum = 0;
-  for (double x : v) sum += std::exp(x - max);
-  return max + std::log(sum);
-}
-
 TrackDraw TrackDrawFrom(const EvaluationPtr& at, int track, double beta, double radius_m,
                         StateEvaluator& evaluator, const ClassConfusionModel& model) {
   TrackDraw draw;
   draw.states.push_back(at->state);
-  draw.log_weights.push_back(0.0);
+  draw.log_p.push_back(0.0);
   for (AssociationState& change : TrackChanges(*at, track, model, radius_m)) {
     const EvaluationPtr approximate = evaluator.Approximate(change, *at);
     const bool usable = approximate && approximate->valid && std::isfinite(approximate->log_target);
-    draw.log_weights.push_back(usable ? beta * (approximate->log_target - at->log_target)
-                                      : -std::numeric_limits<double>::infinity());
+    draw.log_p.push_back(usable ? beta * (approximate->log_target - at->log_target)
+                                : -std::numeric_limits<double>::infinity());
     draw.states.push_back(std::move(change));
   }
-  draw.log_total = LogSumExp(draw.log_weights);
+  NormaliseLog(&draw.log_p);  // never all zero: the state itself has weight 1
   return draw;
 }
 
@@ -136,8 +127,6 @@ EvaluationPtr TrackScanStep(const EvaluationPtr& current, int track, double beta
                             StateEvaluator& evaluator, const ClassConfusionModel& model, Rng& rng,
                             TrackDrawCache* cache, MoveStatistics* stats) {
   ++stats->proposed;
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  const double u_draw = uniform(rng), log_u = std::log(uniform(rng));
   if (current->state.BlockOf(track) < 0) {
     ++stats->self_transitions;
     return current;
@@ -150,16 +139,10 @@ EvaluationPtr TrackScanStep(const EvaluationPtr& current, int track, double beta
                  .emplace(track, TrackDrawFrom(current, track, beta, radius_m, evaluator, model))
                  .first;
   const TrackDraw& forward = cached->second;
-  size_t chosen = 0;
-  double left = u_draw;
-  for (size_t k = 0; k < forward.log_weights.size(); ++k) {
-    left -= std::exp(forward.log_weights[k] - forward.log_total);
-    if (left < 0) {
-      chosen = k;
-      break;
-    }
-  }
-  if (chosen == 0 || !std::isfinite(forward.log_weights[chosen])) {
+  // Both uniforms are drawn for every update, so the stream does not depend on outcomes.
+  const int chosen = SampleLog(forward.log_p, rng);
+  const double log_u = std::log(std::uniform_real_distribution<double>(0.0, 1.0)(rng));
+  if (chosen <= 0) {
     ++stats->self_transitions;
     stats->time_s += SecondsSince(start);
     return current;
@@ -173,13 +156,11 @@ EvaluationPtr TrackScanStep(const EvaluationPtr& current, int track, double beta
   }
   TrackDraw reverse = TrackDrawFrom(proposed, track, beta, radius_m, evaluator, model);
   const auto back = std::find(reverse.states.begin(), reverse.states.end(), current->state);
-  const double log_reverse =
-      back == reverse.states.end()
-          ? -std::numeric_limits<double>::infinity()
-          : reverse.log_weights[back - reverse.states.begin()] - reverse.log_total;
-  const double log_forward = forward.log_weights[chosen] - forward.log_total;
+  const double log_reverse = back == reverse.states.end()
+                                 ? -std::numeric_limits<double>::infinity()
+                                 : reverse.log_p[back - reverse.states.begin()];
   const double log_alpha =
-      beta * (proposed->log_target - current->log_target) + log_reverse - log_forward;
+      beta * (proposed->log_target - current->log_target) + log_reverse - forward.log_p[chosen];
   stats->time_s += SecondsSince(start);
   if (!std::isfinite(log_reverse) || !(log_u < std::min(0.0, log_alpha))) return current;
   ++stats->accepted;
@@ -220,11 +201,9 @@ ChainCheckpoint StepBlock(Chain* chain, bool cold, int block, const ClassConfusi
     for (int k = 0; k < steps; ++k)
       chain->state = MetropolisStep(chain->state, sample, *chain->evaluator, model, options.moves,
                                     options.sampling_moves, chain->rng, &chain->stats);
-    if (!chain->scan_tracks.empty() && !chain->draws)
-      chain->draws = std::make_shared<TrackDrawCache>();
     for (int track : chain->scan_tracks)
       chain->state = TrackScanStep(chain->state, track, chain->beta, radius_m, *chain->evaluator,
-                                   model, chain->rng, chain->draws.get(), &chain->scan);
+                                   model, chain->rng, &chain->draws, &chain->scan);
     if (cold) done.cold_states.push_back(chain->state);
   }
   done.state = chain->state;
