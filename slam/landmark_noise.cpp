@@ -119,10 +119,11 @@ Sums ResidualSums(const LandmarkDataset& data, const std::vector<int>& associati
     edge_group[e] = static_cast<int>(groups.size());
     groups.push_back(keys);
   }
-  std::vector<Eigen::MatrixXd> blocks;  // draws per group
+  CovarianceDraws draws;  // of every variable once; each factor gathers its rows
   std::string why;
-  if (!slam->solver().CovarianceSamples(groups, options.redundancy_samples, seed, &blocks, &why))
+  if (!slam->solver().CovarianceSamples(groups, options.redundancy_samples, seed, &draws, &why))
     throw Error("noise calibration: no covariance draws (" + why + ")");
+  Eigen::MatrixXd gathered;
   const double gate = options.outlier_gate;
   Sums sums;
   for (size_t k = 0; k < data.sightings.size(); ++k) {
@@ -132,20 +133,20 @@ Sums ResidualSums(const LandmarkDataset& data, const std::vector<int>& associati
     Values values;
     values.AddPose(p.x, p.y, p.theta);
     values.Add(landmark[k]->position_m);
-    const Eigen::MatrixXd covariance =
-        s.pose == 0 ? WithFixedPose(blocks[sighting_group[k]], 3, true) : blocks[sighting_group[k]];
+    draws.Gather(sighting_group[k], &gathered);
+    if (s.pose == 0) gathered = WithFixedPose(gathered, 3, true);
     if (s.cartesian) {
       const Eigen::Vector2d z(s.range_m * std::cos(s.bearing_rad),
                               s.range_m * std::sin(s.bearing_rad));
       const PointSightingFactor factor(0, 1, z, s.xy_covariance, data.sensor_offset_m);
       const int rows[2] = {kPoint, kPoint};
-      if (!AddRows(factor, values, covariance, rows, gate, &sums))
+      if (!AddRows(factor, values, gathered, rows, gate, &sums))
         sums.outlier_sightings.push_back(static_cast<int>(k));
     } else {
       const RangeBearingFactor factor(0, 1, s.range_m, s.bearing_rad, s.range_std_m,
                                       s.bearing_std_rad, data.sensor_offset_m);
       const int rows[2] = {kRange, kBearing};
-      if (!AddRows(factor, values, covariance, rows, gate, &sums))
+      if (!AddRows(factor, values, gathered, rows, gate, &sums))
         sums.outlier_sightings.push_back(static_cast<int>(k));
     }
   }
@@ -156,12 +157,12 @@ Sums ResidualSums(const LandmarkDataset& data, const std::vector<int>& associati
     Values values;
     values.AddPose(a.x, a.y, a.theta);
     values.AddPose(b.x, b.y, b.theta);
-    Eigen::MatrixXd covariance = blocks[edge_group[e]];
-    if (edge.from == 0) covariance = WithFixedPose(covariance, 3, true);
-    if (edge.to == 0) covariance = WithFixedPose(covariance, 3, false);
+    draws.Gather(edge_group[e], &gathered);
+    if (edge.from == 0) gathered = WithFixedPose(gathered, 3, true);
+    if (edge.to == 0) gathered = WithFixedPose(gathered, 3, false);
     const RelativePoseFactor factor(0, 1, edge.delta, edge.covariance);
     const int rows[3] = {kTranslation, kTranslation, kHeading};
-    AddRows(factor, values, covariance, rows, gate, &sums);
+    AddRows(factor, values, gathered, rows, gate, &sums);
   }
   return sums;
 }

@@ -244,13 +244,10 @@ bool CovarianceRoots(cholmod_factor* factor, const std::vector<int>& inverse_per
 }
 
 bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_permutation,
-                       cholmod_common* cc, const std::vector<std::vector<int>>& columns, int count,
-                       unsigned long seed, std::vector<Eigen::MatrixXd>* samples,
+                       cholmod_common* cc, int count, unsigned long seed, DrawMatrix* samples,
                        std::string* why) {
   const int n = static_cast<int>(factor->n);
-  samples->assign(columns.size(), Eigen::MatrixXd());
-  for (size_t g = 0; g < columns.size(); ++g)
-    (*samples)[g].resize(static_cast<Eigen::Index>(columns[g].size()), count);
+  samples->resize(n, count);
   if (!factor->is_ll && factor->is_super) {
     if (why) *why = "a supernodal LDL' factor";  // CHOLMOD makes none
     return false;
@@ -281,11 +278,11 @@ bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_p
       return false;
     }
     const auto* yx = static_cast<const double*>(buffers.solution->x);
-    for (size_t g = 0; g < columns.size(); ++g)
-      for (size_t r = 0; r < columns[g].size(); ++r)
-        for (int c = 0; c < width; ++c)
-          (*samples)[g](static_cast<Eigen::Index>(r), first + c) =
-              yx[static_cast<size_t>(c) * n + inverse_permutation[columns[g][r]]];
+    for (int i = 0; i < n; ++i) {
+      const double* column = yx + inverse_permutation[i];
+      double* row = samples->row(i).data() + first;
+      for (int c = 0; c < width; ++c) row[c] = column[static_cast<size_t>(c) * n];
+    }
   }
   return true;
 }

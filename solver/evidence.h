@@ -67,14 +67,12 @@ bool CovarianceRoots(cholmod_factor_struct* factor, const std::vector<int>& inve
 // Draws from N(0, H^{-1}) for the factored matrix H: H = P' L L' P (LL') or
 // P' L D L' P (LDL'), so y = P' L^{-T} z (LL') or P' L^{-T} D^{-1/2} z, with
 // z standard normal (std::mt19937_64 seeded with `seed`), one backward
-// solve per batch of draws. For every list of scalar columns, a
-// columns x count matrix of the draws' values there. False with `why` when
-// CHOLMOD fails. Estimates traces (the redundancy of a group of residuals,
-// Hutchinson-style) where the covariance blocks would cost a solve per
-// column.
+// solve per batch of draws. Row i of `samples` (n x count) holds the draws'
+// values at scalar column i. False with `why` when CHOLMOD fails. Estimates
+// traces (the redundancy of a group of residuals, Hutchinson-style) where
+// the covariance blocks would cost a solve per column.
 bool CovarianceSamples(cholmod_factor_struct* factor, const std::vector<int>& inverse_permutation,
-                       cholmod_common_struct* cc, const std::vector<std::vector<int>>& columns,
-                       int count, unsigned long seed, std::vector<Eigen::MatrixXd>* samples,
-                       std::string* why);
+                       cholmod_common_struct* cc, int count, unsigned long seed,
+                       DrawMatrix* samples, std::string* why);
 
 }  // namespace oslam

@@ -446,9 +446,15 @@ bool SparseSolver::CovarianceRoots(const std::vector<std::vector<int>>& key_grou
                                 columns, roots, why);
 }
 
+void CovarianceDraws::Gather(size_t group, Eigen::MatrixXd* out) const {
+  const std::vector<int>& group_rows = rows[group];
+  out->resize(static_cast<Eigen::Index>(group_rows.size()), all.cols());
+  for (size_t r = 0; r < group_rows.size(); ++r)
+    out->row(static_cast<Eigen::Index>(r)) = all.row(group_rows[r]);
+}
+
 bool SparseSolver::CovarianceSamples(const std::vector<std::vector<int>>& key_groups, int count,
-                                     unsigned long seed, std::vector<Eigen::MatrixXd>* samples,
-                                     std::string* why) {
+                                     unsigned long seed, CovarianceDraws* draws, std::string* why) {
   const SerialOpenMpScope serial_openmp;
   const NormalEquations& normal = impl_->normal;
   if (!normal.factor_is_final()) {
@@ -459,10 +465,19 @@ bool SparseSolver::CovarianceSamples(const std::vector<std::vector<int>>& key_gr
     if (why) *why = "need at least one draw";
     return false;
   }
-  std::vector<std::vector<int>> columns;
-  if (!GroupColumns(normal, key_groups, &columns, why)) return false;
+  if (!GroupColumns(normal, key_groups, &draws->rows, why)) return false;
   return oslam::CovarianceSamples(normal.factor(), normal.inverse_permutation(), normal.common(),
-                                  columns, count, seed, samples, why);
+                                  count, seed, &draws->all, why);
+}
+
+bool SparseSolver::CovarianceSamples(const std::vector<std::vector<int>>& key_groups, int count,
+                                     unsigned long seed, std::vector<Eigen::MatrixXd>* samples,
+                                     std::string* why) {
+  CovarianceDraws draws;
+  if (!CovarianceSamples(key_groups, count, seed, &draws, why)) return false;
+  samples->assign(key_groups.size(), Eigen::MatrixXd());
+  for (size_t g = 0; g < key_groups.size(); ++g) draws.Gather(g, &(*samples)[g]);
+  return true;
 }
 
 }  // namespace oslam

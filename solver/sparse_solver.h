@@ -173,6 +173,18 @@ struct CovarianceRoot {
 // Y_a^T Y_b: the covariance block between two groups.
 Eigen::MatrixXd RootProduct(const CovarianceRoot& a, const CovarianceRoot& b);
 
+// Draws of every free scalar variable, one row each (count values in a row).
+using DrawMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// SparseSolver::CovarianceSamples: the draws of all free variables and, per
+// group of keys asked for, its rows in them.
+struct CovarianceDraws {
+  DrawMatrix all;
+  std::vector<std::vector<int>> rows;
+  // Group g's draws, dimension x count, into `out` (its storage reused).
+  void Gather(size_t group, Eigen::MatrixXd* out) const;
+};
+
 class SparseSolver {
  public:
   explicit SparseSolver(const SolverOptions& options = SolverOptions());
@@ -202,8 +214,13 @@ class SparseSolver {
                        std::vector<CovarianceRoot>* roots, std::string* why = nullptr);
 
   // Draws from the Gaussian at the last Solve's final point, N(0, (J^T J)^{-1})
-  // (evidence.h's CovarianceSamples): per group of keys, a dimension x count
-  // matrix. Same failures as MarginalCovariances.
+  // (evidence.h's CovarianceSamples), of every free variable at once, and
+  // where each group of keys lies in them. Same failures as
+  // MarginalCovariances.
+  bool CovarianceSamples(const std::vector<std::vector<int>>& key_groups, int count,
+                         unsigned long seed, CovarianceDraws* draws, std::string* why = nullptr);
+  // The same, as a dimension x count matrix per group (memory grows with the
+  // groups' total dimension; CovarianceDraws holds each variable once).
   bool CovarianceSamples(const std::vector<std::vector<int>>& key_groups, int count,
                          unsigned long seed, std::vector<Eigen::MatrixXd>* samples,
                          std::string* why = nullptr);

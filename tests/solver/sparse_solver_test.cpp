@@ -630,6 +630,16 @@ TEST(SolverTest, CovarianceSamplesDrawFromTheDenseInverse) {
                       0.06 * std::sqrt(blocks[g](r, r) * blocks[g](q, q)))
               << "group " << g << " (" << r << ", " << q << "), " << c.poses << " poses";
     }
+    // All variables' draws at once: each group's rows are its draws above.
+    CovarianceDraws all;
+    ASSERT_TRUE(solver.CovarianceSamples(groups, 3, 7, &all));
+    EXPECT_EQ(all.all.cols(), 3);
+    EXPECT_GE(all.all.rows(), 3 * (c.poses - 1));
+    Eigen::MatrixXd gathered;
+    for (size_t g = 0; g < groups.size(); ++g) {
+      all.Gather(g, &gathered);
+      EXPECT_EQ(gathered, again[g]) << "group " << g;
+    }
     std::vector<Eigen::MatrixXd> none;
     std::string why;
     EXPECT_FALSE(solver.CovarianceSamples(groups, 0, 7, &none, &why));
