@@ -60,6 +60,12 @@ double LogScreenAcceptance(const EvaluationPtr& approximate, const StateEvaluati
 std::vector<AssociationState> TrackChanges(const StateEvaluation& current, int track,
                                            const ClassConfusionModel& model, double radius_m);
 
+// How far from its object the sweeps and the track scan look for objects a
+// track may join: 3 sigma_R.
+double TrackChangeRadiusM(const MoveOptions& moves) {
+  return 3.0 * moves.reassign_sigma_m;
+}
+
 // Where a track scan may put a track from a state: the state itself first,
 // then its TrackChanges, with log probabilities in proportion to beta
 // (approximate log target - the state's), minus infinity where the evaluator
@@ -196,7 +202,7 @@ ChainCheckpoint StepBlock(Chain* chain, bool cold, int block, const ClassConfusi
   // The cold chain may take several steps per iteration (thinning): any
   // number of steps between swaps keeps its target invariant.
   const int steps = cold ? options.cold_chain_steps : 1;
-  const double radius_m = 3.0 * options.moves.reassign_sigma_m;
+  const double radius_m = TrackChangeRadiusM(options.moves);
   for (int t = iterations.first; t <= iterations.last; ++t) {
     for (int k = 0; k < steps; ++k)
       chain->state = MetropolisStep(chain->state, sample, *chain->evaluator, model, options.moves,
@@ -739,7 +745,7 @@ EvaluationPtr Sampler::Sweep(EvaluationPtr current, StateEvaluator* evaluator,
   // since the poses it holds may cost the change a little.
   constexpr double kSolveAboveNats = -1.0;
   const int num_classes = model_.num_classes();
-  const double radius_m = 3.0 * options_.moves.reassign_sigma_m;
+  const double radius_m = TrackChangeRadiusM(options_.moves);
   // A candidate the evaluator cannot approximate is solved instead.
   auto take_best = [&](const std::vector<AssociationState>& changes) {
     EvaluationPtr best_approximate, best_solved;
@@ -785,7 +791,7 @@ EvaluationPtr Sampler::Sweep(EvaluationPtr current, StateEvaluator* evaluator,
 std::vector<int> Sampler::ContestedTracks(const StateEvaluation& at,
                                           StateEvaluator* evaluator) const {
   if (options_.track_scan_max <= 0) return {};
-  const double radius_m = 3.0 * options_.moves.reassign_sigma_m;
+  const double radius_m = TrackChangeRadiusM(options_.moves);
   std::vector<std::pair<double, int>> contested;  // (-best approximate gain, track)
   for (int track = 0; track < model_.num_tracks(); ++track) {
     if (at.state.BlockOf(track) < 0) continue;
