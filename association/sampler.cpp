@@ -604,7 +604,7 @@ SamplerResult Sampler::Run(const AssociationState& start, const ProgressCallback
   SamplerSummary& summary = result.summary;
   // The cold chain climbs with its own evaluator and random stream.
   result.hill_climbed = HillClimb(start, evaluators[0].get(), &rngs[0], &summary, progress);
-  summary.scan_tracks = ContestedTracks(*result.hill_climbed, evaluators[0].get());
+  summary.scan_tracks = ContestedTracks(result.hill_climbed, evaluators[0].get());
   SampleChains(evaluators, rngs, &result, progress);
   for (const auto& evaluator : evaluators) {
     summary.num_solves += evaluator->num_solves();
@@ -788,19 +788,18 @@ EvaluationPtr Sampler::Sweep(EvaluationPtr current, StateEvaluator* evaluator,
   return current;
 }
 
-std::vector<int> Sampler::ContestedTracks(const StateEvaluation& at,
+std::vector<int> Sampler::ContestedTracks(const EvaluationPtr& at,
                                           StateEvaluator* evaluator) const {
   if (options_.track_scan_max <= 0) return {};
   const double radius_m = TrackChangeRadiusM(options_.moves);
   std::vector<std::pair<double, int>> contested;  // (-best approximate gain, track)
   for (int track = 0; track < model_.num_tracks(); ++track) {
-    if (at.state.BlockOf(track) < 0) continue;
-    double best = -std::numeric_limits<double>::infinity();
-    for (const AssociationState& change : TrackChanges(at, track, model_, radius_m)) {
-      const EvaluationPtr approximate = evaluator->Approximate(change, at);
-      if (approximate && approximate->valid)
-        best = std::max(best, approximate->log_target - at.log_target);
-    }
+    if (at->state.BlockOf(track) < 0) continue;
+    // The scan's own draw at beta = 1: log p(change) - log p(stay) is the
+    // change's approximate gain.
+    const TrackDraw draw = TrackDrawFrom(at, track, 1.0, radius_m, *evaluator, model_);
+    if (draw.log_p.size() < 2) continue;
+    const double best = *std::max_element(draw.log_p.begin() + 1, draw.log_p.end()) - draw.log_p[0];
     if (best >= -options_.track_scan_nats) contested.emplace_back(-best, track);
   }
   std::sort(contested.begin(), contested.end());

@@ -147,7 +147,7 @@ class Sampler {
   EvaluationPtr Sweep(EvaluationPtr current, StateEvaluator* evaluator,
                       SamplerSummary* summary) const;
   // The tracks of SamplerOptions::track_scan_max at `at`, by track id.
-  std::vector<int> ContestedTracks(const StateEvaluation& at, StateEvaluator* evaluator) const;
+  std::vector<int> ContestedTracks(const EvaluationPtr& at, StateEvaluator* evaluator) const;
   // Algorithm 8 from result->hill_climbed: chain i steps with evaluators[i]
   // and a copy of rngs[i]; fills the samples, the best state and the summary's
   // sampling part.
