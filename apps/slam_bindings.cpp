@@ -149,6 +149,12 @@ void BindProposals(SlamStageOptions* o, Bindings* b) {
          "solver iterations per proposed state")
       .Key("proposal_iterations",
            "solver iterations per proposed state (docs/method.md §9.6, §13 #46)");
+  b->AddNegatedFlag(&o->target.linearise_at_reference, "linearise-at-current",
+                    "solve each proposal from the current state (thesis) instead of the "
+                    "hill-climbed one")
+      .Key("linearise_at_reference",
+           "1: MC3 solves each proposal from the hill-climbed solution, so a state's value "
+           "does not depend on its path; 0: from the current state (docs/method.md §9.6)");
   b->AddFlag(&o->target.class_prior_per_object, "class-prior-per-object",
              "P(C, J) = prod_j 1/|classes| instead of uniform (#37)")
       .Key("class_prior_per_object",

@@ -145,6 +145,11 @@ EvaluationPtr EvaluationCache::Find(const AssociationState& state) {
   return found->second;
 }
 
+void EvaluationCache::Clear() {
+  if (journaling_) throw Error("EvaluationCache::Clear after Mark()");
+  entries_ = Map();
+}
+
 void EvaluationCache::Store(const EvaluationPtr& evaluation) {
   if (entries_.size() >= max_entries_) {
     if (journaling_) {

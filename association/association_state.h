@@ -94,6 +94,8 @@ class EvaluationCache {
   EvaluationPtr Find(const AssociationState& state);  // counts a hit when found
   // Inserts or replaces; the whole cache is cleared first when it is full.
   void Store(const EvaluationPtr& evaluation);
+  // Drops every entry (not journalled: call before the first Mark()).
+  void Clear();
   void CountSolve() { ++solves_; }
   size_t solves() const { return solves_; }
   size_t hits() const { return hits_; }
@@ -131,6 +133,11 @@ class StateEvaluator {
   virtual EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) = 0;
   // Puts an evaluation computed elsewhere into the cache (chain start, swaps).
   virtual void Remember(const EvaluationPtr& evaluation) = 0;
+  // From now on Evaluate linearises every state at `reference` instead of at
+  // `from`, so that a state's value is a function of the state alone
+  // (docs/method.md §9.6); evaluations cached before are dropped. Evaluators
+  // whose values never depend on `from` ignore it.
+  virtual void LineariseAt(const EvaluationPtr& reference) { (void)reference; }
   // The same evaluation with what only recorded samples need (the objects'
   // marginal covariances, for the spurious-object model) filled in. Proposals
   // skip it because most are rejected; the default returns the input.

@@ -825,6 +825,7 @@ void Sampler::SampleChains(const std::vector<std::unique_ptr<StateEvaluator>>& e
     chains[i].beta = 1.0 / (1.0 + options_.delta_temperature * i);
     chains[i].rng = rngs[i];
     chains[i].evaluator = evaluators[i].get();
+    chains[i].evaluator->LineariseAt(result->hill_climbed);
     chains[i].evaluator->Remember(result->hill_climbed);
     if (i == 0) chains[i].scan_tracks = summary.scan_tracks;
     all_roll_back = all_roll_back && chains[i].evaluator->SupportsRollBack();

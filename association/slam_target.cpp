@@ -125,8 +125,11 @@ EvaluationPtr SlamEvaluator::Solve(const AssociationState& state, const StateEva
   const auto start_time = std::chrono::steady_clock::now();
   const GeometricSlamProblem problem = BuildProblem(state);
   GeometricSlamResult warm;
-  const bool warm_start = from && from->solution;
-  if (warm_start) warm = WarmStart(state, *from);
+  // A full solve converges from wherever it starts; a proposal's few steps
+  // start at the reference when there is one.
+  const StateEvaluation* start = !full && reference_ ? reference_.get() : from;
+  const bool warm_start = start && start->solution;
+  if (warm_start) warm = WarmStart(state, *start);
   GeometricSlam& slam = full ? full_ : step_;
   auto solution =
       std::make_shared<GeometricSlamResult>(slam.Solve(problem, warm_start ? &warm : nullptr));
@@ -171,11 +174,14 @@ bool SlamEvaluator::LocalObjectLogTarget(const std::vector<int>& block, int clas
 const SlamEvaluator::LocalValue& SlamEvaluator::LocalValueFrom(const StateEvaluation& from,
                                                                const std::vector<int>& block,
                                                                int class_index) {
-  if (memo_solution_ != from.solution) {
-    memo_.clear();
-    memo_solution_ = from.solution;
+  auto memo = memos_.find(from.solution.get());
+  if (memo == memos_.end()) {
+    if (memos_.size() >= kMaxMemoSolutions) memos_.clear();
+    memo = memos_.emplace(from.solution.get(), SolutionMemo{from.solution, {}}).first;
   }
-  auto [entry, added] = memo_.try_emplace({block, class_index});
+  // Each value is used before the next call, so a full memo may be dropped here.
+  if (memo->second.values.size() >= kMaxMemoValues) memo->second.values.clear();
+  auto [entry, added] = memo->second.values.try_emplace({block, class_index});
   LocalValue& value = entry->second;
   if (!added) return value;
   // Started where a solve's warm start would put it (docs/method.md §9.6):
@@ -240,6 +246,14 @@ EvaluationPtr SlamEvaluator::Refine(const AssociationState& state, const StateEv
 
 void SlamEvaluator::Remember(const EvaluationPtr& evaluation) {
   cache_.Store(evaluation);
+}
+
+void SlamEvaluator::LineariseAt(const EvaluationPtr& reference) {
+  if (!options_.linearise_at_reference || !reference || !reference->solution) return;
+  reference_ = reference;
+  // Values cached before were linearised along the path that reached them.
+  cache_.Clear();
+  cache_.Store(reference);
 }
 
 EvaluationPtr SlamEvaluator::Complete(const EvaluationPtr& evaluation) {

@@ -26,6 +26,11 @@ struct SlamTargetOptions {
   // evidence of that linear system (docs/method.md §9.6, §8.2 notes); k > 1 adds k - 1
   // Levenberg-Marquardt iterations before it.
   int proposal_iterations = 1;
+  // After LineariseAt (the sampler calls it with the hill-climbed state before
+  // MC3): true = every proposal is solved from that reference solution, so a
+  // state's value does not depend on the path that reached it; false = from
+  // the current state's solution (the thesis, docs/method.md §9.6).
+  bool linearise_at_reference = true;
   // #37: false = P(C, J) uniform (thesis reading); true = prod_j 1/|classes|.
   bool class_prior_per_object = false;
   size_t max_cache_entries = 100000;  // the cache is cleared when it grows beyond this
@@ -52,6 +57,7 @@ class SlamEvaluator : public StateEvaluator {
   EvaluationPtr Evaluate(const AssociationState& state, const StateEvaluation* from) override;
   EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from) override;
   void Remember(const EvaluationPtr& evaluation) override;
+  void LineariseAt(const EvaluationPtr& reference) override;
   EvaluationPtr Complete(const EvaluationPtr& evaluation) override;
   // The objects that differ between the states, each solved alone with the
   // poses held at from's trajectory (ObjectLogEvidenceWithPosesHeld), change
@@ -99,10 +105,18 @@ class SlamEvaluator : public StateEvaluator {
   SlamTargetOptions options_;
   GeometricSlam full_, step_, covariances_;
   EvaluationCache cache_;
-  // LocalValueFrom's values for the solution memo_solution_ (held, so that
-  // its address is not reused while the values are kept).
-  std::shared_ptr<const GeometricSlamResult> memo_solution_;
-  std::map<std::pair<std::vector<int>, int>, LocalValue> memo_;
+  EvaluationPtr reference_;  // LineariseAt's state; null: linearise at `from`
+  // LocalValueFrom's values per solution (held, so that its address is not
+  // reused while its values are kept): a chain proposes from one state many
+  // times and returns to the few states it moves between, whose solutions
+  // are the cached ones.
+  struct SolutionMemo {
+    std::shared_ptr<const GeometricSlamResult> solution;
+    std::map<std::pair<std::vector<int>, int>, LocalValue> values;
+  };
+  static constexpr size_t kMaxMemoSolutions = 256;  // all dropped when full
+  static constexpr size_t kMaxMemoValues = 100000;   // per solution, likewise
+  std::unordered_map<const GeometricSlamResult*, SolutionMemo> memos_;
 };
 
 }  // namespace oslam

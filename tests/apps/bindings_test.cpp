@@ -93,6 +93,8 @@ std::vector<KeyCase> Cases() {
        [](O o) { return o.slam.tracks.link_rule == TrackLinkRule::kRefuseAmbiguous; }},
       {"slam.track_max_gap_frames", "0", [](O o) { return o.slam.tracks.max_gap_frames == 0; }},
       {"slam.proposal_iterations", "3", [](O o) { return o.slam.target.proposal_iterations == 3; }},
+      {"slam.linearise_at_reference", "0",
+       [](O o) { return !o.slam.target.linearise_at_reference; }},
       {"slam.class_prior_per_object", "1",
        [](O o) { return o.slam.target.class_prior_per_object; }},
       {"slam.mismatch_penalty", "inf",

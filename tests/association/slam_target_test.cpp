@@ -314,6 +314,40 @@ TEST_F(SlamTargetTest, TheApproximationKeepsSharedObjectsAndSolvesTheChangedOnes
 
 // The objects' local values are kept while proposals come from one state;
 // what is kept must be what a fresh evaluator computes.
+// After LineariseAt every proposal is solved from the reference, so a
+// state's value is the same whichever neighbour proposed it (docs/method.md
+// §9.6); values cached before LineariseAt were linearised elsewhere and go.
+TEST_F(SlamTargetTest, AfterLineariseAtAStatesValueDoesNotDependOnItsNeighbour) {
+  SlamEvaluator solver(s_.data, model_, Options());
+  const EvaluationPtr reference = solver.Refine(s_.truth, nullptr);
+  const EvaluationPtr merged = solver.Refine(Merge(s_.truth, 0, 1), nullptr);
+  const AssociationState split = SplitOffLastTrack(s_.truth);
+  SlamEvaluator a(s_.data, model_, Options()), b(s_.data, model_, Options());
+  const EvaluationPtr before = a.Evaluate(split, merged.get());
+  a.LineariseAt(reference);
+  b.LineariseAt(reference);
+  const EvaluationPtr from_merged = a.Evaluate(split, merged.get());
+  const EvaluationPtr from_truth = b.Evaluate(split, reference.get());
+  ASSERT_TRUE(from_merged->valid && from_truth->valid);
+  EXPECT_NE(from_merged, before);  // solved again
+  EXPECT_EQ(from_merged->log_target, from_truth->log_target);
+  EXPECT_EQ(from_merged->locations, from_truth->locations);
+  EXPECT_EQ(from_merged->residual2, from_truth->residual2);
+  // The reference itself is kept as it is.
+  EXPECT_EQ(a.Evaluate(s_.truth, merged.get()), reference);
+
+  // Linearised at the neighbour (the thesis), the two neighbours disagree.
+  SlamTargetOptions thesis = Options();
+  thesis.linearise_at_reference = false;
+  SlamEvaluator c(s_.data, model_, thesis), d(s_.data, model_, thesis);
+  c.LineariseAt(reference);
+  d.LineariseAt(reference);
+  const EvaluationPtr c_split = c.Evaluate(split, merged.get());
+  const EvaluationPtr d_split = d.Evaluate(split, reference.get());
+  EXPECT_NE(c_split->log_target, d_split->log_target);
+  EXPECT_EQ(d_split->log_target, from_truth->log_target);
+}
+
 TEST_F(SlamTargetTest, TheApproximationIsTheSameRepeatedAndFromAFreshEvaluator) {
   SlamEvaluator evaluator(s_.data, model_, Options()), fresh(s_.data, model_, Options());
   const EvaluationPtr truth = evaluator.Refine(s_.truth, nullptr);
