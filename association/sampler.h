@@ -46,9 +46,10 @@ struct SamplerOptions {
   // Metropolis-Hastings steps of the cold chain per iteration (1: Algorithm
   // 8); the others take one. Beyond the thesis (docs/method.md §9.4): the
   // cold chain's proposals are mostly screened out cheaply, so thinning it
-  // buys effective samples for less than more iterations of every chain
-  // (lab: ESS 74-218 -> 193-346, long_loop 11-44 -> 35-105, +2-11 % CPU).
-  int cold_chain_steps = 3;
+  // buys effective samples for less than more iterations of every chain.
+  // 2 with the track scan (long_loop: ESS at least as high as with 3, for
+  // less CPU; docs/method.md §9.4).
+  int cold_chain_steps = 2;
   // beta_i = 1 / (1 + dT (i - 1)). 3.33 in the thesis; 0.5 beyond it
   // (docs/method.md §9.4): at 3.33 the hot chains' states are tens of nats
   // below the cold chain's and 2 % of swaps are accepted; at 0.5 about 25 %.
@@ -58,7 +59,9 @@ struct SamplerOptions {
   int swap_every = 1;
   // Iterations t = 1..num_iterations; the cold chain's state is recorded when
   // t > burn_in (Algorithm 8), so num_iterations counts the burn-in (#21).
-  int num_iterations = 667;
+  // The thesis runs 667; 1,500 give long_loop's log target an effective
+  // sample size of about 100 or more (docs/method.md §9.4).
+  int num_iterations = 1500;
   int burn_in = 70;
   unsigned long seed = 1;
   bool parallel_chains = true;
@@ -86,7 +89,7 @@ struct SamplerOptions {
   // hill-climbed state by the approximation; at most track_scan_max tracks,
   // the closest first (0 = off). The tracks are fixed before MC3 starts, so
   // the chain's target is unchanged.
-  int track_scan_max = 0;
+  int track_scan_max = 8;
   double track_scan_nats = 10.0;
 
   bool Validate(std::string* why) const;

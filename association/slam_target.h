@@ -114,7 +114,7 @@ class SlamEvaluator : public StateEvaluator {
     std::shared_ptr<const GeometricSlamResult> solution;
     std::map<std::pair<std::vector<int>, int>, LocalValue> values;
   };
-  static constexpr size_t kMaxMemoSolutions = 256;  // all dropped when full
+  static constexpr size_t kMaxMemoSolutions = 4096;  // all dropped when full
   static constexpr size_t kMaxMemoValues = 100000;   // per solution, likewise
   std::unordered_map<const GeometricSlamResult*, SolutionMemo> memos_;
 };

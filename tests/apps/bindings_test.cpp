@@ -77,7 +77,7 @@ std::vector<KeyCase> Cases() {
                 o.slam.sampler.sampling_moves.reassign == 0.1;
        }},
       {"slam.chains", "2", [](O o) { return o.slam.sampler.num_chains == 2; }},
-      {"slam.cold_chain_steps", "2", [](O o) { return o.slam.sampler.cold_chain_steps == 2; }},
+      {"slam.cold_chain_steps", "1", [](O o) { return o.slam.sampler.cold_chain_steps == 1; }},
       {"slam.track_scan", "6", [](O o) { return o.slam.sampler.track_scan_max == 6; }},
       {"slam.track_scan_nats", "4.5", [](O o) { return o.slam.sampler.track_scan_nats == 4.5; }},
       {"slam.delta_t", "1.5", [](O o) { return o.slam.sampler.delta_temperature == 1.5; }},

@@ -76,7 +76,7 @@ TEST(RunConfig, PrintedDefaultsKeepTheirOrderAndText) {
         "  threads: 2  # frames decoded and searched at once, 0 = one per core (same output)\n"
         "  skip_bad_frames: 0",
         "slam:\n  method: \"oslam\"  # oslam (MCMC over association and classes) or nn "
-        "(baseline)\n  seed: 1  # seed of every random choice of the sampler\n  samples: 667",
+        "(baseline)\n  seed: 1  # seed of every random choice of the sampler\n  samples: 1500",
         "  hill_climb_moves: \"0.9,0.1,0\"", "  track_gate_angle_rad: 0.349066  #",
         "  track_link_rule: \"nearest\"", "  track_max_gap_frames: 2  #",
         "  mismatch_penalty: 3  #", "  spurious_model: 1  #",
@@ -94,7 +94,7 @@ TEST(RunConfig, DefaultsAreTheDocumentedOnesOfTheMappingCode) {
   const RunConfig config;
   const SlamStageOptions& s = SettingsOf(config);
   const SamplerOptions sampler;
-  EXPECT_EQ(s.sampler.num_iterations, 667);
+  EXPECT_EQ(s.sampler.num_iterations, 1500);
   EXPECT_EQ(s.sampler.burn_in, 70);
   EXPECT_EQ(s.sampler.hill_climb_steps, 100);
   EXPECT_EQ(s.sampler.hill_climb_patience, 50);
@@ -266,7 +266,7 @@ TEST(RunConfig, BadValuesAreOneLineErrorsNamingTheKeyOrFile) {
 
   // Well-formed but invalid: reported by Check, with the key's name.
   RunConfig invalid;
-  invalid.Override("slam.burn_in=700");
+  invalid.Override("slam.burn_in=2000");
   const std::string burn_in = Message([&] { invalid.Check(); });
   EXPECT_NE(burn_in.find("burn-in"), std::string::npos) << burn_in;
   RunConfig rule;

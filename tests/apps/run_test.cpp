@@ -176,7 +176,7 @@ TEST_F(RunCommand, UsageErrorsExitWithTwo) {
   for (const std::string& arguments : std::vector<std::string>{"run " + Run(), "run " + Run() + " -o x --set nosuch.key=1", "run " + Run() + " -o x --set slam.samples",
         "run " + Run() + " -o x --set slam.method=magic",
         "run " + Run() + " -o x --set slam.merge_sigma_m=-1",
-        "run " + Run() + " -o x --set slam.burn_in=700",
+        "run " + Run() + " -o x --set slam.burn_in=2000",
         "run " + Run() + " -o x --set slam.pixel_noise_px=thirty", std::string("config")}) {
     const Result result = Oslam(arguments);
     EXPECT_EQ(result.exit_code, 2) << arguments << ": " << result.err;
@@ -184,7 +184,7 @@ TEST_F(RunCommand, UsageErrorsExitWithTwo) {
   }
   const Result defaults = Oslam("config --print-defaults");
   EXPECT_EQ(defaults.exit_code, 0);
-  for (const char* line : {"samples: 667", "pixel_noise_px: 30", "spurious_t0_m2: 0.16",
+  for (const char* line : {"samples: 1500", "pixel_noise_px: 30", "spurious_t0_m2: 0.16",
                            "spurious_tau_m2: 0.04", "track_gate_radius_px: 30",
                            "motion_mult_fwd: 0.1", "merge_distance_m: 0.5"})
     EXPECT_NE(defaults.out.find(line), std::string::npos) << line << " in " << defaults.out;

@@ -61,6 +61,7 @@ SamplerOptions TestOptions(int chains, int iterations) {
   options.sampling_moves = {0.3, 0.3, 0.2, 0.2};
   options.cold_chain_steps = 1;
   options.hill_climb_sweeps = 0;
+  options.track_scan_max = 0;  // the scan's own tests turn it on
   return options;
 }
 
@@ -198,10 +199,10 @@ TEST(DetailedBalanceTest, TrackScanKeepsTheEnumeratedPosterior) {
   EXPECT_GT(result.summary.track_scan.accepted, 1000);
 }
 
-// Off by default, and a bad setting is named.
-TEST(SamplerTest, TrackScanIsOffByDefaultAndValidated) {
+// On by default (8 tracks), off at 0, and a bad setting is named.
+TEST(SamplerTest, TrackScanIsOnByDefaultOffAtZeroAndValidated) {
   SamplerOptions options;
-  EXPECT_EQ(options.track_scan_max, 0);
+  EXPECT_EQ(options.track_scan_max, 8);
   const ClassConfusionModel model = TestModel();
   const SamplerResult result = RunTest(TestOptions(1, 2000), model);
   EXPECT_TRUE(result.summary.scan_tracks.empty());
