@@ -307,6 +307,12 @@ void BindFusionAndSchedule(SlamStageOptions* o, Bindings* b) {
   b->Add(&f.lookalike_base_std_m, "lookalike-base-std", "M",
          "least spread of a look-alike's base height (docs/method.md §7.2)")
       .Key("lookalike_base_std_m", "least spread of a look-alike's base height, m");
+  b->Add(&f.lookalike_prior, "lookalike-prior", "P",
+         "prior probability that a consistently detected object is a look-alike of its class "
+         "(docs/method.md §7.2)")
+      .Key("lookalike_prior", "prior probability of a look-alike, in (0, 1) (docs/method.md §7.2)")
+      .Check([o] { return o->fusion.lookalike_prior > 0 && o->fusion.lookalike_prior < 1; },
+             "must be in (0, 1)");
   b->AddFlag(&o->class_likelihood_per_detection, "class-likelihood-per-detection",
              "count log P(a | c) once per detection (eq. 4.32 as printed), not once per track")
       .Key("class_likelihood_per_detection",

@@ -179,6 +179,10 @@ bool FusionOptions::Validate(std::string* why) const {
     if (why) *why = "the look-alike size and base spreads must be positive (m)";
     return false;
   }
+  if (!(lookalike_prior > 0 && lookalike_prior < 1)) {
+    if (why) *why = "the prior probability of a look-alike must be in (0, 1)";
+    return false;
+  }
   if (!(min_existence >= 0 && min_existence <= 1)) {
     if (why) *why = "the minimum existence probability must be in [0, 1]";
     return false;
@@ -313,10 +317,15 @@ double ExistenceWeight(const Matrix5d& covariance, const Vector5d& mean, const C
                        ? MirroredSigmoid(ClassConditionedLocationVariance(covariance, prior),
                                          options.spurious_t0_m2, options.spurious_tau_m2)
                        : NonSpuriousProbability(covariance, prior, options);
-  if (p <= 0.0 || p >= 1.0) return p;
-  const double log_odds =
-      std::log(p) - std::log1p(-p) + ClassGeometryLogBayesFactor(covariance, mean, prior, options);
-  return 1.0 / (1.0 + std::exp(-log_odds));
+  if (p <= 0.0) return p;
+  // Three hypotheses: spurious (the sigmoid's 1 - p), a look-alike, an
+  // object of the class. How well the detections pin the object down says
+  // nothing of which of the last two it is, so the Bayes factor weighs them
+  // against their own prior, not against p's odds.
+  const double class_log_odds = ClassGeometryLogBayesFactor(covariance, mean, prior, options) +
+                                std::log1p(-options.lookalike_prior) -
+                                std::log(options.lookalike_prior);
+  return p / (1.0 + std::exp(-class_log_odds));
 }
 
 FusionResult FuseSamples(const std::vector<EvaluationPtr>& samples,

@@ -32,15 +32,18 @@ struct FusionOptions {
   double spurious_t0_m2 = 0.16;   // t0 = (0.4 m)^2
   double spurious_tau_m2 = 0.04;  // tau = (0.2 m)^2
   bool spurious_model = true;     // false: P(xi) = 1 (setup 2, Fig. 6.9)
-  // Beyond the thesis (docs/method.md §7.2, class geometry evidence): the
-  // odds of P(xi) times the Bayes factor of the object's prior-free geometry
-  // under its class's priors (size; location, with any support prior)
-  // against a look-alike's, whose diameter and height have this spread
-  // about the class's means and whose base height at least
-  // lookalike_base_std_m. false: the thesis' P(xi).
+  // Beyond the thesis (docs/method.md §7.2, class geometry evidence): a
+  // consistently detected object is of its class or a look-alike. P(xi)
+  // (the sigmoid: is it consistent?) times P(class | consistent), from the
+  // Bayes factor of the object's prior-free geometry under its class's
+  // priors (size; location, with any support prior) against a look-alike's,
+  // whose diameter and height have this spread about the class's means and
+  // whose base height at least lookalike_base_std_m, and the prior
+  // probability lookalike_prior of a look-alike. false: the thesis' P(xi).
   bool class_geometry_evidence = true;
   double lookalike_size_std_m = 1.0;
   double lookalike_base_std_m = 2.0;  // the thesis' Gamma_z (§13 #7)
+  double lookalike_prior = 0.5;       // no preference, in (0, 1)
   // Beyond the thesis (docs/method.md §7.2, existence given the class): the
   // location uncertainty of the sigmoid keeps the class's size prior and the
   // base-height part of its location prior and removes only the horizontal
@@ -90,8 +93,9 @@ double ClassGeometryLogBayesFactor(const Eigen::Matrix<double, 5, 5>& covariance
                                    const Eigen::Matrix<double, 5, 1>& mean, const ClassPrior& prior,
                                    const FusionOptions& options);
 
-// P(xi) of the object: NonSpuriousProbability, its odds multiplied by the
-// class geometry Bayes factor when options.class_geometry_evidence.
+// P(xi) of the object: NonSpuriousProbability, times the probability that a
+// consistent object is of its class rather than a look-alike when
+// options.class_geometry_evidence.
 double ExistenceWeight(const Eigen::Matrix<double, 5, 5>& covariance,
                        const Eigen::Matrix<double, 5, 1>& mean, const ClassPrior& prior,
                        const FusionOptions& options);

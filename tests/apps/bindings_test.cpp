@@ -59,6 +59,7 @@ std::vector<KeyCase> Cases() {
        [](O o) { return o.slam.fusion.lookalike_size_std_m == 0.7; }},
       {"slam.lookalike_base_std_m", "1.5",
        [](O o) { return o.slam.fusion.lookalike_base_std_m == 1.5; }},
+      {"slam.lookalike_prior", "0.3", [](O o) { return o.slam.fusion.lookalike_prior == 0.3; }},
       {"slam.method", "nn", [](O o) { return o.slam.method == SlamMethod::kNearestNeighbour; }},
       {"slam.seed", "17", [](O o) { return o.slam.sampler.seed == 17; }},
       {"slam.samples", "300", [](O o) { return o.slam.sampler.num_iterations == 300; }},

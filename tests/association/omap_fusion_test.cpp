@@ -249,7 +249,9 @@ TEST(ClassGeometryEvidence, UninformativeGeometryIsNoEvidence) {
   EXPECT_NEAR(ClassGeometryLogBayesFactor(covariance, mean, prior, FusionOptions{}), 0.0, 1e-6);
 }
 
-TEST(ClassGeometryEvidence, ExistenceWeightMultipliesTheOddsOfTheSpuriousModel) {
+// Spurious, look-alike or of the class: P(xi) times P(class | consistent),
+// the Bayes factor weighed against the look-alike's prior.
+TEST(ClassGeometryEvidence, ExistenceWeightIsConsistencyTimesTheClassAgainstALookAlike) {
   const ClassPrior prior = GreenBox();
   Vector5d theta;
   theta << 1.0, 2.0, 0.0, 0.3, 0.45;
@@ -259,15 +261,28 @@ TEST(ClassGeometryEvidence, ExistenceWeightMultipliesTheOddsOfTheSpuriousModel) 
   ASSERT_GT(p, 0.5);
   ASSERT_LT(p, 0.99);
   const double log_bf = ClassGeometryLogBayesFactor(covariance, mean, prior, options);
-  const double w = ExistenceWeight(covariance, mean, prior, options);
-  EXPECT_NEAR(std::log(w / (1 - w)), std::log(p / (1 - p)) + log_bf, 1e-9);
+  EXPECT_NEAR(ExistenceWeight(covariance, mean, prior, options), p / (1 + std::exp(-log_bf)),
+              1e-12);
+  options.lookalike_prior = 0.2;  // prior odds 4 : 1 for the class
+  EXPECT_NEAR(ExistenceWeight(covariance, mean, prior, options),
+              p / (1 + std::exp(-log_bf - std::log(4.0))), 1e-12);
+  // A well-located look-alike: p near 1 does not outweigh the geometry.
+  Vector5d wide;
+  wide << 1.0, 2.0, 0.0, 1.8, 0.6;
+  const auto [c2, m2] = Posterior(prior, Vector5d::Constant(1e6), wide);
+  options.lookalike_prior = 0.5;
+  EXPECT_LT(ExistenceWeight(c2, m2, prior, options), 0.5);
+  options.lookalike_prior = 1.0;
+  std::string why;
+  EXPECT_FALSE(options.Validate(&why));
+  EXPECT_NE(why.find("look-alike"), std::string::npos) << why;
+  options.lookalike_prior = 0.5;
   options.class_geometry_evidence = false;
   EXPECT_EQ(ExistenceWeight(covariance, mean, prior, options), p);
   options.spurious_model = false;
   EXPECT_EQ(ExistenceWeight(covariance, mean, prior, options), 1.0);
   options = {};
   options.lookalike_size_std_m = 0;
-  std::string why;
   EXPECT_FALSE(options.Validate(&why));
 }
 
@@ -310,8 +325,8 @@ TEST(ExistenceGivenClass, AnObjectSeenFromOnePlaceIsLocatedByItsApparentSize) {
     const double p = MirroredSigmoid(ClassConditionedLocationVariance(covariance, bottle),
                                      given_class.spurious_t0_m2, given_class.spurious_tau_m2);
     const double log_bf = ClassGeometryLogBayesFactor(covariance, mean, bottle, given_class);
-    const double w = ExistenceWeight(covariance, mean, bottle, given_class);
-    EXPECT_NEAR(std::log(w / (1 - w)), std::log(p / (1 - p)) + log_bf, 1e-9);
+    EXPECT_NEAR(ExistenceWeight(covariance, mean, bottle, given_class),
+                p / (1 + std::exp(-log_bf)), 1e-12);
   }
 }
 
