@@ -651,6 +651,10 @@ EvaluationPtr LandmarkAssociation::SampleMc3(EvaluationPtr best) {
   sampler_options.delta_temperature = 3.33;
   sampler_options.refine_every = options_.refine_every;
   sampler_options.sampling_moves = {0.5, 0.5, 0.0};  // one class: nothing to switch
+  // The track scan and the cold chain's 2 steps were measured on O-SLAM
+  // scenes only (docs/method.md §9.4); landmark MC3 keeps the sampler it had.
+  sampler_options.cold_chain_steps = 3;
+  sampler_options.track_scan_max = 0;
   sampler_options.moves = options_.moves;
   sampler_options.num_chains = options_.num_chains;
   sampler_options.num_iterations = options_.samples;
