@@ -57,7 +57,10 @@ class RunCommand : public ::testing::Test {
     return copy;
   }
   static std::string Run() { return dir_->Path("run"); }
-  static std::string Fast() { return " --set slam.samples=60 --set slam.burn_in=10 --set slam.hill_climb=20 --set export.overlays=0 "; }
+  static std::string Fast() {
+    return " --set slam.samples=60 --set slam.burn_in=10 --set slam.hill_climb=20 --set "
+           "export.overlays=0 ";
+  }
 
   static testing::TempDir* dir_;
 };
@@ -95,8 +98,8 @@ TEST_F(RunCommand, WritesTheMapFiguresReportAndEvaluationAndIsDeterministic) {
 
 // Exit code 1, one line on stderr naming `file_part` and `problem`, and no
 // output folder.
-void ExpectInputError(const Result& result, const std::string& file_part, const std::string& problem,
-                      const std::string& out) {
+void ExpectInputError(const Result& result, const std::string& file_part,
+                      const std::string& problem, const std::string& out) {
   EXPECT_EQ(result.exit_code, 1) << result.err;
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   EXPECT_NE(result.err.find(file_part), std::string::npos) << result.err;
@@ -144,8 +147,9 @@ TEST_F(RunCommand, BadInputIsReportedBeforeAnythingIsWritten) {
   {
     testing::TempDir config_dir;
     std::ofstream(config_dir.Path("oslam.yaml")) << "slam:\n  sampels: 10\n";
-    ExpectInputError(Oslam("run " + Run() + " -o " + out + " --config " + config_dir.Path("oslam.yaml")),
-                     "oslam.yaml", "slam.sampels: unknown key", out);
+    ExpectInputError(
+        Oslam("run " + Run() + " -o " + out + " --config " + config_dir.Path("oslam.yaml")),
+        "oslam.yaml", "slam.sampels: unknown key", out);
   }
 }
 
@@ -173,22 +177,26 @@ TEST_F(RunCommand, DetectionsDoNotDependOnTheThreads) {
 }
 
 TEST_F(RunCommand, UsageErrorsExitWithTwo) {
-  for (const std::string& arguments : std::vector<std::string>{"run " + Run(), "run " + Run() + " -o x --set nosuch.key=1", "run " + Run() + " -o x --set slam.samples",
-        "run " + Run() + " -o x --set slam.method=magic",
-        "run " + Run() + " -o x --set slam.merge_sigma_m=-1",
-        "run " + Run() + " -o x --set slam.burn_in=2000",
-        "run " + Run() + " -o x --set slam.pixel_noise_px=thirty", std::string("config")}) {
+  // In the suite's temporary folder: a run that wrongly goes ahead leaves
+  // nothing in the working directory.
+  const std::string out = dir_->Path("usage_out");
+  const std::string run_to = "run " + Run() + " -o " + out;
+  for (const std::string& arguments :
+       {"run " + Run(), run_to + " --set nosuch.key=1", run_to + " --set slam.samples",
+        run_to + " --set slam.method=magic", run_to + " --set slam.merge_sigma_m=-1",
+        run_to + " --set slam.burn_in=2000", run_to + " --set slam.pixel_noise_px=thirty",
+        std::string("config")}) {
     const Result result = Oslam(arguments);
     EXPECT_EQ(result.exit_code, 2) << arguments << ": " << result.err;
     EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   }
   const Result defaults = Oslam("config --print-defaults");
   EXPECT_EQ(defaults.exit_code, 0);
-  for (const char* line : {"samples: 1500", "pixel_noise_px: 30", "spurious_t0_m2: 0.16",
-                           "spurious_tau_m2: 0.04", "track_gate_radius_px: 30",
-                           "motion_mult_fwd: 0.1", "merge_distance_m: 0.5"})
+  for (const char* line :
+       {"samples: 1500", "pixel_noise_px: 30", "spurious_t0_m2: 0.16", "spurious_tau_m2: 0.04",
+        "track_gate_radius_px: 30", "motion_mult_fwd: 0.1", "merge_distance_m: 0.5"})
     EXPECT_NE(defaults.out.find(line), std::string::npos) << line << " in " << defaults.out;
-  EXPECT_FALSE(fs::exists("x")) << "output written despite a bad configuration";
+  EXPECT_FALSE(fs::exists(out)) << "output written despite a bad configuration";
 
   // The printed defaults are a valid configuration file; a bad value in a
   // file is a one-line error naming the file and the key (exit code 1).

@@ -325,8 +325,8 @@ TEST(ExistenceGivenClass, AnObjectSeenFromOnePlaceIsLocatedByItsApparentSize) {
     const double p = MirroredSigmoid(ClassConditionedLocationVariance(covariance, bottle),
                                      given_class.spurious_t0_m2, given_class.spurious_tau_m2);
     const double log_bf = ClassGeometryLogBayesFactor(covariance, mean, bottle, given_class);
-    EXPECT_NEAR(ExistenceWeight(covariance, mean, bottle, given_class),
-                p / (1 + std::exp(-log_bf)), 1e-12);
+    EXPECT_NEAR(ExistenceWeight(covariance, mean, bottle, given_class), p / (1 + std::exp(-log_bf)),
+                1e-12);
   }
 }
 
