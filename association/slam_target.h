@@ -2,9 +2,10 @@
 // geometric solver's Laplace evidence, plus the class-confusion penalty
 // sum log P(a | c) (eq. 4.32) and log P(C, J) (uniform joint by default,
 // docs/method.md §13 #37). A state's objects are its blocks of tracks; object id = the
-// block's earliest track. Proposed states are solved from the current state's
-// solution with few iterations (docs/method.md §9.6), and every evaluated state is
-// cached by its canonical form, so a revisited state keeps one value (§9.3).
+// block's earliest track. Proposed states are solved with few iterations from
+// the current state's solution, or after LineariseAt from the reference's
+// (docs/method.md §9.6), and every evaluated state is cached by its canonical
+// form, so a revisited state keeps one value (§9.3).
 #pragma once
 
 #include <map>
