@@ -651,9 +651,9 @@ std::optional<GroundTruth> ReadGroundTruth(const std::string& run_dir) {
   for (const GroundTruthObject& object : truth.objects) ids.insert(object.id);
   for (const GroundTruthSighting& sighting : truth.sightings) {
     if (ids.count(sighting.object_id) == 0)
-      throw Error::InFile(
-          (dir / "sightings.csv").string(),
-          "object_id " + std::to_string(sighting.object_id) + " not in objects.csv");
+      throw Error::InFile((dir / "sightings.csv").string(),
+                          "object_id " + std::to_string(sighting.object_id) + " not in " +
+                              (dir / "objects.csv").string());
   }
   return truth;
 }

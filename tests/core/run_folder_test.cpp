@@ -335,7 +335,8 @@ TEST(GroundTruth, WriteThenReadRoundTrips) {
 
   std::ofstream(dir.Path("ground_truth/sightings.csv"), std::ios::app) << "1,8,1,1,1,1,1\n";
   EXPECT_EQ(ErrorOf([&] { ReadGroundTruth(dir.Path()); }),
-            dir.Path("ground_truth/sightings.csv") + ": object_id 8 not in objects.csv");
+            dir.Path("ground_truth/sightings.csv") + ": object_id 8 not in " +
+                dir.Path("ground_truth/objects.csv"));
 }
 
 }  // namespace
