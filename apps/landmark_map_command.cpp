@@ -36,18 +36,47 @@ std::string TrajectoryCsv(const LandmarkDataset& data, const LandmarkSlamResult&
   return out.str();
 }
 
-void PrintGpsError(const std::string& gps_path, const LandmarkDataset& data,
-                   const std::vector<Pose2>& trajectory) {
+// --gps-antenna: "estimate", or the mount as "FORWARD,LEFT" (metres, robot
+// frame).
+GpsComparisonOptions GpsAntennaOptions(const std::string& value) {
+  GpsComparisonOptions options;
+  if (value == "estimate") {
+    options.estimate_antenna_offset = true;
+    return options;
+  }
+  const size_t comma = value.find(',');
+  const std::string parts[2] = {value.substr(0, comma),
+                                comma == std::string::npos ? "" : value.substr(comma + 1)};
+  for (int k = 0; k < 2; ++k) {
+    char* end = nullptr;
+    options.antenna_offset_m[k] = std::strtod(parts[k].c_str(), &end);
+    if (parts[k].empty() || *end != '\0' || !std::isfinite(options.antenna_offset_m[k])) break;
+    if (k == 1) return options;
+  }
+  throw UsageError("--gps-antenna: '" + value +
+                   "' is neither 'estimate' nor FORWARD,LEFT in metres (e.g. 3.78,0.5)");
+}
+
+void PrintGpsError(const std::string& gps_path, const std::string& antenna,
+                   const LandmarkDataset& data, const std::vector<Pose2>& trajectory) {
   if (gps_path.empty()) return;
   if (static_cast<int>(data.pose_times.size()) != data.num_poses)
     throw Error::InFile(data.path, "--gps needs pose times, which this format has not");
   const std::vector<GpsFix> gps = ReadGps(gps_path);
-  const GpsError e = CompareWithGps(trajectory, data.pose_times, gps);
-  const GpsError d = CompareWithGps(data.dead_reckoning, data.pose_times, gps);
+  const GpsComparisonOptions options = GpsAntennaOptions(antenna);
+  const GpsError e = CompareWithGps(trajectory, data.pose_times, gps, options);
+  // The dead reckoning is compared at the same antenna position.
+  GpsComparisonOptions same_antenna;
+  same_antenna.antenna_offset_m = e.antenna_offset_m;
+  const GpsError d = CompareWithGps(data.dead_reckoning, data.pose_times, gps, same_antenna);
+  const GpsError origin = CompareWithGps(trajectory, data.pose_times, gps);
   std::printf(
-      "vs GPS (%d fixes, rigid alignment): RMSE %.2f m, median %.2f m, max %.2f m (dead "
-      "reckoning: RMSE %.2f m, median %.2f m, max %.2f m)\n",
-      e.num_fixes, e.rmse_m, e.median_m, e.max_m, d.rmse_m, d.median_m, d.max_m);
+      "vs GPS (%d fixes, rigid alignment, antenna %.2f m forward, %.2f m left%s): RMSE %.2f m, "
+      "median %.2f m, max %.2f m (dead reckoning: RMSE %.2f m, median %.2f m, max %.2f m; the "
+      "robot origin against the fixes: RMSE %.2f m)\n",
+      e.num_fixes, e.antenna_offset_m.x(), e.antenna_offset_m.y(),
+      options.estimate_antenna_offset ? ", estimated" : "", e.rmse_m, e.median_m, e.max_m,
+      d.rmse_m, d.median_m, d.max_m, origin.rmse_m);
 }
 
 // A true trajectory (oslam simulate-landmarks' true_trajectory.csv: pose,
@@ -284,6 +313,9 @@ void LandmarkMode::Declare(Arguments* arguments) {
         "set's frame, e.g. from oslam simulate-landmarks)");
   b.Add(&o.gps, "gps", "FILE",
         "compare the trajectory with GPS fixes (gps.dat: time x y; needs pose times)");
+  b.Add(&o.gps_antenna, "gps-antenna", "FORWARD,LEFT",
+        "where the GPS antenna sits in the robot frame, metres, or 'estimate' (fitted with the "
+        "alignment)");
   b.Declare(arguments);
 }
 
@@ -292,6 +324,7 @@ int LandmarkMode::Run(const Arguments& arguments) {
   if (arguments.Has("preset")) ApplyPreset(arguments.Get("preset"));
   bindings_.Apply(arguments);
   Options& o = options_;
+  GpsAntennaOptions(o.gps_antenna);  // a bad value fails before the solve
   const LandmarkDataset data = ReadDataset(arguments.Get("landmarks"), &o.format, o.inputs, o.poses,
                                            o.odometry_noise_scale, arguments.Flag("quiet"));
   if (o.unknown_association) return RunUnknownAssociation(arguments, data);
@@ -347,6 +380,7 @@ int LandmarkMode::Run(const Arguments& arguments) {
                                  ReadTrueTrajectory(o.truth_trajectory, data.num_poses)));
     std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());
   }
+  PrintGpsError(o.gps, o.gps_antenna, data, result.trajectory);
   return 0;
 }
 
@@ -463,7 +497,7 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
         n.range, n.bearing, n.point, n.odometry_translation, n.odometry_heading,
         result.calibration_time_s);
   if (data.has_landmark_ids) PrintAgainstFileIds(data, options, result, options_.truth_trajectory);
-  PrintGpsError(options_.gps, data, solution.trajectory);
+  PrintGpsError(options_.gps, options_.gps_antenna, data, solution.trajectory);
   std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());
   return 0;
 }

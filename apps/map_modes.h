@@ -57,6 +57,7 @@ class LandmarkMode {
     std::string inputs;           // victoria-raw: "" = inputs.dat beside the measurements
     std::string association;      // one landmark id per sighting; "" = the file's ids
     std::string association_out, trajectory, gps;
+    std::string gps_antenna = "estimate";  // "estimate" or "FORWARD,LEFT" in metres
     std::string truth_trajectory;  // CSV pose,x_m,y_m[,theta_rad]: ATE printed
     std::string class_name = "tree";
     long poses = 0;  // the first N poses only (0: all)

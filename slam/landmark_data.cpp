@@ -429,14 +429,30 @@ std::vector<GpsFix> ReadGps(const std::string& path) {
   return fixes;
 }
 
-GpsError CompareWithGps(const std::vector<Pose2>& trajectory, const std::vector<double>& times_s,
-                        const std::vector<GpsFix>& gps, double max_gap_s) {
-  if (trajectory.size() != times_s.size())
-    throw Error("GPS comparison: " + std::to_string(trajectory.size()) + " poses but " +
-                std::to_string(times_s.size()) + " times");
-  for (size_t i = 1; i < times_s.size(); ++i)
-    if (times_s[i] < times_s[i - 1]) throw Error("GPS comparison: pose times decrease");
-  std::vector<Eigen::Vector2d> estimated, measured;
+bool GpsComparisonOptions::Validate(std::string* why) const {
+  if (!(max_gap_s > 0)) {
+    *why = "max_gap_s must be positive";
+    return false;
+  }
+  if (!antenna_offset_m.allFinite()) {
+    *why = "antenna_offset_m must be finite";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+// A pose interpolated at a fix's time, and the fix.
+struct GpsPair {
+  Eigen::Vector2d position_m, fix_m;
+  double heading_rad = 0;
+};
+
+std::vector<GpsPair> PairWithFixes(const std::vector<Pose2>& trajectory,
+                                   const std::vector<double>& times_s,
+                                   const std::vector<GpsFix>& gps, double max_gap_s) {
+  std::vector<GpsPair> pairs;
   size_t i = 0;
   for (const GpsFix& fix : gps) {
     while (i + 2 < times_s.size() && times_s[i + 1] <= fix.time_s) ++i;
@@ -446,34 +462,92 @@ GpsError CompareWithGps(const std::vector<Pose2>& trajectory, const std::vector<
     const double w = (fix.time_s - times_s[i]) / gap;
     const Pose2& a = trajectory[i];
     const Pose2& b = trajectory[i + 1];
-    estimated.emplace_back((1 - w) * a.x + w * b.x, (1 - w) * a.y + w * b.y);
-    measured.emplace_back(fix.x_m, fix.y_m);
+    pairs.push_back({{(1 - w) * a.x + w * b.x, (1 - w) * a.y + w * b.y},
+                     {fix.x_m, fix.y_m},
+                     a.theta + w * WrapAngle(b.theta - a.theta)});
   }
-  const size_t n = estimated.size();
-  if (n < 2) throw Error("GPS comparison: fewer than 2 fixes fall within the trajectory's times");
+  return pairs;
+}
+
+Eigen::Matrix2d Rotation2(double angle_rad) {
+  const double c = std::cos(angle_rad), s = std::sin(angle_rad);
+  return (Eigen::Matrix2d() << c, -s, s, c).finished();
+}
+
+Eigen::Vector2d AntennaOf(const GpsPair& pair, const Eigen::Vector2d& offset_m) {
+  return pair.position_m + Rotation2(pair.heading_rad) * offset_m;
+}
+
+// Planar Procrustes of the antenna positions onto the fixes.
+void AlignRigidly(const std::vector<GpsPair>& pairs, GpsError* result) {
+  const double n = static_cast<double>(pairs.size());
   Eigen::Vector2d mean_e = Eigen::Vector2d::Zero(), mean_m = Eigen::Vector2d::Zero();
-  for (size_t k = 0; k < n; ++k) {
-    mean_e += estimated[k];
-    mean_m += measured[k];
+  for (const GpsPair& p : pairs) {
+    mean_e += AntennaOf(p, result->antenna_offset_m);
+    mean_m += p.fix_m;
   }
   mean_e /= n;
   mean_m /= n;
-  // Planar Procrustes: the rotation angle maximising sum m_k . R e_k.
-  double dot = 0, cross = 0;
-  for (size_t k = 0; k < n; ++k) {
-    const Eigen::Vector2d e = estimated[k] - mean_e, m = measured[k] - mean_m;
+  double dot = 0, cross = 0;  // the angle maximising sum m_k . R e_k
+  for (const GpsPair& p : pairs) {
+    const Eigen::Vector2d e = AntennaOf(p, result->antenna_offset_m) - mean_e, m = p.fix_m - mean_m;
     dot += e.dot(m);
     cross += e.x() * m.y() - e.y() * m.x();
   }
+  result->rotation_rad = std::atan2(cross, dot);
+  result->translation_m = mean_m - Rotation2(result->rotation_rad) * mean_e;
+}
+
+// The offset minimising the misfit for the alignment held: R R(theta_k) is a
+// rotation, so the normal equations are n I and the offset a mean.
+Eigen::Vector2d BestAntennaOffset(const std::vector<GpsPair>& pairs, const GpsError& alignment) {
+  const Eigen::Matrix2d rotation = Rotation2(alignment.rotation_rad);
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (const GpsPair& p : pairs) {
+    const Eigen::Vector2d misfit = p.fix_m - (rotation * p.position_m + alignment.translation_m);
+    sum += Rotation2(alignment.rotation_rad + p.heading_rad).transpose() * misfit;
+  }
+  return sum / static_cast<double>(pairs.size());
+}
+
+}  // namespace
+
+GpsError CompareWithGps(const std::vector<Pose2>& trajectory, const std::vector<double>& times_s,
+                        const std::vector<GpsFix>& gps, const GpsComparisonOptions& options) {
+  std::string why;
+  if (!options.Validate(&why)) throw Error("GPS comparison options: " + why);
+  if (trajectory.size() != times_s.size())
+    throw Error("GPS comparison: " + std::to_string(trajectory.size()) + " poses but " +
+                std::to_string(times_s.size()) + " times");
+  for (size_t i = 1; i < times_s.size(); ++i)
+    if (times_s[i] < times_s[i - 1]) throw Error("GPS comparison: pose times decrease");
+  const std::vector<GpsPair> pairs = PairWithFixes(trajectory, times_s, gps, options.max_gap_s);
+  const size_t min_fixes = options.estimate_antenna_offset ? 3 : 2;
+  if (pairs.size() < min_fixes)
+    throw Error("GPS comparison: fewer than " + std::to_string(min_fixes) +
+                " fixes fall within the trajectory's times");
   GpsError result;
-  result.rotation_rad = std::atan2(cross, dot);
-  const double c = std::cos(result.rotation_rad), s = std::sin(result.rotation_rad);
-  const Eigen::Matrix2d rotation = (Eigen::Matrix2d() << c, -s, s, c).finished();
-  result.translation_m = mean_m - rotation * mean_e;
+  result.antenna_offset_m = options.estimate_antenna_offset ? Eigen::Vector2d::Zero()
+                                                            : options.antenna_offset_m;
+  AlignRigidly(pairs, &result);
+  // Block coordinate descent on (alignment, offset): each block's exact
+  // minimum; with headings that vary along the drive it converges in a few
+  // rounds.
+  for (int round = 0; options.estimate_antenna_offset && round < 200; ++round) {
+    const Eigen::Vector2d offset = BestAntennaOffset(pairs, result);
+    const double change = (offset - result.antenna_offset_m).norm();
+    result.antenna_offset_m = offset;
+    AlignRigidly(pairs, &result);
+    if (change < 1e-9) break;
+  }
+  const Eigen::Matrix2d rotation = Rotation2(result.rotation_rad);
+  const size_t n = pairs.size();
   std::vector<double> errors(n);
   double sum_sq = 0;
   for (size_t k = 0; k < n; ++k) {
-    errors[k] = (rotation * estimated[k] + result.translation_m - measured[k]).norm();
+    errors[k] = (rotation * AntennaOf(pairs[k], result.antenna_offset_m) + result.translation_m -
+                 pairs[k].fix_m)
+                    .norm();
     sum_sq += errors[k] * errors[k];
   }
   std::sort(errors.begin(), errors.end());

@@ -128,23 +128,34 @@ struct GpsFix {
 // gps.dat: time x y (local metric frame). Throws oslam::Error "FILE:LINE: ...".
 std::vector<GpsFix> ReadGps(const std::string& path);
 
-// A trajectory against GPS, after the least-squares rigid
-// 2D alignment of the trajectory onto the fixes (GPS has its own frame):
-// each fix is compared with the position interpolated linearly at its time
-// between the two poses around it; fixes before the first or after the last
-// pose time, or inside a gap between poses longer than max_gap_s, are
-// skipped. The robot frame origin is compared with the antenna (its mount
-// offset is unknown for Victoria Park).
+// A trajectory against GPS, after the least-squares rigid 2D alignment of
+// the trajectory onto the fixes (GPS has its own frame): each fix is compared
+// with the antenna's position, the pose interpolated linearly at the fix's
+// time between the two poses around it plus the antenna's offset in the
+// robot frame; fixes before the first or after the last pose time, or inside
+// a gap between poses longer than max_gap_s, are skipped.
+struct GpsComparisonOptions {
+  double max_gap_s = 1.0;
+  // Where the antenna sits in the robot frame: (forward, left), metres.
+  Eigen::Vector2d antenna_offset_m = Eigen::Vector2d::Zero();
+  // Estimate the offset with the alignment (least squares over both,
+  // antenna_offset_m ignored): a mount that nobody documented still
+  // compares the same point of the vehicle.
+  bool estimate_antenna_offset = false;
+  bool Validate(std::string* why) const;
+};
 struct GpsError {
   int num_fixes = 0;  // fixes compared
   double rmse_m = 0, median_m = 0, p95_m = 0, max_m = 0;
   double rotation_rad = 0;                                  // of the alignment
   Eigen::Vector2d translation_m = Eigen::Vector2d::Zero();  // p_gps = R p + t
+  Eigen::Vector2d antenna_offset_m = Eigen::Vector2d::Zero();  // used or estimated
 };
-// Throws oslam::Error when the sizes differ, the times decrease or fewer than
-// 2 fixes can be compared.
+// Throws oslam::Error when the options are invalid, the sizes differ, the
+// times decrease or fewer than 2 fixes (3 when estimating the offset) can be
+// compared.
 GpsError CompareWithGps(const std::vector<Pose2>& trajectory, const std::vector<double>& times_s,
-                        const std::vector<GpsFix>& gps, double max_gap_s = 1.0);
+                        const std::vector<GpsFix>& gps, const GpsComparisonOptions& options = {});
 
 // The landmark ids of the sightings (the association the file gives), -1
 // where unknown.

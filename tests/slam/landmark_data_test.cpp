@@ -242,8 +242,50 @@ TEST(GpsTest, CompareAlignsRigidlyAndInterpolatesInTime) {
   EXPECT_LT(outlier.median_m, 0.2);
   // A gap longer than max_gap_s between two poses drops the fixes inside it.
   times.back() += 5.0;
-  EXPECT_LT(CompareWithGps(trajectory, times, gps, 1.0).num_fixes, 41);
+  GpsComparisonOptions one_second;
+  one_second.max_gap_s = 1.0;
+  EXPECT_LT(CompareWithGps(trajectory, times, gps, one_second).num_fixes, 41);
   EXPECT_THROW(CompareWithGps(trajectory, {1.0}, gps), Error);
+  GpsComparisonOptions bad;
+  bad.max_gap_s = 0;
+  EXPECT_THROW(CompareWithGps(trajectory, times, gps, bad), Error);
+}
+
+TEST(GpsTest, AntennaOffsetGivenOrEstimated) {
+  // A winding drive (on a circle the offset would not be observable: a rigid
+  // turn absorbs it) with the antenna 3.8 m ahead of and 0.5 m left of the
+  // robot origin; GPS in a turned, shifted frame.
+  std::vector<Pose2> trajectory;
+  std::vector<double> times;
+  std::vector<GpsFix> gps;
+  const Eigen::Vector2d antenna(3.8, 0.5);
+  const double angle = DegToRad(-40), c = std::cos(angle), s = std::sin(angle);
+  for (int i = 0; i <= 100; ++i) {
+    const double u = 0.5 * i;
+    const double phi = std::atan(0.8 * std::cos(u / 5));  // heading of y = 4 sin(x / 5)
+    const Pose2 pose{u, 4 * std::sin(u / 5), phi};
+    trajectory.push_back(pose);
+    times.push_back(i);
+    const double x = pose.x + std::cos(phi) * antenna.x() - std::sin(phi) * antenna.y();
+    const double y = pose.y + std::sin(phi) * antenna.x() + std::cos(phi) * antenna.y();
+    gps.push_back({i + 0.0, 7 + c * x - s * y, 3 + s * x + c * y});
+  }
+  // The origin compared with the antenna: metres off, as no rigid alignment
+  // can turn a lever arm that turns with the robot.
+  EXPECT_GT(CompareWithGps(trajectory, times, gps).rmse_m, 0.5);
+  GpsComparisonOptions given;
+  given.antenna_offset_m = antenna;
+  const GpsError at_mount = CompareWithGps(trajectory, times, gps, given);
+  EXPECT_LT(at_mount.rmse_m, 1e-9);
+  EXPECT_NEAR(at_mount.rotation_rad, angle, 1e-9);
+  GpsComparisonOptions estimated;
+  estimated.estimate_antenna_offset = true;
+  estimated.antenna_offset_m = Eigen::Vector2d(-100, 100);  // ignored
+  const GpsError fitted = CompareWithGps(trajectory, times, gps, estimated);
+  EXPECT_LT(fitted.rmse_m, 1e-6);
+  EXPECT_LT((fitted.antenna_offset_m - antenna).norm(), 1e-6);
+  EXPECT_NEAR(fitted.rotation_rad, angle, 1e-6);
+  EXPECT_NEAR(fitted.translation_m.x(), 7, 1e-6);
 }
 
 TEST(AssociationFileTest, OneIdPerSightingOrAnError) {
