@@ -75,8 +75,8 @@ void PrintGpsError(const std::string& gps_path, const std::string& antenna,
       "median %.2f m, max %.2f m (dead reckoning: RMSE %.2f m, median %.2f m, max %.2f m; the "
       "robot origin against the fixes: RMSE %.2f m)\n",
       e.num_fixes, e.antenna_offset_m.x(), e.antenna_offset_m.y(),
-      options.estimate_antenna_offset ? ", estimated" : "", e.rmse_m, e.median_m, e.max_m,
-      d.rmse_m, d.median_m, d.max_m, origin.rmse_m);
+      options.estimate_antenna_offset ? ", estimated" : "", e.rmse_m, e.median_m, e.max_m, d.rmse_m,
+      d.median_m, d.max_m, origin.rmse_m);
 }
 
 // A true trajectory (oslam simulate-landmarks' true_trajectory.csv: pose,

@@ -55,7 +55,7 @@ void CheckReach(const std::string& path, const std::vector<Pose2>& poses) {
 }
 
 void ExpectFields(const std::string& path, int line, const std::vector<std::string>& tokens,
-                  size_t count, const char* layout) {
+                  size_t count, const std::string& layout) {
   if (tokens.size() != count)
     throw Error::AtLine(path, line,
                         "expected " + std::to_string(count) + " fields (" + layout + "), got " +
@@ -178,8 +178,16 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
   };
   std::vector<PendingSighting> pending;
   ForEachLandmarkRecord(path, [&](int line, const std::vector<std::string>& t) {
-    if (t[0] == "ODOMETRY") {
-      ExpectFields(path, line, t, 12, "ODOMETRY i j dx dy dtheta c11 c12 c13 c22 c23 c33");
+    // load2D reads EDGE2 and EDGE as ODOMETRY, and VERTEX2 / VERTEX as
+    // initial estimates (oslam starts from the odometry: checked, not used).
+    if (t[0] == "VERTEX2" || t[0] == "VERTEX") {
+      ExpectFields(path, line, t, 5, t[0] + " id x y theta");
+      Integer(path, line, t[1], "pose id");
+      Number(path, line, t[2], "x", bounds::kCoordinateM, "m");
+      Number(path, line, t[3], "y", bounds::kCoordinateM, "m");
+      Number(path, line, t[4], "theta", bounds::kAngleRad, "rad");
+    } else if (t[0] == "ODOMETRY" || t[0] == "EDGE2" || t[0] == "EDGE") {
+      ExpectFields(path, line, t, 12, t[0] + " i j dx dy dtheta c11 c12 c13 c22 c23 c33");
       const long i = Integer(path, line, t[1], "pose i"), j = Integer(path, line, t[2], "pose j");
       if (i == j) throw Error::AtLine(path, line, "odometry from pose " + t[1] + " to itself");
       double v[9];
@@ -275,11 +283,12 @@ LandmarkDataset ReadGtsamLandmarks(const std::string& path) {
         throw Error::AtLine(path, line, "the noise stds must be > 0");
       pending.push_back(p);
     } else {
-      throw Error::AtLine(path, line,
-                          "unknown record '" + t[0] + "' (expected ODOMETRY, LANDMARK or BR)");
+      throw Error::AtLine(
+          path, line,
+          "unknown record '" + t[0] + "' (expected ODOMETRY, EDGE2, LANDMARK, BR or VERTEX2)");
     }
   });
-  if (data.pose_ids.empty()) throw Error::InFile(path, "no ODOMETRY lines");
+  if (data.pose_ids.empty()) throw Error::InFile(path, "no ODOMETRY (or EDGE2) lines");
   for (auto& p : pending) {
     const auto found = pose_index.find(p.pose_id);
     if (found == pose_index.end())
@@ -527,8 +536,8 @@ GpsError CompareWithGps(const std::vector<Pose2>& trajectory, const std::vector<
     throw Error("GPS comparison: fewer than " + std::to_string(min_fixes) +
                 " fixes fall within the trajectory's times");
   GpsError result;
-  result.antenna_offset_m = options.estimate_antenna_offset ? Eigen::Vector2d::Zero()
-                                                            : options.antenna_offset_m;
+  result.antenna_offset_m =
+      options.estimate_antenna_offset ? Eigen::Vector2d::Zero() : options.antenna_offset_m;
   AlignRigidly(pairs, &result);
   // Block coordinate descent on (alignment, offset): each block's exact
   // minimum; with headings that vary along the drive it converges in a few

@@ -147,8 +147,8 @@ struct GpsComparisonOptions {
 struct GpsError {
   int num_fixes = 0;  // fixes compared
   double rmse_m = 0, median_m = 0, p95_m = 0, max_m = 0;
-  double rotation_rad = 0;                                  // of the alignment
-  Eigen::Vector2d translation_m = Eigen::Vector2d::Zero();  // p_gps = R p + t
+  double rotation_rad = 0;                                     // of the alignment
+  Eigen::Vector2d translation_m = Eigen::Vector2d::Zero();     // p_gps = R p + t
   Eigen::Vector2d antenna_offset_m = Eigen::Vector2d::Zero();  // used or estimated
 };
 // Throws oslam::Error when the options are invalid, the sizes differ, the

@@ -306,6 +306,7 @@ DetectedLandmarkFormat DetectLandmarkFormat(const std::string& path) {
   if (fs::path(path).filename() == "measurements.dat")
     return {LandmarkFormat::kVictoriaRaw, "named measurements.dat"};
   bool g2o = false, vertex2 = false, edge2 = false, landmark = false, odometry = false;
+  bool bearing_range = false, equiv = false;
   bool toro_diagonal = true, isam_diagonal = true;
   int first_unknown = 0;
   std::string unknown;
@@ -333,13 +334,20 @@ DetectedLandmarkFormat DetectLandmarkFormat(const std::string& path) {
       landmark = true;
     } else if (tag == "ODOMETRY" || tag == "BR") {
       odometry = true;
+      bearing_range = bearing_range || tag == "BR";
+    } else if (tag == "EQUIV") {
+      equiv = true;
     } else if (first_unknown == 0) {
       first_unknown = line;
       unknown = tag;
     }
   });
   if (g2o) return {LandmarkFormat::kG2o, "g2o records (VERTEX_SE2, EDGE_SE2, ...)"};
-  if (vertex2) return {LandmarkFormat::kToro, "TORO's VERTEX2 records"};
+  // BR is load2D's alone; load2D also reads VERTEX2 and EDGE2 (as
+  // covariances), TORO neither BR nor covariances.
+  if (bearing_range && (vertex2 || edge2) && !equiv)
+    return {LandmarkFormat::kGtsam, "BR records with VERTEX2/EDGE2 (GTSAM's load2D)"};
+  if (vertex2 || equiv) return {LandmarkFormat::kToro, "TORO's VERTEX2 or EQUIV records"};
   if (edge2 && landmark) return {LandmarkFormat::kIsam, "EDGE2 with LANDMARK records (iSAM)"};
   if (edge2 && !odometry) {
     if (toro_diagonal && !isam_diagonal)
@@ -417,8 +425,15 @@ LandmarkDataset ReadToroGraph(const std::string& path) {
       r.Estimate(2, /*with_angle=*/true);
       builder.DeclarePose(r.Id(1, "pose id"), r);
       any_vertex = true;
+    } else if (t[0] == "EQUIV") {
+      // TORO collapses the edge between two equivalent nodes into one node;
+      // oslam keeps both poses and the edge with its own noise (as GTSAM's
+      // load2D, which skips EQUIV). Checked, otherwise not used.
+      r.Expect(3, "id1 id2");
+      r.Id(1, "pose id1");
+      r.Id(2, "pose id2");
     } else if (t[0] != "EDGE2") {
-      r.Fail("unknown record '" + t[0] + "' (TORO 2D: VERTEX2, EDGE2)");
+      r.Fail("unknown record '" + t[0] + "' (TORO 2D: VERTEX2, EDGE2, EQUIV)");
     }
   });
   builder.SetPosesDeclared(any_vertex);

@@ -143,6 +143,49 @@ TEST(GtsamLandmarksTest, BearingRangeLinesAndLoad2DNoiseOrders) {
   EXPECT_DOUBLE_EQ(data.sightings[1].xy_covariance(0, 1), 0.1);
 }
 
+TEST(GtsamLandmarksTest, Load2DReadsVertex2AndEdge2AsOdometry) {
+  // GTSAM's own .graph files (examples/Data/example.graph): VERTEX2 initial
+  // estimates, EDGE2 with a TORO-ordered covariance, BR sightings.
+  testing::TempDir dir;
+  const std::string path = WriteFile(dir, "g.graph",
+                                     "VERTEX2 0 0 0 0\nVERTEX2 1 1 0 0\nVERTEX2 2 2 0 0\n"
+                                     "EDGE2 0 1 1 0 0 0.01 0 0.04 0.0025 0 0\n"
+                                     "EDGE2 1 2 1 0 0 0.01 0 0.04 0.0025 0 0\n"
+                                     "BR 0 144 0.2 9.1 0.03 0.1\nBR 2 144 0.5 7.5 0.03 0.1\n");
+  EXPECT_EQ(DetectLandmarkFormat(path).format, LandmarkFormat::kGtsam);
+  const LandmarkDataset data = ReadLandmarkDataset(path, LandmarkFormat::kGtsam);
+  ASSERT_EQ(data.num_poses, 3);
+  ASSERT_EQ(data.odometry.size(), 2u);
+  const Eigen::Vector3d diagonal(0.01, 0.04, 0.0025);  // a covariance, as load2D reads it
+  EXPECT_TRUE(data.odometry[1].covariance.isApprox(Eigen::Matrix3d(diagonal.asDiagonal())));
+  ASSERT_EQ(data.sightings.size(), 2u);
+  EXPECT_EQ(data.sightings[1].pose, 2);
+  EXPECT_EQ(data.sightings[1].landmark, 144);
+  LandmarkSlam slam;
+  EXPECT_TRUE(slam.Solve(data, GivenAssociation(data)).summary.IsUsable());
+  const std::string bad = WriteFile(dir, "b.graph", "EDGE2 0 1 1 0 0 1 0 1 1 0 0\nVERTEX2 1 0 0\n");
+  EXPECT_NE(ErrorOf([&] { ReadGtsamLandmarks(bad); }).find(bad + ":2: expected 5 fields (VERTEX2"),
+            std::string::npos);
+}
+
+TEST(ToroGraphTest, EquivalentNodesKeepTheirEdge) {
+  // TORO's EQUIV (w100.graph in GTSAM's examples): poses 2 and 0 are one
+  // place; the edge between them stays, with its own noise (GTSAM's reading).
+  testing::TempDir dir;
+  const std::string path = WriteFile(dir, "w.graph",
+                                     "VERTEX2 0 0 0 0\nVERTEX2 1 1 0 0\nVERTEX2 2 0 0 0\n"
+                                     "EDGE2 1 0 -1 0 0 1 0 1 1 0 0\n"
+                                     "EDGE2 2 1 1 0 3.14159 1 0 1 1 0 0\n"
+                                     "EDGE2 2 0 0.05 0 0 1 0 1 1 0 0\n"
+                                     "EQUIV 2 0\n");
+  EXPECT_EQ(DetectLandmarkFormat(path).format, LandmarkFormat::kToro);
+  const LandmarkDataset data = ReadToroGraph(path);
+  EXPECT_EQ(data.num_poses, 3);
+  EXPECT_EQ(data.odometry.size(), 3u);
+  const std::string bad = WriteFile(dir, "b.graph", "VERTEX2 0 0 0 0\nEQUIV 2\n");
+  EXPECT_NE(ErrorOf([&] { ReadToroGraph(bad); }).find(bad + ":2:"), std::string::npos);
+}
+
 TEST(LandmarkFormatTest, DetectsTheFormatFromItsRecords) {
   EXPECT_EQ(DetectLandmarkFormat(kData + "g2o_small.g2o").format, LandmarkFormat::kG2o);
   EXPECT_EQ(DetectLandmarkFormat(kData + "toro_small.graph").format, LandmarkFormat::kToro);
