@@ -332,6 +332,11 @@ LandmarkSlamResult LandmarkSlam::StagedInitialisation(const LandmarkDataset& dat
   inner.compute_landmark_covariances = false;
   inner.compute_pose_covariances = false;
   inner.solver.compute_evidence = false;
+  // Every stage is a new problem analysed afresh; AMD costs a fraction of
+  // METIS to compute, and a stage's loose solve does not repay METIS's
+  // smaller fill (Victoria Park: 1.48 -> 1.21 s; a 20,000-pose graph with
+  // 275 stages 24 -> 18 s; the same optima).
+  inner.solver.ordering = OrderingType::kAmd;
   // A stage only has to bring the next closure into the full solve's basin;
   // the full solve converges tightly.
   inner.solver.function_tolerance = std::max(inner.solver.function_tolerance, 1e-5);
