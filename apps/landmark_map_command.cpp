@@ -398,8 +398,7 @@ void PrintAgainstFileIds(const LandmarkDataset& data, const UnknownAssociationOp
   std::set<int> ids(shipped.begin(), shipped.end());
   ids.erase(-1);
   const LandmarkDataset noise = WithNoiseScales(data, result.noise_scales);
-  LandmarkSlamOptions known_options = options.target.slam;
-  known_options.compute_landmark_covariances = false;
+  const LandmarkSlamOptions& known_options = result.slam_options;  // the search's model
   const LandmarkSlamResult reference = LandmarkSlam(known_options).Solve(noise, shipped);
   int joined = 0, outliers = 0;
   const std::vector<int> fixed = JoinDuplicateLandmarks(data, shipped, reference, 0.25, &joined);

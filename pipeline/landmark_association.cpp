@@ -147,6 +147,9 @@ void LandmarkAssociation::BuildTracks() {
     }
   }
   options_.target.slam.landmark_prior_mean_m = centre / placed;
+  result_.slam_options = options_.target.slam;
+  result_.slam_options.compute_landmark_covariances = false;
+  result_.slam_options.compute_pose_covariances = false;
   driven_m_.assign(data.dead_reckoning.size(), 0.0);
   for (size_t i = 1; i < data.dead_reckoning.size(); ++i)
     driven_m_[i] =

@@ -215,6 +215,12 @@ struct UnknownAssociationResult {
   // Noise calibration: the scales of the stated noise (product over the
   // rounds), the refinement's splits and merges, and its time.
   NoiseScales noise_scales;
+  // The model the search scored under, as known-association options (the
+  // landmark location prior centred on the sightings included; no
+  // covariances): another association solved with these on
+  // WithNoiseScales(data, noise_scales) has a comparable evidence and
+  // trajectory.
+  LandmarkSlamOptions slam_options;
   long refine_splits = 0, refine_merges = 0;
   double calibration_time_s = 0;
   SamplerSummary sampler;  // when samples > 0

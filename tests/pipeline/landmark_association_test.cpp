@@ -57,6 +57,14 @@ TEST(LandmarkAssociationTest, HillClimbingRecoversTheTrueAssociation) {
     EXPECT_DOUBLE_EQ(a.agreement, 1.0);
     EXPECT_LT(TrajectoryRmse(result.solution.trajectory, truth), 1.0);
     EXPECT_LT(TrajectoryRmse(result.solution.trajectory, known.trajectory), 0.05);
+    // The association re-solved under the model the result reports (its
+    // noise, its location prior) is the result: what comparisons with
+    // another association rely on.
+    const LandmarkSlamResult again =
+        LandmarkSlam(result.slam_options)
+            .Solve(WithNoiseScales(data, result.noise_scales), result.association);
+    EXPECT_LT(TrajectoryRmse(again.trajectory, result.solution.trajectory), 1e-4);
+    EXPECT_NEAR(again.evidence.log_evidence, result.log_target, 1e-3);
   }
 }
 
@@ -108,7 +116,7 @@ TEST(LandmarkAssociationTest, JointMergeClosesALoopNoSingleMergeCloses) {
   const PairwiseAgreement b = ComparePairwise(with.association, truth);
   // The true association under the noise the search calibrated.
   const LandmarkSlamResult known =
-      LandmarkSlam(options.target.slam).Solve(WithNoiseScales(data, with.noise_scales), truth);
+      LandmarkSlam(with.slam_options).Solve(WithNoiseScales(data, with.noise_scales), truth);
   std::printf(
       "single merges only: P %.3f R %.3f, %zu landmarks, RMSE %.2f m, log target %.1f; joint: "
       "P %.3f R %.3f, %zu landmarks, RMSE %.2f m, log target %.1f (%ld tries, %ld pairs); "
