@@ -262,7 +262,7 @@ class ChainStepper {
       return at;
     }
     std::unique_lock<std::mutex> lock(mutex_);
-    changed_.wait(lock, [&] {
+    to_caller_.wait(lock, [&] {
       if (failure_) return true;
       for (const auto& queue : published_)
         if (queue.empty()) return false;
@@ -282,8 +282,8 @@ class ChainStepper {
     if (threads_.empty()) return;
     std::unique_lock<std::mutex> lock(mutex_);
     for (size_t i = 0; i < chains_.size(); ++i) hold_[i] = swapped[i];
-    changed_.notify_all();
-    changed_.wait(lock, [&] {
+    to_chains_.notify_all();
+    to_caller_.wait(lock, [&] {
       if (failure_) return true;
       for (size_t i = 0; i < chains_.size(); ++i)
         if (swapped[i] && !held_[i]) return false;
@@ -313,7 +313,7 @@ class ChainStepper {
       }
       decided_ = block + 1;
     }
-    changed_.notify_all();
+    to_chains_.notify_all();
   }
 
   void Stop() {
@@ -321,7 +321,7 @@ class ChainStepper {
       std::lock_guard<std::mutex> lock(mutex_);
       stop_ = true;
     }
-    changed_.notify_all();
+    to_chains_.notify_all();
     for (auto& thread : threads_)
       if (thread.joinable()) thread.join();
   }
@@ -339,12 +339,12 @@ class ChainStepper {
         for (;;) {
           if (stop_) return;
           if (hold_[i]) {
+            if (!held_[i]) to_caller_.notify_one();
             held_[i] = 1;
-            changed_.notify_all();
           } else if (next_block_[i] < num_blocks_ && next_block_[i] <= decided_ + depth_) {
             break;
           }
-          changed_.wait(lock);
+          to_chains_.wait(lock);
         }
         block = next_block_[i];
         do_release = release_pending_[i];
@@ -358,13 +358,13 @@ class ChainStepper {
       } catch (...) {
         std::lock_guard<std::mutex> lock(mutex_);
         if (!failure_) failure_ = std::current_exception();
-        changed_.notify_all();
+        to_caller_.notify_one();
         return;
       }
       std::lock_guard<std::mutex> lock(mutex_);
       published_[i].push_back(std::move(done));
       ++next_block_[i];
-      changed_.notify_all();
+      to_caller_.notify_one();
     }
   }
 
@@ -373,7 +373,10 @@ class ChainStepper {
   const SamplerOptions& options_;
   const int num_blocks_, depth_;
   std::mutex mutex_;
-  std::condition_variable changed_;
+  // Chains' threads wait for decisions (to_chains_), the caller for
+  // checkpoints and held chains (to_caller_): a change wakes only who waits
+  // for it.
+  std::condition_variable to_chains_, to_caller_;
   // Guarded by mutex_: the chains' checkpoints not yet taken, the block each
   // chain steps next, held chains, and marks a chain's thread is to release.
   std::vector<std::deque<ChainCheckpoint>> published_;
