@@ -293,6 +293,9 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&u.calibration_rounds, "calibration-rounds", "N",
         "unknown association: after the search, re-estimate the noise at the association found "
         "and refine it by split and merge sweeps, N times (0: none)");
+  b.Add(&u.sighting_split_gate, "sighting-split-gate", "CHI2",
+        "unknown association: after the final solve, split a sighting off its track when its "
+        "squared whitened error exceeds this and the evidence rises (0: off)");
   b.Add(&u.free_poses, "free-poses", "POSES",
         "unknown association: poses free in a window's solves, earlier ones held (0: all free)");
   b.Add(&o.poses, "poses", "N",

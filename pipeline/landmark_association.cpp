@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <set>
 #include <utility>
 
@@ -30,6 +31,10 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     return false;
   }
   if (calibration_rounds > 0 && !calibration.Validate(why)) return false;
+  if (!(sighting_split_gate >= 0) || sighting_split_rounds < 0) {
+    if (why) *why = "the sighting split gate and rounds must be >= 0";
+    return false;
+  }
   if (min_track_sightings < 1 || targeted_max_candidates < 0 || !(sweep_radius_m >= 0)) {
     if (why) *why = "tracks need >= 1 sighting and the candidate cap must be >= 0 (0: none)";
     return false;
@@ -694,9 +699,80 @@ void LandmarkAssociation::FinalSolve(const EvaluationPtr& best) {
   result_.association = evaluator_->Association(result_.state);
   result_.solution = evaluator_->Solve(result_.state, best.get());
   result_.log_target = result_.solution.evidence.log_evidence;
+  if (options_.sighting_split_gate > 0 && options_.sighting_split_rounds > 0 &&
+      !options_.diameter_per_track)
+    SplitMisfitSightings();
   result_.total_time_s = SecondsSince(start_);
   Say(Format("final solve: %.0f landmarks, log evidence %.1f, total %.2f s",
              double(result_.solution.landmarks.size()), result_.log_target, result_.total_time_s));
+}
+
+std::vector<int> LandmarkAssociation::MisfitSightings() const {
+  const LandmarkDataset& data = *data_;
+  const LandmarkSlamResult& solved = result_.solution;
+  std::map<int, Eigen::Vector2d> where;
+  for (const MappedLandmark& l : solved.landmarks) where[l.id] = l.position_m;
+  std::map<int, int> count;
+  for (int id : result_.association)
+    if (id >= 0) ++count[id];
+  std::map<int, std::pair<double, int>> worst;  // landmark -> (squared error, sighting)
+  double largest = 0;
+  for (size_t k = 0; k < result_.association.size(); ++k) {
+    const int id = result_.association[k];
+    const auto it = where.find(id);
+    if (id < 0 || it == where.end() || count[id] < 2) continue;
+    const LandmarkSighting& s = data.sightings[k];
+    const double e2 =
+        SightingSquaredError(s, solved.trajectory[s.pose], it->second, data.sensor_offset_m);
+    if (!(e2 > options_.sighting_split_gate)) continue;
+    largest = std::max(largest, e2);
+    auto& w = worst[id];
+    if (e2 > w.first) w = {e2, static_cast<int>(k)};
+  }
+  // A wrong sighting bends the solve around it, so its neighbours misfit
+  // too: only the worst of each landmark, and only those near the worst.
+  std::vector<std::pair<double, int>> misfits;
+  for (const auto& [id, w] : worst)
+    if (w.first >= 0.25 * largest) misfits.push_back(w);
+  std::sort(misfits.rbegin(), misfits.rend());
+  std::vector<int> sightings;
+  for (const auto& m : misfits) sightings.push_back(m.second);
+  return sightings;
+}
+
+void LandmarkAssociation::SplitMisfitSightings() {
+  LandmarkSlamOptions options = result_.slam_options;
+  options.compute_landmark_covariances = true;  // the result's
+  LandmarkSlam slam(options);
+  const double before = result_.log_target;
+  int next_id = num_tracks_;
+  for (const int id : result_.association) next_id = std::max(next_id, id + 1);
+  for (int round = 0; round < options_.sighting_split_rounds; ++round) {
+    const std::vector<int> misfits = MisfitSightings();
+    if (misfits.empty()) break;
+    // All of the round's misfits, else the worst alone.
+    bool kept = false;
+    for (const size_t n : {misfits.size(), size_t{1}}) {
+      std::vector<int> trial = result_.association;
+      for (size_t j = 0; j < n; ++j) trial[misfits[j]] = next_id + static_cast<int>(j);
+      LandmarkSlamResult solved = slam.Solve(*data_, trial, &result_.solution);
+      if (solved.summary.IsUsable() && solved.evidence.valid &&
+          solved.evidence.log_evidence > result_.log_target) {
+        result_.association = std::move(trial);
+        result_.solution = std::move(solved);
+        result_.log_target = result_.solution.evidence.log_evidence;
+        result_.sighting_splits += static_cast<long>(n);
+        next_id += static_cast<int>(n);
+        kept = true;
+        break;
+      }
+      if (misfits.size() == 1) break;
+    }
+    if (!kept) break;
+  }
+  if (result_.sighting_splits > 0)
+    Say(Format("sighting splits: %.0f sightings split off their tracks, log target %.1f -> %.1f",
+               double(result_.sighting_splits), before, result_.log_target));
 }
 
 }  // namespace oslam

@@ -185,6 +185,18 @@ struct UnknownAssociationOptions {
   NoiseCalibrationOptions calibration;
   double refine_radius_m = 10;
   int refine_sweeps = 6;
+  // Tracks are built before the search and stay whole in it, so a sighting
+  // that continued a track by mistake (a clutter return within the track
+  // gate) stays tied to the track's landmark. After the final solve, each
+  // landmark's worst sighting whose squared whitened error exceeds
+  // sighting_split_gate (2 degrees of freedom; only those within a factor 4
+  // of the round's worst, as in data snooping) becomes a landmark of its
+  // own, and the split is kept when the whole problem's evidence rises (else
+  // the single worst is tried alone); at most sighting_split_rounds rounds
+  // (0: off). Not with diameter_per_track (a track's one diameter would go
+  // with the sighting that carries it).
+  double sighting_split_gate = 25;
+  int sighting_split_rounds = 5;
   int samples = 0;  // MC³ iterations after hill climbing (0: hill climbing only)
   int burn_in = 0;
   int num_chains = 2;
@@ -196,10 +208,12 @@ struct UnknownAssociationOptions {
 
 struct UnknownAssociationResult {
   std::vector<std::vector<int>> tracks;
-  AssociationState state;        // the best state found
-  std::vector<int> association;  // per sighting (ids = earliest track of the landmark)
-  LandmarkSlamResult solution;   // full solve of `state`, landmark covariances
-  double log_target = 0;         // of `state`, full evaluation
+  AssociationState state;  // the best state found
+  // Per sighting: ids = the earliest track of the landmark; a sighting split
+  // off its track (sighting_split_gate) num_tracks + j; -1 clutter.
+  std::vector<int> association;
+  LandmarkSlamResult solution;  // full solve of `state`, landmark covariances
+  double log_target = 0;        // of `state`, full evaluation
   long proposals = 0, accepted = 0, solves = 0, cache_hits = 0, cold_retries = 0;
   long joint_tries = 0, joint_merges = 0;  // joint re-entry merges: solves tried, pairs kept
   long clutter_tracks = 0, clutter_sightings = 0;  // left out (min_track_sightings)
@@ -222,6 +236,7 @@ struct UnknownAssociationResult {
   // trajectory.
   LandmarkSlamOptions slam_options;
   long refine_splits = 0, refine_merges = 0;
+  long sighting_splits = 0;  // sightings split off their tracks (sighting_split_gate)
   double calibration_time_s = 0;
   SamplerSummary sampler;  // when samples > 0
 };
@@ -321,6 +336,11 @@ class LandmarkAssociation {
   // MC³ from the hill-climbing state; the better of its best and `best`.
   EvaluationPtr SampleMc3(EvaluationPtr best);
   void FinalSolve(const EvaluationPtr& best);
+  // The sighting splits (sighting_split_gate) on result_'s association.
+  void SplitMisfitSightings();
+  // Result_'s association with the worst misfit sighting of each landmark
+  // (beyond the gate, near the round's worst) split off, worst first.
+  std::vector<int> MisfitSightings() const;
   // A full solve of a window's state, timed.
   EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from);
   void Say(const std::string& line) const;

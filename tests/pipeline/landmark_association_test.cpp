@@ -4,7 +4,8 @@
 // re-entry merge closes the loop the single merges leave open, also when its
 // alignment pairs some trees wrongly, and in a city grid that repeats itself
 // by the alignment weighted by fit; no landmark
-// keeps two sightings of one scan; short tracks are left to clutter; a run
+// keeps two sightings of one scan; a false return riding a track is split
+// off it; short tracks are left to clutter; a run
 // is reproducible from its seed; the option checks.
 #include "pipeline/landmark_association.h"
 
@@ -261,6 +262,51 @@ TEST(LandmarkAssociationTest, NoLandmarkKeepsTwoSightingsOfOneScan) {
   EXPECT_EQ(result.scan_splits, 1);  // merged in the first window, split in the second
 }
 
+// A false return within the track gate continues a tree's track; the
+// search keeps tracks whole, so only the sighting split after the final
+// solve gives it its own landmark, and the true association's evidence.
+TEST(LandmarkAssociationTest, AMisfitSightingIsSplitOffItsTrack) {
+  LandmarkDataset data = SimulateDrive(5, nullptr);
+  // The middle sighting of tree 0's first stretch, 0.6 m long in range (6
+  // sigma; the track gate is 1 m): a return of something else.
+  std::vector<size_t> of_tree;
+  for (size_t k = 0; k < data.sightings.size(); ++k)
+    if (data.sightings[k].landmark == 0 && data.sightings[k].pose < data.num_poses / 2)
+      of_tree.push_back(k);
+  ASSERT_GE(of_tree.size(), 3u);
+  const size_t wrong = of_tree[of_tree.size() / 2];
+  data.sightings[wrong].range_m += 0.6;
+  data.sightings[wrong].landmark = 99;
+  UnknownAssociationOptions options;
+  options.tracks = {1.0, 2};
+  options.target = DriveTargetOptions(LandmarkEvaluationMode::kMarginal);
+  options.moves.merge_distance_m = 5.0;  // as HillClimbingRecoversTheTrueAssociation
+  options.moves.merge_sigma_m = 2.5;
+  options.window_poses = 0;
+  options.targeted_radius_m = 0;
+  options.hill_climb_steps_per_track = 15;
+  options.seed = 7;
+  UnknownAssociationOptions whole = options;
+  whole.sighting_split_gate = 0;
+  const UnknownAssociationResult kept = SolveUnknownAssociation(data, whole);
+  const UnknownAssociationResult split = SolveUnknownAssociation(data, options);
+  const std::vector<int> truth = GivenAssociation(data);
+  const PairwiseAgreement a = ComparePairwise(kept.association, truth);
+  const PairwiseAgreement b = ComparePairwise(split.association, truth);
+  std::printf("tracks whole: P %.4f, %.1f; split: P %.4f, %.1f (%ld split)\n", a.precision,
+              kept.log_target, b.precision, split.log_target, split.sighting_splits);
+  EXPECT_LT(a.precision, 1.0);  // the false return rides with its track
+  EXPECT_EQ(kept.sighting_splits, 0);
+  EXPECT_EQ(split.sighting_splits, 1);
+  EXPECT_DOUBLE_EQ(b.precision, 1.0);
+  EXPECT_DOUBLE_EQ(b.recall, 1.0);
+  EXPECT_GT(split.log_target, kept.log_target);
+  // The result is the true association's solve under the search's model.
+  const LandmarkSlamResult known =
+      LandmarkSlam(split.slam_options).Solve(WithNoiseScales(data, split.noise_scales), truth);
+  EXPECT_NEAR(split.log_target, known.evidence.log_evidence, 1e-3);
+}
+
 // Tracks shorter than min_track_sightings are clutter: out of the state, -1.
 TEST(LandmarkAssociationTest, ShortTracksAreLeftToClutter) {
   LandmarkDataset data = SimulateDrive(5, nullptr);
@@ -414,6 +460,14 @@ TEST(LandmarkAssociationTest, RejectsInvalidOptions) {
   joint.joint_min_inliers = 0;  // off: the other joint options are not used
   joint.joint_inlier_m = 0;
   EXPECT_TRUE(joint.Validate(&why));
+  UnknownAssociationOptions split;
+  split.sighting_split_gate = -1;
+  EXPECT_FALSE(split.Validate(&why));
+  split.sighting_split_gate = std::nan("");
+  EXPECT_FALSE(split.Validate(&why));
+  split.sighting_split_gate = 0;  // off
+  split.sighting_split_rounds = -1;
+  EXPECT_FALSE(split.Validate(&why));
   UnknownAssociationOptions targeted;  // the targeted merges need the closed form
   targeted.target.mode = LandmarkEvaluationMode::kLocal;
   EXPECT_FALSE(targeted.Validate(&why));
