@@ -64,16 +64,16 @@ TEST(LandmarkAssociationRealTest, VictoriaParkWithIdsHidden) {
       outliers, c.precision, c.recall, rmse, clean_rmse, result.total_time_s);
   // Measured (docs/results.md): 3 duplicate pairs 0.03-0.21 m apart with
   // 27-49 sightings each; precision 0.961 against the file's ids, 0.9993
-  // with them joined; recall 0.998; 159 landmarks; 3.37 m from the file's
-  // solve under the search's model, 1.10 m from it without its 21 outlier
-  // sightings.
+  // with them joined; recall 0.998; 161 landmarks (2 sightings split off
+  // their tracks); 3.44 m from the file's solve under the search's model,
+  // 1.17 m from it without its 21 outlier sightings.
   EXPECT_EQ(joined, 3);
   EXPECT_GE(b.precision, 0.998);
   EXPECT_GE(b.recall, 0.99);
   EXPECT_GE(c.precision, 0.999);
   EXPECT_GE(c.recall, 0.995);
   EXPECT_LT(rmse, 5.0);
-  EXPECT_LT(clean_rmse, 1.2);
+  EXPECT_LT(clean_rmse, 1.3);
 }
 
 // The raw scans (detections_no_ids: clutter, Ackermann odometry from speed and
