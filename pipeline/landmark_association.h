@@ -208,7 +208,7 @@ struct UnknownAssociationOptions {
 
 struct UnknownAssociationResult {
   std::vector<std::vector<int>> tracks;
-  AssociationState state;  // the best state found
+  AssociationState state;  // the best state of tracks found (before the sighting splits)
   // Per sighting: ids = the earliest track of the landmark; a sighting split
   // off its track (sighting_split_gate) num_tracks + j; -1 clutter.
   std::vector<int> association;
