@@ -2,6 +2,7 @@
 // set, the association taken from the file's landmark ids (GTSAM format) or
 // from an association file, or found (--unknown-association). Writes the
 // O-Map (trees as objects) and the trajectory CSV.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,12 +27,19 @@ namespace {
 std::string TrajectoryCsv(const LandmarkDataset& data, const LandmarkSlamResult& result) {
   std::ostringstream out;
   const bool times = static_cast<int>(data.pose_times.size()) == data.num_poses;
-  out << "pose,pose_id," << (times ? "time_s," : "") << "x_m,y_m,theta_rad\n";
+  // --pose-covariances: each pose's marginal standard deviations as well.
+  const bool spread = static_cast<int>(result.pose_covariances.size()) == data.num_poses;
+  out << "pose,pose_id," << (times ? "time_s," : "") << "x_m,y_m,theta_rad"
+      << (spread ? ",x_std_m,y_std_m,theta_std_rad" : "") << '\n';
   for (int i = 0; i < data.num_poses; ++i) {
     const Pose2& p = result.trajectory[i];
     out << i << ',' << data.pose_ids[i] << ',';
     if (times) out << CsvNumber(data.pose_times[i]) << ',';
-    out << CsvNumber(p.x) << ',' << CsvNumber(p.y) << ',' << CsvNumber(p.theta) << '\n';
+    out << CsvNumber(p.x) << ',' << CsvNumber(p.y) << ',' << CsvNumber(p.theta);
+    if (spread)
+      for (int k = 0; k < 3; ++k)
+        out << ',' << CsvNumber(std::sqrt(std::max(0.0, result.pose_covariances[i](k, k))));
+    out << '\n';
   }
   return out.str();
 }

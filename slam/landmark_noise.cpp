@@ -189,7 +189,14 @@ NoiseCalibrationResult CalibrateNoise(const LandmarkDataset& data,
   std::vector<int> used = association;
   for (int it = 0; it <= options.iterations; ++it) {
     const LandmarkDataset scaled = WithNoiseScales(data, out.scales);
-    LandmarkSlam slam(solve);
+    // The last solve, under the final scales, is the result: with the
+    // covariances the caller asked for.
+    LandmarkSlamOptions this_solve = solve;
+    if (it == options.iterations) {
+      this_solve.compute_landmark_covariances = slam_options.compute_landmark_covariances;
+      this_solve.compute_pose_covariances = slam_options.compute_pose_covariances;
+    }
+    LandmarkSlam slam(this_solve);
     LandmarkSlamResult result = slam.Solve(scaled, used, warm ? &previous : nullptr);
     if (!result.summary.IsUsable())
       throw Error::InFile(data.path,

@@ -88,6 +88,26 @@ TEST(LandmarkNoiseTest, TheRightNoiseStaysAndOutliersAreLeftOut) {
   EXPECT_LT(c.outliers, 2 * spoiled);
 }
 
+// The last solve is the result: with the covariances the caller asked for
+// (the calibration's own solves go without).
+TEST(LandmarkNoiseTest, TheResultCarriesTheCovariancesAskedFor) {
+  const LandmarkWorld world = CityDrive();
+  NoiseCalibrationOptions options;
+  options.iterations = 1;
+  LandmarkSlamOptions slam;
+  slam.compute_pose_covariances = true;
+  const NoiseCalibrationResult c =
+      CalibrateNoise(world.data, world.true_association, slam, options);
+  ASSERT_EQ(c.solution.pose_covariances.size(), world.true_trajectory.size());
+  EXPECT_GT(c.solution.pose_covariances.back()(0, 0), 0.0);
+  ASSERT_FALSE(c.solution.landmarks.empty());
+  for (const MappedLandmark& l : c.solution.landmarks) EXPECT_GT(l.covariance(0, 0), 0.0);
+  slam.compute_landmark_covariances = slam.compute_pose_covariances = false;
+  const NoiseCalibrationResult bare =
+      CalibrateNoise(world.data, world.true_association, slam, options);
+  EXPECT_TRUE(bare.solution.pose_covariances.empty());
+}
+
 TEST(LandmarkNoiseTest, WithNoiseScalesScalesEveryCovariance) {
   const LandmarkWorld world = CityDrive();
   NoiseScales s;
