@@ -262,6 +262,21 @@ TEST(LandmarkAssociationTest, NoLandmarkKeepsTwoSightingsOfOneScan) {
   EXPECT_EQ(result.scan_splits, 1);  // merged in the first window, split in the second
 }
 
+// One window of random hill climbing on SimulateDrive's trees, as
+// HillClimbingRecoversTheTrueAssociation with the closed-form evaluation.
+UnknownAssociationOptions OneWindowClimbOptions() {
+  UnknownAssociationOptions options;
+  options.tracks = {1.0, 2};
+  options.target = DriveTargetOptions(LandmarkEvaluationMode::kMarginal);
+  options.moves.merge_distance_m = 5.0;
+  options.moves.merge_sigma_m = 2.5;
+  options.window_poses = 0;
+  options.targeted_radius_m = 0;  // random moves only
+  options.hill_climb_steps_per_track = 15;
+  options.seed = 7;
+  return options;
+}
+
 // A false return within the track gate continues a tree's track; the
 // search keeps tracks whole, so only the sighting split after the final
 // solve gives it its own landmark, and the true association's evidence.
@@ -277,15 +292,7 @@ TEST(LandmarkAssociationTest, AMisfitSightingIsSplitOffItsTrack) {
   const size_t wrong = of_tree[of_tree.size() / 2];
   data.sightings[wrong].range_m += 0.6;
   data.sightings[wrong].landmark = 99;
-  UnknownAssociationOptions options;
-  options.tracks = {1.0, 2};
-  options.target = DriveTargetOptions(LandmarkEvaluationMode::kMarginal);
-  options.moves.merge_distance_m = 5.0;  // as HillClimbingRecoversTheTrueAssociation
-  options.moves.merge_sigma_m = 2.5;
-  options.window_poses = 0;
-  options.targeted_radius_m = 0;
-  options.hill_climb_steps_per_track = 15;
-  options.seed = 7;
+  const UnknownAssociationOptions options = OneWindowClimbOptions();
   UnknownAssociationOptions whole = options;
   whole.sighting_split_gate = 0;
   const UnknownAssociationResult kept = SolveUnknownAssociation(data, whole);
@@ -325,16 +332,8 @@ TEST(LandmarkAssociationTest, ShortTracksAreLeftToClutter) {
   std::stable_sort(
       data.sightings.begin(), data.sightings.end(),
       [](const LandmarkSighting& a, const LandmarkSighting& b) { return a.pose < b.pose; });
-  UnknownAssociationOptions options;
-  options.tracks = {1.0, 2};
-  options.target = DriveTargetOptions(LandmarkEvaluationMode::kMarginal);
-  options.moves.merge_distance_m = 5.0;  // as HillClimbingRecoversTheTrueAssociation
-  options.moves.merge_sigma_m = 2.5;
-  options.window_poses = 0;
-  options.targeted_radius_m = 0;
-  options.hill_climb_steps_per_track = 15;
+  UnknownAssociationOptions options = OneWindowClimbOptions();
   options.min_track_sightings = 2;
-  options.seed = 7;
   const UnknownAssociationResult result = SolveUnknownAssociation(data, options);
   long clutter = 0, real_left_out = 0;
   std::vector<int> kept, kept_truth;  // the sightings given to landmarks
