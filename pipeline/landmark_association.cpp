@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <map>
 #include <set>
 #include <utility>
 
@@ -13,6 +12,7 @@
 #include "core/text.h"
 #include "slam/landmark_factors.h"
 #include "slam/landmark_noise.h"
+#include "slam/landmark_reference.h"
 
 namespace oslam {
 
@@ -707,39 +707,6 @@ void LandmarkAssociation::FinalSolve(const EvaluationPtr& best) {
              double(result_.solution.landmarks.size()), result_.log_target, result_.total_time_s));
 }
 
-std::vector<int> LandmarkAssociation::MisfitSightings() const {
-  const LandmarkDataset& data = *data_;
-  const LandmarkSlamResult& solved = result_.solution;
-  std::map<int, Eigen::Vector2d> where;
-  for (const MappedLandmark& l : solved.landmarks) where[l.id] = l.position_m;
-  std::map<int, int> count;
-  for (int id : result_.association)
-    if (id >= 0) ++count[id];
-  std::map<int, std::pair<double, int>> worst;  // landmark -> (squared error, sighting)
-  double largest = 0;
-  for (size_t k = 0; k < result_.association.size(); ++k) {
-    const int id = result_.association[k];
-    const auto it = where.find(id);
-    if (id < 0 || it == where.end() || count[id] < 2) continue;
-    const LandmarkSighting& s = data.sightings[k];
-    const double e2 =
-        SightingSquaredError(s, solved.trajectory[s.pose], it->second, data.sensor_offset_m);
-    if (!(e2 > options_.sighting_split_gate)) continue;
-    largest = std::max(largest, e2);
-    auto& w = worst[id];
-    if (e2 > w.first) w = {e2, static_cast<int>(k)};
-  }
-  // A wrong sighting bends the solve around it, so its neighbours misfit
-  // too: only the worst of each landmark, and only those near the worst.
-  std::vector<std::pair<double, int>> misfits;
-  for (const auto& [id, w] : worst)
-    if (w.first >= 0.25 * largest) misfits.push_back(w);
-  std::sort(misfits.rbegin(), misfits.rend());
-  std::vector<int> sightings;
-  for (const auto& m : misfits) sightings.push_back(m.second);
-  return sightings;
-}
-
 void LandmarkAssociation::SplitMisfitSightings() {
   LandmarkSlamOptions options = result_.slam_options;
   options.compute_landmark_covariances = true;  // the result's
@@ -748,7 +715,8 @@ void LandmarkAssociation::SplitMisfitSightings() {
   int next_id = num_tracks_;
   for (const int id : result_.association) next_id = std::max(next_id, id + 1);
   for (int round = 0; round < options_.sighting_split_rounds; ++round) {
-    const std::vector<int> misfits = MisfitSightings();
+    const std::vector<int> misfits = WorstMisfitSightings(
+        *data_, result_.association, result_.solution, options_.sighting_split_gate, 2);
     if (misfits.empty()) break;
     // All of the round's misfits, else the worst alone.
     bool kept = false;

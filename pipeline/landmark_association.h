@@ -338,9 +338,6 @@ class LandmarkAssociation {
   void FinalSolve(const EvaluationPtr& best);
   // The sighting splits (sighting_split_gate) on result_'s association.
   void SplitMisfitSightings();
-  // Result_'s association with the worst misfit sighting of each landmark
-  // (beyond the gate, near the round's worst) split off, worst first.
-  std::vector<int> MisfitSightings() const;
   // A full solve of a window's state, timed.
   EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from);
   void Say(const std::string& line) const;

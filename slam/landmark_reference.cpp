@@ -41,6 +41,36 @@ std::vector<int> JoinDuplicateLandmarks(const LandmarkDataset& data, const std::
   return out;
 }
 
+std::vector<int> WorstMisfitSightings(const LandmarkDataset& data, const std::vector<int>& ids,
+                                      const LandmarkSlamResult& solved, double gate,
+                                      int min_sightings) {
+  std::map<int, Eigen::Vector2d> where;
+  for (const MappedLandmark& l : solved.landmarks) where[l.id] = l.position_m;
+  std::map<int, int> count;
+  for (int id : ids)
+    if (id >= 0) ++count[id];
+  std::map<int, std::pair<double, int>> worst;  // id -> (error, sighting)
+  double largest = 0;
+  for (size_t k = 0; k < ids.size(); ++k) {
+    const auto it = where.find(ids[k]);
+    if (ids[k] < 0 || it == where.end() || count[ids[k]] < min_sightings) continue;
+    const LandmarkSighting& s = data.sightings[k];
+    const double e2 =
+        SightingSquaredError(s, solved.trajectory[s.pose], it->second, data.sensor_offset_m);
+    if (!(e2 > gate)) continue;
+    largest = std::max(largest, e2);
+    auto& w = worst[ids[k]];
+    if (e2 > w.first) w = {e2, static_cast<int>(k)};
+  }
+  std::vector<std::pair<double, int>> misfits;
+  for (const auto& [id, w] : worst)
+    if (w.first >= 0.25 * largest) misfits.push_back(w);
+  std::sort(misfits.rbegin(), misfits.rend());
+  std::vector<int> sightings;
+  for (const auto& m : misfits) sightings.push_back(m.second);
+  return sightings;
+}
+
 std::vector<int> LeaveOutOutlierSightings(const LandmarkDataset& data, std::vector<int> ids,
                                           const LandmarkSlamOptions& options, double gate,
                                           LandmarkSlamResult* solved, int* removed, int rounds) {
@@ -49,36 +79,23 @@ std::vector<int> LeaveOutOutlierSightings(const LandmarkDataset& data, std::vect
   const std::vector<int> given = ids;
   LandmarkSlamResult result = slam.Solve(data, ids);
   for (int round = 0; round < rounds; ++round) {
+    // Data snooping in batches (WorstMisfitSightings); a sighting left out
+    // that fits the new solve comes back.
+    const std::vector<int> misfits = WorstMisfitSightings(data, ids, result, gate);
     std::map<int, Eigen::Vector2d> where;
     for (const MappedLandmark& l : result.landmarks) where[l.id] = l.position_m;
-    // Data snooping in batches: a wrong sighting bends the solve, so the
-    // sightings near it look wrong too; only the worst of each landmark,
-    // and only those near the round's worst, go in one round, and a
-    // sighting left out that fits the new solve comes back.
-    std::map<int, std::pair<double, int>> worst;  // id -> (error, sighting)
-    double largest = 0;
-    bool changed = false;
+    bool changed = !misfits.empty();
     for (size_t k = 0; k < ids.size(); ++k) {
       const auto it = where.find(given[k]);
-      if (given[k] < 0 || it == where.end()) continue;
+      if (ids[k] >= 0 || given[k] < 0 || it == where.end()) continue;
       const LandmarkSighting& s = data.sightings[k];
-      const double e2 =
-          SightingSquaredError(s, result.trajectory[s.pose], it->second, data.sensor_offset_m);
-      if (ids[k] < 0) {
-        if (e2 <= gate) ids[k] = given[k];
-        changed |= ids[k] >= 0;
-        continue;
-      }
-      if (!(e2 > gate)) continue;
-      largest = std::max(largest, e2);
-      auto& w = worst[ids[k]];
-      if (e2 > w.first) w = {e2, static_cast<int>(k)};
-    }
-    for (const auto& [id, w] : worst)
-      if (w.first >= 0.25 * largest) {
-        ids[w.second] = -1;
+      if (SightingSquaredError(s, result.trajectory[s.pose], it->second, data.sensor_offset_m) <=
+          gate) {
+        ids[k] = given[k];
         changed = true;
       }
+    }
+    for (int k : misfits) ids[k] = -1;
     if (!changed) break;
     result = slam.Solve(data, ids);  // not from the bent solve
   }

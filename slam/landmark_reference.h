@@ -22,6 +22,15 @@ std::vector<int> JoinDuplicateLandmarks(const LandmarkDataset& data, const std::
                                         const LandmarkSlamResult& solved, double radius_m,
                                         int* joined = nullptr);
 
+// Data snooping's batch at a solve `solved` of `ids`: of each landmark with
+// at least `min_sightings` sightings, the worst sighting whose squared
+// whitened error exceeds `gate`, kept only within a factor 4 of the worst of
+// all (a wrong sighting bends the solve around it, so its neighbours misfit
+// too); worst first.
+std::vector<int> WorstMisfitSightings(const LandmarkDataset& data, const std::vector<int>& ids,
+                                      const LandmarkSlamResult& solved, double gate,
+                                      int min_sightings = 1);
+
 // The sightings of `ids` whose squared whitened error at the solve of `ids`
 // exceeds `gate` (2 degrees of freedom; 25 is the noise calibration's gate)
 // set to -1, re-solved until none exceeds it (at most `rounds` times). Data
