@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <set>
+#include <tuple>
 #include <utility>
 
 #include "core/angles.h"
@@ -707,6 +709,78 @@ void LandmarkAssociation::FinalSolve(const EvaluationPtr& best) {
              double(result_.solution.landmarks.size()), result_.log_target, result_.total_time_s));
 }
 
+long LandmarkAssociation::JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id) {
+  const LandmarkDataset& data = *data_;
+  std::map<int, std::vector<int>> members;  // landmark -> its sightings
+  for (size_t k = 0; k < result_.association.size(); ++k)
+    if (result_.association[k] >= 0) members[result_.association[k]].push_back(int(k));
+  auto poses_of = [&](int id) {
+    std::map<int, int> at;  // pose -> sighting
+    for (int k : members[id]) at[data.sightings[k].pose] = k;
+    return at;
+  };
+  // Pairs whose positions agree within the gate and that share a scan.
+  std::vector<std::tuple<double, int, int>> pairs;  // (squared distance in sigmas, a, b)
+  const std::vector<MappedLandmark>& marks = result_.solution.landmarks;
+  for (size_t i = 0; i < marks.size(); ++i)
+    for (size_t j = i + 1; j < marks.size(); ++j) {
+      const Eigen::Vector2d d = marks[i].position_m - marks[j].position_m;
+      const Eigen::Matrix2d s =
+          marks[i].covariance.topLeftCorner<2, 2>() + marks[j].covariance.topLeftCorner<2, 2>();
+      const Eigen::LLT<Eigen::Matrix2d> llt(s);
+      if (llt.info() != Eigen::Success || !(s.determinant() > 0)) continue;
+      const double m2 = d.dot(llt.solve(d));
+      if (!(m2 <= options_.sighting_split_gate)) continue;
+      const std::map<int, int> a = poses_of(marks[i].id), b = poses_of(marks[j].id);
+      bool shared = false;
+      for (const auto& entry : b) shared = shared || a.count(entry.first);
+      if (shared) pairs.emplace_back(m2, marks[i].id, marks[j].id);
+    }
+  std::sort(pairs.begin(), pairs.end());
+  std::set<int> touched;
+  long joined = 0;
+  for (const auto& [m2, a, b] : pairs) {
+    if (touched.count(a) || touched.count(b)) continue;
+    auto find = [&](int id) -> const MappedLandmark* {
+      for (const MappedLandmark& l : result_.solution.landmarks)
+        if (l.id == id) return &l;
+      return nullptr;
+    };
+    const MappedLandmark* la = find(a);
+    const MappedLandmark* lb = find(b);
+    if (!la || !lb) continue;
+    const double na = double(members[a].size()), nb = double(members[b].size());
+    const Eigen::Vector2d joint = (na * la->position_m + nb * lb->position_m) / (na + nb);
+    std::vector<int> trial = result_.association;
+    for (int k : members[b]) trial[k] = a;
+    const std::map<int, int> at_a = poses_of(a), at_b = poses_of(b);
+    int split = 0;
+    for (const auto& [pose, kb] : at_b) {
+      const auto ka = at_a.find(pose);
+      if (ka == at_a.end()) continue;
+      // The one of the scan's two sightings farther from the joint place goes.
+      auto error = [&](int k) {
+        return SightingSquaredError(data.sightings[k], result_.solution.trajectory[pose], joint,
+                                    data.sensor_offset_m);
+      };
+      trial[error(ka->second) > error(kb) ? ka->second : kb] = *next_id + split++;
+    }
+    LandmarkSlamResult solved = slam->Solve(data, trial, &result_.solution);
+    if (!solved.summary.IsUsable() || !solved.evidence.valid ||
+        !(solved.evidence.log_evidence > result_.log_target))
+      continue;
+    result_.association = std::move(trial);
+    result_.solution = std::move(solved);
+    result_.log_target = result_.solution.evidence.log_evidence;
+    result_.sighting_splits += split;
+    *next_id += split;
+    touched.insert(a);
+    touched.insert(b);
+    ++joined;
+  }
+  return joined;
+}
+
 void LandmarkAssociation::SplitMisfitSightings() {
   LandmarkSlamOptions options = result_.slam_options;
   options.compute_landmark_covariances = true;  // the result's
@@ -714,6 +788,7 @@ void LandmarkAssociation::SplitMisfitSightings() {
   const double before = result_.log_target;
   int next_id = num_tracks_;
   for (const int id : result_.association) next_id = std::max(next_id, id + 1);
+  result_.shared_scan_joins = JoinAcrossSharedScans(&slam, &next_id);
   for (int round = 0; round < options_.sighting_split_rounds; ++round) {
     const std::vector<int> misfits = WorstMisfitSightings(
         *data_, result_.association, result_.solution, options_.sighting_split_gate, 2);
@@ -739,8 +814,11 @@ void LandmarkAssociation::SplitMisfitSightings() {
     if (!kept) break;
   }
   if (result_.sighting_splits > 0)
-    Say(Format("sighting splits: %.0f sightings split off their tracks, log target %.1f -> %.1f",
-               double(result_.sighting_splits), before, result_.log_target));
+    Say(
+        Format("sighting splits: %.0f sightings split off their tracks (%.0f landmarks joined "
+               "across a shared scan), log target %.1f -> %.1f",
+               double(result_.sighting_splits), double(result_.shared_scan_joins), before,
+               result_.log_target));
 }
 
 }  // namespace oslam

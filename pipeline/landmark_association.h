@@ -236,7 +236,8 @@ struct UnknownAssociationResult {
   // trajectory.
   LandmarkSlamOptions slam_options;
   long refine_splits = 0, refine_merges = 0;
-  long sighting_splits = 0;  // sightings split off their tracks (sighting_split_gate)
+  long sighting_splits = 0;    // sightings split off their tracks (sighting_split_gate)
+  long shared_scan_joins = 0;  // landmark pairs joined across a shared scan (the same)
   double calibration_time_s = 0;
   SamplerSummary sampler;  // when samples > 0
 };
@@ -338,6 +339,11 @@ class LandmarkAssociation {
   void FinalSolve(const EvaluationPtr& best);
   // The sighting splits (sighting_split_gate) on result_'s association.
   void SplitMisfitSightings();
+  // Before them: two landmarks agreeing in place within the gate but sharing
+  // a scan (one sighting per scan forbids their merge) tried joined with,
+  // in each shared scan, the sighting farther from their joint place split
+  // off; kept when the evidence rises. Returns the pairs joined.
+  long JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id);
   // A full solve of a window's state, timed.
   EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from);
   void Say(const std::string& line) const;

@@ -314,6 +314,40 @@ TEST(LandmarkAssociationTest, AMisfitSightingIsSplitOffItsTrack) {
   EXPECT_NEAR(split.log_target, known.evidence.log_evidence, 1e-3);
 }
 
+// A false return beside a tree's true one in the same scan ends the tree's
+// track there (two candidates), and rides with one of its two parts, which
+// then can never merge (one sighting per scan) however close they are:
+// joined with the farther sighting of the shared scan split off, the true
+// association comes back.
+TEST(LandmarkAssociationTest, PartsSharingAScanAreJoinedWithoutTheFalseReturn) {
+  LandmarkDataset data = SimulateDrive(5, nullptr);
+  std::vector<size_t> of_tree;
+  for (size_t k = 0; k < data.sightings.size(); ++k)
+    if (data.sightings[k].landmark == 0 && data.sightings[k].pose < data.num_poses / 2)
+      of_tree.push_back(k);
+  ASSERT_GE(of_tree.size(), 3u);
+  LandmarkSighting false_return = data.sightings[of_tree[of_tree.size() / 2]];
+  false_return.range_m += 0.3;  // 3 sigma: no misfit beyond the gate
+  false_return.landmark = 99;
+  data.sightings.insert(data.sightings.begin() + of_tree[of_tree.size() / 2] + 1, false_return);
+  const UnknownAssociationOptions options = OneWindowClimbOptions();
+  UnknownAssociationOptions without = options;
+  without.sighting_split_gate = 0;
+  const UnknownAssociationResult parts = SolveUnknownAssociation(data, without);
+  const UnknownAssociationResult joined = SolveUnknownAssociation(data, options);
+  const std::vector<int> truth = GivenAssociation(data);
+  const PairwiseAgreement a = ComparePairwise(parts.association, truth);
+  const PairwiseAgreement b = ComparePairwise(joined.association, truth);
+  std::printf("without: P %.4f R %.4f, %.1f; joined: P %.4f R %.4f, %.1f (%ld joins)\n",
+              a.precision, a.recall, parts.log_target, b.precision, b.recall, joined.log_target,
+              joined.shared_scan_joins);
+  EXPECT_LT(a.recall, 1.0);  // the tree in two parts
+  EXPECT_EQ(joined.shared_scan_joins, 1);
+  EXPECT_DOUBLE_EQ(b.precision, 1.0);
+  EXPECT_DOUBLE_EQ(b.recall, 1.0);
+  EXPECT_GT(joined.log_target, parts.log_target);
+}
+
 // Tracks shorter than min_track_sightings are clutter: out of the state, -1.
 TEST(LandmarkAssociationTest, ShortTracksAreLeftToClutter) {
   LandmarkDataset data = SimulateDrive(5, nullptr);
