@@ -782,9 +782,8 @@ long LandmarkAssociation::JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id
 }
 
 void LandmarkAssociation::SplitMisfitSightings() {
-  LandmarkSlamOptions options = result_.slam_options;
-  options.compute_landmark_covariances = true;  // the result's
-  LandmarkSlam slam(options);
+  // The trials go without covariances; the result gets them at the end.
+  LandmarkSlam slam(result_.slam_options);
   const double before = result_.log_target;
   int next_id = num_tracks_;
   for (const int id : result_.association) next_id = std::max(next_id, id + 1);
@@ -813,12 +812,17 @@ void LandmarkAssociation::SplitMisfitSightings() {
     }
     if (!kept) break;
   }
-  if (result_.sighting_splits > 0)
-    Say(
-        Format("sighting splits: %.0f sightings split off their tracks (%.0f landmarks joined "
-               "across a shared scan), log target %.1f -> %.1f",
-               double(result_.sighting_splits), double(result_.shared_scan_joins), before,
-               result_.log_target));
+  if (result_.sighting_splits == 0) return;
+  LandmarkSlamOptions with_covariances = result_.slam_options;
+  with_covariances.compute_landmark_covariances = true;
+  result_.solution =
+      LandmarkSlam(with_covariances).Solve(*data_, result_.association, &result_.solution);
+  result_.log_target = result_.solution.evidence.log_evidence;
+  Say(
+      Format("sighting splits: %.0f sightings split off their tracks (%.0f landmarks joined "
+             "across a shared scan), log target %.1f -> %.1f",
+             double(result_.sighting_splits), double(result_.shared_scan_joins), before,
+             result_.log_target));
 }
 
 }  // namespace oslam
