@@ -277,6 +277,16 @@ UnknownAssociationOptions OneWindowClimbOptions() {
   return options;
 }
 
+// The middle sighting of tree 0's first stretch of SimulateDrive.
+size_t MiddleSightingOfTreeZero(const LandmarkDataset& data) {
+  std::vector<size_t> of_tree;
+  for (size_t k = 0; k < data.sightings.size(); ++k)
+    if (data.sightings[k].landmark == 0 && data.sightings[k].pose < data.num_poses / 2)
+      of_tree.push_back(k);
+  if (of_tree.size() < 3) throw Error("SimulateDrive: tree 0 seen fewer than 3 times");
+  return of_tree[of_tree.size() / 2];
+}
+
 // A false return within the track gate continues a tree's track; the
 // search keeps tracks whole, so only the sighting split after the final
 // solve gives it its own landmark, and the true association's evidence.
@@ -284,12 +294,7 @@ TEST(LandmarkAssociationTest, AMisfitSightingIsSplitOffItsTrack) {
   LandmarkDataset data = SimulateDrive(5, nullptr);
   // The middle sighting of tree 0's first stretch, 0.6 m long in range (6
   // sigma; the track gate is 1 m): a return of something else.
-  std::vector<size_t> of_tree;
-  for (size_t k = 0; k < data.sightings.size(); ++k)
-    if (data.sightings[k].landmark == 0 && data.sightings[k].pose < data.num_poses / 2)
-      of_tree.push_back(k);
-  ASSERT_GE(of_tree.size(), 3u);
-  const size_t wrong = of_tree[of_tree.size() / 2];
+  const size_t wrong = MiddleSightingOfTreeZero(data);
   data.sightings[wrong].range_m += 0.6;
   data.sightings[wrong].landmark = 99;
   const UnknownAssociationOptions options = OneWindowClimbOptions();
@@ -321,15 +326,11 @@ TEST(LandmarkAssociationTest, AMisfitSightingIsSplitOffItsTrack) {
 // association comes back.
 TEST(LandmarkAssociationTest, PartsSharingAScanAreJoinedWithoutTheFalseReturn) {
   LandmarkDataset data = SimulateDrive(5, nullptr);
-  std::vector<size_t> of_tree;
-  for (size_t k = 0; k < data.sightings.size(); ++k)
-    if (data.sightings[k].landmark == 0 && data.sightings[k].pose < data.num_poses / 2)
-      of_tree.push_back(k);
-  ASSERT_GE(of_tree.size(), 3u);
-  LandmarkSighting false_return = data.sightings[of_tree[of_tree.size() / 2]];
+  const size_t middle = MiddleSightingOfTreeZero(data);
+  LandmarkSighting false_return = data.sightings[middle];
   false_return.range_m += 0.3;  // 3 sigma: no misfit beyond the gate
   false_return.landmark = 99;
-  data.sightings.insert(data.sightings.begin() + of_tree[of_tree.size() / 2] + 1, false_return);
+  data.sightings.insert(data.sightings.begin() + middle + 1, false_return);
   const UnknownAssociationOptions options = OneWindowClimbOptions();
   UnknownAssociationOptions without = options;
   without.sighting_split_gate = 0;
