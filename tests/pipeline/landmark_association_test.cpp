@@ -287,6 +287,16 @@ size_t MiddleSightingOfTreeZero(const LandmarkDataset& data) {
   return of_tree[of_tree.size() / 2];
 }
 
+// The one-window search on `data` without, then with, the joins and splits
+// after the final solve.
+std::pair<UnknownAssociationResult, UnknownAssociationResult> WithoutAndWithSplits(
+    const LandmarkDataset& data) {
+  UnknownAssociationOptions without = OneWindowClimbOptions();
+  without.sighting_split_gate = 0;
+  return {SolveUnknownAssociation(data, without),
+          SolveUnknownAssociation(data, OneWindowClimbOptions())};
+}
+
 // A false return within the track gate continues a tree's track; the
 // search keeps tracks whole, so only the sighting split after the final
 // solve gives it its own landmark, and the true association's evidence.
@@ -297,11 +307,7 @@ TEST(LandmarkAssociationTest, AMisfitSightingIsSplitOffItsTrack) {
   const size_t wrong = MiddleSightingOfTreeZero(data);
   data.sightings[wrong].range_m += 0.6;
   data.sightings[wrong].landmark = 99;
-  const UnknownAssociationOptions options = OneWindowClimbOptions();
-  UnknownAssociationOptions whole = options;
-  whole.sighting_split_gate = 0;
-  const UnknownAssociationResult kept = SolveUnknownAssociation(data, whole);
-  const UnknownAssociationResult split = SolveUnknownAssociation(data, options);
+  const auto [kept, split] = WithoutAndWithSplits(data);
   const std::vector<int> truth = GivenAssociation(data);
   const PairwiseAgreement a = ComparePairwise(kept.association, truth);
   const PairwiseAgreement b = ComparePairwise(split.association, truth);
@@ -331,11 +337,7 @@ TEST(LandmarkAssociationTest, PartsSharingAScanAreJoinedWithoutTheFalseReturn) {
   false_return.range_m += 0.3;  // 3 sigma: no misfit beyond the gate
   false_return.landmark = 99;
   data.sightings.insert(data.sightings.begin() + middle + 1, false_return);
-  const UnknownAssociationOptions options = OneWindowClimbOptions();
-  UnknownAssociationOptions without = options;
-  without.sighting_split_gate = 0;
-  const UnknownAssociationResult parts = SolveUnknownAssociation(data, without);
-  const UnknownAssociationResult joined = SolveUnknownAssociation(data, options);
+  const auto [parts, joined] = WithoutAndWithSplits(data);
   const std::vector<int> truth = GivenAssociation(data);
   const PairwiseAgreement a = ComparePairwise(parts.association, truth);
   const PairwiseAgreement b = ComparePairwise(joined.association, truth);
