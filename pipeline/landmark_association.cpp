@@ -709,6 +709,18 @@ void LandmarkAssociation::FinalSolve(const EvaluationPtr& best) {
              double(result_.solution.landmarks.size()), result_.log_target, result_.total_time_s));
 }
 
+bool LandmarkAssociation::KeepIfBetter(LandmarkSlam* slam, std::vector<int> trial, long splits) {
+  LandmarkSlamResult solved = slam->Solve(*data_, trial, &result_.solution);
+  if (!solved.summary.IsUsable() || !solved.evidence.valid ||
+      !(solved.evidence.log_evidence > result_.log_target))
+    return false;
+  result_.association = std::move(trial);
+  result_.solution = std::move(solved);
+  result_.log_target = result_.solution.evidence.log_evidence;
+  result_.sighting_splits += splits;
+  return true;
+}
+
 long LandmarkAssociation::JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id) {
   const LandmarkDataset& data = *data_;
   std::map<int, std::vector<int>> members;  // landmark -> its sightings
@@ -739,13 +751,13 @@ long LandmarkAssociation::JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id
   std::sort(pairs.begin(), pairs.end());
   std::set<int> touched;
   long joined = 0;
+  auto find = [&](int id) -> const MappedLandmark* {  // in the current solution
+    for (const MappedLandmark& l : result_.solution.landmarks)
+      if (l.id == id) return &l;
+    return nullptr;
+  };
   for (const auto& [m2, a, b] : pairs) {
     if (touched.count(a) || touched.count(b)) continue;
-    auto find = [&](int id) -> const MappedLandmark* {
-      for (const MappedLandmark& l : result_.solution.landmarks)
-        if (l.id == id) return &l;
-      return nullptr;
-    };
     const MappedLandmark* la = find(a);
     const MappedLandmark* lb = find(b);
     if (!la || !lb) continue;
@@ -765,14 +777,7 @@ long LandmarkAssociation::JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id
       };
       trial[error(ka->second) > error(kb) ? ka->second : kb] = *next_id + split++;
     }
-    LandmarkSlamResult solved = slam->Solve(data, trial, &result_.solution);
-    if (!solved.summary.IsUsable() || !solved.evidence.valid ||
-        !(solved.evidence.log_evidence > result_.log_target))
-      continue;
-    result_.association = std::move(trial);
-    result_.solution = std::move(solved);
-    result_.log_target = result_.solution.evidence.log_evidence;
-    result_.sighting_splits += split;
+    if (!KeepIfBetter(slam, std::move(trial), split)) continue;
     *next_id += split;
     touched.insert(a);
     touched.insert(b);
@@ -797,13 +802,7 @@ void LandmarkAssociation::SplitMisfitSightings() {
     for (const size_t n : {misfits.size(), size_t{1}}) {
       std::vector<int> trial = result_.association;
       for (size_t j = 0; j < n; ++j) trial[misfits[j]] = next_id + static_cast<int>(j);
-      LandmarkSlamResult solved = slam.Solve(*data_, trial, &result_.solution);
-      if (solved.summary.IsUsable() && solved.evidence.valid &&
-          solved.evidence.log_evidence > result_.log_target) {
-        result_.association = std::move(trial);
-        result_.solution = std::move(solved);
-        result_.log_target = result_.solution.evidence.log_evidence;
-        result_.sighting_splits += static_cast<long>(n);
+      if (KeepIfBetter(&slam, std::move(trial), static_cast<long>(n))) {
         next_id += static_cast<int>(n);
         kept = true;
         break;

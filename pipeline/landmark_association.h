@@ -344,6 +344,9 @@ class LandmarkAssociation {
   // in each shared scan, the sighting farther from their joint place split
   // off; kept when the evidence rises. Returns the pairs joined.
   long JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id);
+  // Solves `trial` (an association of result_'s sightings with `splits`
+  // sightings split off) and makes it result_'s when its evidence is higher.
+  bool KeepIfBetter(LandmarkSlam* slam, std::vector<int> trial, long splits);
   // A full solve of a window's state, timed.
   EvaluationPtr Refine(const AssociationState& state, const StateEvaluation* from);
   void Say(const std::string& line) const;
