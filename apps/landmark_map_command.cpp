@@ -257,6 +257,10 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&u.num_chains, "chains", "N", "unknown association: MC3 chains");
   b.Add(&u.window_poses, "window", "POSES",
         "unknown association: poses added per hill-climbing window (0: one window)");
+  b.Add(&u.window_drift_spacing, "window-drift", "FRACTION",
+        "unknown association: a window also ends where the dead reckoning's drift since the "
+        "last solve reaches this fraction of the landmarks' spacing (0: off)")
+      .Check([this] { return options_.unknown.window_drift_spacing >= 0; }, "must be >= 0");
   b.Add(&u.tracks.gate_m, "track-gate", "M",
         "unknown association: a sighting continues a track when its world position is this "
         "close to the track's last one");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Core>
 
@@ -84,6 +85,96 @@ std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
     begin = end;
   }
   return tracks;
+}
+
+namespace {
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+// The odometry step reaching each pose from the one before (nullptr where
+// the chain has none).
+std::vector<const RelativePoseMeasurement*> ChainSteps(const LandmarkDataset& data) {
+  std::vector<const RelativePoseMeasurement*> steps(static_cast<size_t>(data.num_poses), nullptr);
+  for (const RelativePoseMeasurement& m : data.odometry)
+    if (m.to == m.from + 1 && m.to < data.num_poses && !steps[static_cast<size_t>(m.to)])
+      steps[static_cast<size_t>(m.to)] = &m;
+  return steps;
+}
+
+}  // namespace
+
+double MedianCoVisibleSpacing(const LandmarkDataset& data) {
+  std::vector<std::vector<Eigen::Vector2d>> per_scan(static_cast<size_t>(data.num_poses));
+  for (const LandmarkSighting& s : data.sightings)
+    if (s.range_m > 0)
+      per_scan[static_cast<size_t>(s.pose)].push_back(
+          LandmarkFromRangeBearing(Pose2{}, s.range_m, s.bearing_rad, data.sensor_offset_m));
+  std::vector<double> nearest;
+  for (const auto& scan : per_scan) {
+    if (scan.size() < 2) continue;
+    for (size_t a = 0; a < scan.size(); ++a) {
+      double best = std::numeric_limits<double>::infinity();
+      for (size_t b = 0; b < scan.size(); ++b)
+        if (b != a) best = std::min(best, (scan[a] - scan[b]).norm());
+      nearest.push_back(best);
+    }
+  }
+  return Median(std::move(nearest));
+}
+
+std::vector<int> SearchWindowEnds(const LandmarkDataset& data, int max_poses,
+                                  double max_drift_m) {
+  std::vector<int> ends;
+  const int n = data.num_poses;
+  if (max_drift_m <= 0) {
+    if (max_poses > 0)
+      for (int end = max_poses; end < n; end += max_poses) ends.push_back(end);
+    ends.push_back(n);
+    return ends;
+  }
+  std::vector<double> ranges;
+  for (const LandmarkSighting& s : data.sightings)
+    if (s.range_m > 0) ranges.push_back(s.range_m);
+  const double range_m = Median(std::move(ranges));
+  const std::vector<const RelativePoseMeasurement*> steps = ChainSteps(data);
+  // Pose k relative to the pose before the window, and its covariance there.
+  Pose2 relative;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  int start = 0;
+  for (int k = 1; k < n; ++k) {
+    if (const RelativePoseMeasurement* step = steps[static_cast<size_t>(k)]) {
+      const double c = std::cos(relative.theta), s = std::sin(relative.theta);
+      const Pose2& d = step->delta;
+      Eigen::Matrix3d by_pose = Eigen::Matrix3d::Identity();
+      by_pose(0, 2) = -s * d.x - c * d.y;
+      by_pose(1, 2) = c * d.x - s * d.y;
+      Eigen::Matrix3d by_step = Eigen::Matrix3d::Identity();
+      by_step.topLeftCorner<2, 2>() << c, -s, s, c;
+      covariance = by_pose * covariance * by_pose.transpose() +
+                   by_step * step->covariance * by_step.transpose();
+      relative = Pose2{relative.x + c * d.x - s * d.y, relative.y + s * d.x + c * d.y,
+                       relative.theta + d.theta};
+    }
+    const Eigen::Matrix2d position = covariance.topLeftCorner<2, 2>();
+    const double largest = 0.5 * (position.trace() + std::hypot(position(0, 0) - position(1, 1),
+                                                                2 * position(0, 1)));
+    const double drift_m = std::sqrt(largest + range_m * range_m * covariance(2, 2));
+    const bool full = max_poses > 0 && k + 1 - start >= max_poses;
+    // Pose k goes into the window ending at k + 1; the next starts afresh.
+    if ((drift_m > max_drift_m || full) && k + 1 < n) {
+      ends.push_back(k + 1);
+      start = k + 1;
+      relative = Pose2{};
+      covariance.setZero();
+    }
+  }
+  ends.push_back(n);
+  return ends;
 }
 
 }  // namespace oslam

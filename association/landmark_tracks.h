@@ -30,4 +30,20 @@ std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
                                                   const std::vector<Pose2>& trajectory,
                                                   const LandmarkTrackOptions& options);
 
+// How far apart neighbouring landmarks typically stand, measured where no
+// odometry enters: per sighting, the distance to the nearest other sighting
+// of the same scan (both placed in the robot frame); the median over every
+// scan with two or more. 0 when no scan has two.
+double MedianCoVisibleSpacing(const LandmarkDataset& data);
+
+// The growing windows of the unknown-association search (docs/method.md
+// §16.2), as pose counts (each window ends before its count; the last is
+// num_poses). A window holds at most max_poses poses; with max_drift_m > 0 it
+// ends earlier, at the first pose whose dead-reckoned sightings, relative to
+// the pose before the window, have a predicted position std above
+// max_drift_m: sqrt(largest eigenvalue of the position covariance +
+// (median range * heading std)^2), the odometry's covariances composed along
+// the chain (first order). max_poses 0: one window unless the drift ends it.
+std::vector<int> SearchWindowEnds(const LandmarkDataset& data, int max_poses, double max_drift_m);
+
 }  // namespace oslam

@@ -65,6 +65,16 @@ struct UnknownAssociationOptions {
   // to pay: recall 0.998 on the whole drive against 0.984 with 20, in less
   // time (docs/results.md).
   int window_poses = 40;  // 0: one window with every pose
+  // A window also ends where the dead reckoning's drift since the last solve
+  // (predicted std of a sighting's world position, SearchWindowEnds) reaches
+  // this fraction of the landmarks' spacing (MedianCoVisibleSpacing): a new
+  // track whose place is uncertain by a good part of the spacing fits its
+  // neighbour's landmark as well as its own, and a window's merges are made
+  // all at once. iSAM's cityTrees10000 (trees on a 5 m grid, heading drift
+  // 0.01 rad per metre): 0.08-0.12 find the true trajectory, 40-pose windows
+  // alone end a grid cell off (docs/benchmarks.md). 0: windows of
+  // window_poses only.
+  double window_drift_spacing = 0.1;
   // Poses free in a window's solves: the last free_poses of it (never fewer
   // than its new poses); the earlier ones are held at the previous window's
   // solution, so a proposal's exact solve costs what the recent drive costs.
@@ -285,6 +295,7 @@ class LandmarkAssociation {
   // Tracks on the dead reckoning, clutter left out, the location prior's
   // centre, the windows' ends.
   void BuildTracks();
+  void PlanWindows();
   // A window: its start state and first solve, targeted merges, duplicate
   // sweep, joint re-entry merge, random hill climbing.
   void RunWindow(size_t w);

@@ -129,5 +129,65 @@ TEST(LandmarkTracksTest, OptionsNeedAPositiveFiniteGateAndAPoseGap) {
   EXPECT_THROW(scans.Tracks(1.0, 0), Error);
 }
 
+TEST(LandmarkTracksTest, SpacingIsTheMedianNearestNeighbourWithinAScan) {
+  Scans scans(6);
+  // Trees 3 m apart beside the road; every scan sees three of them.
+  for (int pose = 0; pose < 5; ++pose)
+    for (int tree = 0; tree < 3; ++tree) scans.See(pose, pose + 3.0 * tree, 4.0);
+  scans.See(5, 7.0, -2.0);  // a scan with one sighting measures nothing
+  EXPECT_NEAR(MedianCoVisibleSpacing(scans.data()), 3.0, 1e-9);
+  Scans lonely(3);
+  lonely.See(0, 1.0, 1.0);
+  EXPECT_EQ(MedianCoVisibleSpacing(lonely.data()), 0.0);
+}
+
+// A straight drive of unit steps with independent noise per step.
+LandmarkDataset StraightDrive(int num_poses, const Eigen::Vector3d& step_std) {
+  Scans scans(num_poses);
+  LandmarkDataset data = scans.data();
+  for (int i = 1; i < num_poses; ++i) {
+    RelativePoseMeasurement m;
+    m.from = i - 1;
+    m.to = i;
+    m.delta = {1.0, 0.0, 0.0};
+    m.covariance = step_std.cwiseAbs2().asDiagonal();
+    data.odometry.push_back(m);
+  }
+  LandmarkSighting s;
+  s.range_m = 6.0;  // every sighting (the median range) 6 m away
+  for (int i = 0; i < num_poses; ++i) {
+    s.pose = i;
+    data.sightings.push_back(s);
+  }
+  return data;
+}
+
+TEST(LandmarkTracksTest, WindowsEndWhereTheDriftReachesTheBound) {
+  const Eigen::Vector3d step_std(0.02, 0.01, 0.01);
+  const LandmarkDataset data = StraightDrive(100, step_std);
+  // Closed form for k unit steps straight ahead: the heading error of step j
+  // moves the k - j later steps sideways.
+  const auto drift = [&](int k) {
+    double lateral = k * step_std.y() * step_std.y();
+    for (int j = 1; j < k; ++j) lateral += (k - j) * (k - j) * step_std.z() * step_std.z();
+    const double along = k * step_std.x() * step_std.x();
+    return std::sqrt(std::max(lateral, along) + 36.0 * k * step_std.z() * step_std.z());
+  };
+  const double bound = 0.5;
+  int steps = 1;
+  while (drift(steps) <= bound) ++steps;
+  ASSERT_GT(steps, 5);
+  ASSERT_LT(3 * steps, 100);
+  const std::vector<int> ends = SearchWindowEnds(data, 0, bound);
+  ASSERT_GE(ends.size(), 3u);
+  EXPECT_EQ(ends[0], steps + 1);          // poses 0 .. steps
+  EXPECT_EQ(ends[1] - ends[0], steps);    // from the pose before the window
+  EXPECT_EQ(ends.back(), 100);
+  // The pose cap still holds, and without a bound the windows are fixed.
+  EXPECT_EQ(SearchWindowEnds(data, 5, bound).front(), 5);
+  EXPECT_EQ(SearchWindowEnds(data, 40, 0.0), (std::vector<int>{40, 80, 100}));
+  EXPECT_EQ(SearchWindowEnds(data, 0, 0.0), (std::vector<int>{100}));
+}
+
 }  // namespace
 }  // namespace oslam
