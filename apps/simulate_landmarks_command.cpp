@@ -33,6 +33,12 @@ int RunSimulateLandmarksCommand(const std::vector<std::string>& args) {
   b.Add(&o.blocks, "blocks", "N", "city: blocks per side; park: its side in blocks");
   b.Add(&o.block_m, "block-size", "M", "a block's size (street to street)");
   b.Add(&o.min_separation_m, "separation", "M", "landmarks at least this far apart");
+  b.Add(&o.lattice_m, "lattice", "M",
+        "city: landmarks on the points of a square lattice this wide (0: anywhere)");
+  b.Add(&o.odometry_std(0), "odometry-forward-std", "M", "odometry noise per step, forward (std)");
+  b.Add(&o.odometry_std(1), "odometry-left-std", "M", "odometry noise per step, sideways (std)");
+  b.Add(&o.odometry_std(2), "odometry-heading-std", "RAD",
+        "odometry noise per step, heading (std)");
   b.Add(&o.max_range_m, "max-range", "M", "the sensor's range");
   b.Add(&o.range_std_m, "range-std", "M", "range noise (std)");
   b.Add(&o.bearing_std_rad, "bearing-std", "RAD", "bearing noise (std)");

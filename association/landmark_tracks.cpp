@@ -127,8 +127,7 @@ double MedianCoVisibleSpacing(const LandmarkDataset& data) {
   return Median(std::move(nearest));
 }
 
-std::vector<int> SearchWindowEnds(const LandmarkDataset& data, int max_poses,
-                                  double max_drift_m) {
+std::vector<int> SearchWindowEnds(const LandmarkDataset& data, int max_poses, double max_drift_m) {
   std::vector<int> ends;
   const int n = data.num_poses;
   if (max_drift_m <= 0) {
@@ -161,8 +160,8 @@ std::vector<int> SearchWindowEnds(const LandmarkDataset& data, int max_poses,
                        relative.theta + d.theta};
     }
     const Eigen::Matrix2d position = covariance.topLeftCorner<2, 2>();
-    const double largest = 0.5 * (position.trace() + std::hypot(position(0, 0) - position(1, 1),
-                                                                2 * position(0, 1)));
+    const double largest =
+        0.5 * (position.trace() + std::hypot(position(0, 0) - position(1, 1), 2 * position(0, 1)));
     const double drift_m = std::sqrt(largest + range_m * range_m * covariance(2, 2));
     const bool full = max_poses > 0 && k + 1 - start >= max_poses;
     // Pose k goes into the window ending at k + 1; the next starts afresh.

@@ -41,9 +41,10 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     if (why) *why = "tracks need >= 1 sighting and the candidate cap must be >= 0 (0: none)";
     return false;
   }
-  if (window_poses < 0 || !(window_drift_spacing >= 0) || free_poses < 0 || !(targeted_radius_m >= 0) ||
-      !(hill_climb_steps_per_track >= 0) || final_hill_climb_steps < 0 || refine_every < 1 ||
-      samples < 0 || num_chains < 1 || burn_in < 0 || (samples > 0 && burn_in >= samples)) {
+  if (window_poses < 0 || !(window_drift_spacing >= 0) || free_poses < 0 ||
+      !(targeted_radius_m >= 0) || !(hill_climb_steps_per_track >= 0) ||
+      final_hill_climb_steps < 0 || refine_every < 1 || samples < 0 || num_chains < 1 ||
+      burn_in < 0 || (samples > 0 && burn_in >= samples)) {
     if (why)
       *why =
           "windows, steps and samples must be >= 0, refine_every and chains >= 1, burn-in "
@@ -178,12 +179,12 @@ void LandmarkAssociation::BuildTracks() {
 
 // After the calibration: the drift bound uses the odometry noise searched under.
 void LandmarkAssociation::PlanWindows() {
-  const double spacing_m =
-      options_.window_drift_spacing > 0 ? MedianCoVisibleSpacing(*data_) : 0.0;
+  const double spacing_m = options_.window_drift_spacing > 0 ? MedianCoVisibleSpacing(*data_) : 0.0;
   const double max_drift_m = options_.window_drift_spacing * spacing_m;
   ends_ = SearchWindowEnds(*data_, options_.window_poses, max_drift_m);
   if (max_drift_m > 0)
-    Say(Format("windows: %.0f of at most %.0f poses, ended where the drift reaches %.2f m (%.2f "
+    Say(
+        Format("windows: %.0f of at most %.0f poses, ended where the drift reaches %.2f m (%.2f "
                "of the landmarks' spacing, %.2f m)",
                double(ends_.size()), double(options_.window_poses), max_drift_m,
                options_.window_drift_spacing, spacing_m));

@@ -28,6 +28,9 @@ bool LandmarkWorldOptions::Validate(std::string* why) const {
       !(2 * street_offset_max_m < block_m))
     return fail("need 0 <= street offsets and twice the largest below the block size");
   if (!(min_separation_m >= 0)) return fail("the landmark separation must be >= 0");
+  if (!(lattice_m >= 0) || !std::isfinite(lattice_m)) return fail("the lattice must be >= 0 m");
+  if (lattice_m > 0 && layout != LandmarkWorldLayout::kCityGrid)
+    return fail("a landmark lattice needs the city layout");
   if (!(max_range_m > 0) || !(field_of_view_rad > 0) || field_of_view_rad > 2 * kPi)
     return fail("the sensor needs a range > 0 and a field of view in (0, 2 pi]");
   if (!(range_std_m > 0) || !(bearing_std_rad > 0) || !std::isfinite(range_std_m) ||
@@ -103,9 +106,35 @@ std::vector<Pose2> TruePath(const LandmarkWorldOptions& o, std::mt19937_64& rng)
   return poses;
 }
 
+// City grid on a lattice: num_landmarks of the lattice points within the
+// street offsets, at random.
+std::vector<Eigen::Vector2d> LatticeLandmarks(const LandmarkWorldOptions& o, std::mt19937_64& rng) {
+  const double side = o.blocks * o.block_m;
+  const auto to_street = [&](double v) {
+    const double r = std::fmod(v, o.block_m);
+    return std::min(r, o.block_m - r);
+  };
+  std::vector<Eigen::Vector2d> points;
+  const int n = static_cast<int>(std::floor(side / o.lattice_m + 1e-9));
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) {
+      const Eigen::Vector2d p(i * o.lattice_m, j * o.lattice_m);
+      const double d = std::min(to_street(p.x()), to_street(p.y()));
+      if (d >= o.street_offset_min_m && d <= o.street_offset_max_m) points.push_back(p);
+    }
+  if (static_cast<int>(points.size()) < o.num_landmarks)
+    throw Error("landmark world: room for only " + std::to_string(points.size()) + " of " +
+                std::to_string(o.num_landmarks) + " landmarks on a " + std::to_string(o.lattice_m) +
+                " m lattice");
+  std::shuffle(points.begin(), points.end(), rng);
+  points.resize(static_cast<size_t>(o.num_landmarks));
+  return points;
+}
+
 // Landmarks at least min_separation_m apart: beside the streets, or
 // anywhere in the park.
 std::vector<Eigen::Vector2d> PlaceLandmarks(const LandmarkWorldOptions& o, std::mt19937_64& rng) {
+  if (o.lattice_m > 0) return LatticeLandmarks(o, rng);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   const double side = o.blocks * o.block_m;
   std::vector<Eigen::Vector2d> landmarks;

@@ -39,6 +39,11 @@ struct LandmarkWorldOptions {
   // both layouts keep landmarks at least min_separation_m apart (0: any).
   double street_offset_min_m = 3, street_offset_max_m = 8;
   double min_separation_m = 2;
+  // City grid: > 0 puts the landmarks on the points of a square lattice this
+  // wide (those within the street offsets, chosen at random), a layout that
+  // repeats itself: a re-entry off by one lattice step fits as well as the
+  // true one (iSAM's cityTrees10000 has trees on a 5 m lattice). 0: anywhere.
+  double lattice_m = 0;
   // Sensor at the robot's origin, facing ahead.
   double max_range_m = 15;
   double field_of_view_rad = 3.14159265358979;  // centred on the heading

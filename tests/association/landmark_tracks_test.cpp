@@ -180,8 +180,8 @@ TEST(LandmarkTracksTest, WindowsEndWhereTheDriftReachesTheBound) {
   ASSERT_LT(3 * steps, 100);
   const std::vector<int> ends = SearchWindowEnds(data, 0, bound);
   ASSERT_GE(ends.size(), 3u);
-  EXPECT_EQ(ends[0], steps + 1);          // poses 0 .. steps
-  EXPECT_EQ(ends[1] - ends[0], steps);    // from the pose before the window
+  EXPECT_EQ(ends[0], steps + 1);        // poses 0 .. steps
+  EXPECT_EQ(ends[1] - ends[0], steps);  // from the pose before the window
   EXPECT_EQ(ends.back(), 100);
   // The pose cap still holds, and without a bound the windows are fixed.
   EXPECT_EQ(SearchWindowEnds(data, 5, bound).front(), 5);

@@ -209,9 +209,8 @@ TEST(LandmarkAssociationTest, TheAlignmentWeightedByFitClosesALoopInARepeatingGr
   // Windows that end where the drift reaches a tenth of the landmarks'
   // spacing (the default) decide the re-entry before the count goes wrong.
   by_count.window_drift_spacing = 0.1;
-  const PairwiseAgreement pc =
-      ComparePairwise(SolveUnknownAssociation(world.data, by_count).association,
-                      world.true_association);
+  const PairwiseAgreement pc = ComparePairwise(
+      SolveUnknownAssociation(world.data, by_count).association, world.true_association);
   std::printf("by count, drift-bounded windows: P %.4f R %.4f\n", pc.precision, pc.recall);
   EXPECT_GT(pc.recall, 0.99);
   EXPECT_GT(pc.precision, 0.99);

@@ -87,6 +87,40 @@ TEST(LandmarkWorldTest, HoldsWhatWasAskedAndRepeatsFromItsSeed) {
 // (60 m off) and fixed stages of 50 or 10 poses all stop in false minima;
 // the adaptive stages reach the cost a start from the true trajectory and
 // landmarks reaches (method.md §16.1).
+TEST(LandmarkWorldTest, LatticeLandmarksStandOnItsPointsBesideTheStreets) {
+  LandmarkWorldOptions o;
+  o.blocks = 4;
+  o.block_m = 20;
+  o.lattice_m = 5;
+  o.num_landmarks = 100;
+  o.num_poses = 200;
+  const LandmarkWorld world = SimulateLandmarkWorld(o);
+  ASSERT_EQ(world.true_landmarks.size(), 100u);
+  std::set<std::pair<long, long>> points;
+  for (const Eigen::Vector2d& p : world.true_landmarks) {
+    const double i = p.x() / o.lattice_m, j = p.y() / o.lattice_m;
+    EXPECT_NEAR(i, std::round(i), 1e-9);
+    EXPECT_NEAR(j, std::round(j), 1e-9);
+    points.insert({std::lround(i), std::lround(j)});
+    const auto to_street = [&](double v) {  // the truth's frame starts at a crossing
+      const double r = std::fmod(std::fmod(v, o.block_m) + o.block_m, o.block_m);
+      return std::min(r, o.block_m - r);
+    };
+    const double d = std::min(to_street(p.x()), to_street(p.y()));
+    EXPECT_GE(d, o.street_offset_min_m);
+    EXPECT_LE(d, o.street_offset_max_m);
+  }
+  EXPECT_EQ(points.size(), 100u);  // distinct points
+  // 5 m from a street in one direction, 5 or 10 m in the other: 128 points.
+  o.num_landmarks = 129;
+  EXPECT_THROW(SimulateLandmarkWorld(o), Error);
+  o.num_landmarks = 10;
+  o.layout = LandmarkWorldLayout::kPark;
+  std::string why;
+  EXPECT_FALSE(o.Validate(&why));
+  EXPECT_NE(why.find("lattice"), std::string::npos);
+}
+
 TEST(LandmarkWorldTest, DefaultStartReachesTheOptimumOfAStartFromTheTruth) {
   LandmarkWorldOptions options;
   options.num_poses = 2000;
