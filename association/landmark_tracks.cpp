@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include "core/error.h"
+#include "core/statistics.h"
 #include "slam/landmark_factors.h"
 
 namespace oslam {
@@ -89,13 +90,6 @@ std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
 
 namespace {
 
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
-
 // The odometry step reaching each pose from the one before (nullptr where
 // the chain has none).
 std::vector<const RelativePoseMeasurement*> ChainSteps(const LandmarkDataset& data) {
@@ -124,7 +118,7 @@ double MedianCoVisibleSpacing(const LandmarkDataset& data) {
       nearest.push_back(best);
     }
   }
-  return Median(std::move(nearest));
+  return UpperMedian(std::move(nearest));
 }
 
 std::vector<int> SearchWindowEnds(const LandmarkDataset& data, int max_poses, double max_drift_m) {
@@ -139,7 +133,7 @@ std::vector<int> SearchWindowEnds(const LandmarkDataset& data, int max_poses, do
   std::vector<double> ranges;
   for (const LandmarkSighting& s : data.sightings)
     if (s.range_m > 0) ranges.push_back(s.range_m);
-  const double range_m = Median(std::move(ranges));
+  const double range_m = UpperMedian(std::move(ranges));
   const std::vector<const RelativePoseMeasurement*> steps = ChainSteps(data);
   // Pose k relative to the pose before the window, and its covariance there.
   Pose2 relative;

@@ -21,6 +21,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_file.h"
+#include "core/statistics.h"
 
 namespace oslam {
 
@@ -393,12 +394,6 @@ bool InitialPoses(const MeiCamera& camera, const std::vector<Eigen::Vector3d>& o
   return true;
 }
 
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
 // Mei initial guess: ξ = 1, no distortion, centre given, generalised focal
 // length γ chosen on a log grid by the median per-view RMS of DLT poses.
 Problem InitialMeiProblem(const std::vector<Eigen::Vector3d>& object,
@@ -428,7 +423,7 @@ Problem InitialMeiProblem(const std::vector<Eigen::Vector3d>& object,
       view_rms.push_back(problem.ViewResiduals(projector, problem.poses[v], v, &residuals)
                              ? RmsOf(residuals)
                              : std::numeric_limits<double>::infinity());
-    const double score = Median(view_rms);
+    const double score = UpperMedian(view_rms);
     if (score < best_score) {
       best_score = score;
       best = problem;
@@ -578,7 +573,7 @@ void ScoreViews(const Problem& problem, const std::vector<size_t>& used,
       view.reprojected.push_back(view.corners[i] + residuals.segment<2>(2 * i));
     view_rms.push_back(view.rms_px);
   }
-  const double median = Median(view_rms);
+  const double median = UpperMedian(view_rms);
   for (size_t k : used)
     result->views[k].outlier =
         result->views[k].rms_px > std::max(options.outlier_view_factor * median, 1.0);

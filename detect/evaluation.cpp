@@ -10,6 +10,7 @@
 #include "calib/observation_model.h"
 #include "core/angles.h"
 #include "core/csv.h"
+#include "core/statistics.h"
 
 namespace oslam {
 namespace {
@@ -50,12 +51,6 @@ double OverlapArea(const Detection& d, const GroundTruthSighting& s) {
   return std::max(0.0, angular) * std::max(0.0, radial);
 }
 
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
 }  // namespace
 
 DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
@@ -77,7 +72,8 @@ DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
     bool counts = false;
     if (class_index >= 0 && s.frame < static_cast<long>(truth.trajectory.size())) {
       const Pose2& pose = truth.trajectory[s.frame];
-      const double range = std::hypot(object.base_world.x() - pose.x, object.base_world.y() - pose.y);
+      const double range =
+          std::hypot(object.base_world.x() - pose.x, object.base_world.y() - pose.y);
       counts = s.visible_fraction >= options.min_visible_fraction && range <= options.max_range_m;
     }
     sightings_by_frame[s.frame].push_back({&s, class_index, counts});
@@ -144,11 +140,11 @@ DetectionEvaluation EvaluateDetections(const std::vector<Detection>& detections,
     result.total.confused += stats.confused;
     result.total.spurious += stats.spurious;
   }
-  result.median_u_r_error_px = Median(u_r);
-  result.median_u_phi_error_px = Median(u_phi);
-  result.median_s_r_error_px = Median(s_r);
-  result.median_s_phi_error_px = Median(s_phi);
-  result.median_position_error_px = Median(position);
+  result.median_u_r_error_px = UpperMedian(u_r);
+  result.median_u_phi_error_px = UpperMedian(u_phi);
+  result.median_s_r_error_px = UpperMedian(s_r);
+  result.median_s_phi_error_px = UpperMedian(s_phi);
+  result.median_position_error_px = UpperMedian(position);
   return result;
 }
 
@@ -327,10 +323,11 @@ std::string DetectionEvaluation::Table() const {
   };
   for (const ClassDetectionStats& s : per_class) row(s);
   row(total);
-  std::snprintf(line, sizeof(line),
-                "median |error| px: base position %.2f (u_r %.2f, u_phi %.2f), s_r %.2f, s_phi %.2f\n",
-                median_position_error_px, median_u_r_error_px, median_u_phi_error_px,
-                median_s_r_error_px, median_s_phi_error_px);
+  std::snprintf(
+      line, sizeof(line),
+      "median |error| px: base position %.2f (u_r %.2f, u_phi %.2f), s_r %.2f, s_phi %.2f\n",
+      median_position_error_px, median_u_r_error_px, median_u_phi_error_px, median_s_r_error_px,
+      median_s_phi_error_px);
   out << line;
   return out.str();
 }

@@ -11,6 +11,7 @@
 
 #include "core/angles.h"
 #include "core/error.h"
+#include "core/statistics.h"
 
 namespace oslam {
 
@@ -108,13 +109,6 @@ TrajectoryMetrics TrajectoryErrors(const std::vector<Pose2>& estimate,
     m.rpe_rotation_rmse_rad = std::sqrt(rpe_r / (n - 1));
   }
   return m;
-}
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const size_t mid = values.size() / 2;
-  return values.size() % 2 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
 }
 
 }  // namespace
