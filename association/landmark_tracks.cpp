@@ -150,8 +150,7 @@ std::vector<int> SearchWindowEnds(const LandmarkDataset& data, int max_poses, do
       by_step.topLeftCorner<2, 2>() << c, -s, s, c;
       covariance = by_pose * covariance * by_pose.transpose() +
                    by_step * step->covariance * by_step.transpose();
-      relative = Pose2{relative.x + c * d.x - s * d.y, relative.y + s * d.x + c * d.y,
-                       relative.theta + d.theta};
+      relative = ComposePose(relative, d);
     }
     const Eigen::Matrix2d position = covariance.topLeftCorner<2, 2>();
     const double largest =
