@@ -38,6 +38,12 @@ void BindDetectOptions(DetectStageOptions* o, Bindings* b) {
       .Key("max_shape_distance",
            "drop detections whose slice elongation is further than this many sigmas from their "
            "class's image shape; inf = off");
+  b->AddNumberOrInfinity(&d.max_blob_colour_distance, "max-blob-colour-distance", "SIGMAS",
+                         "drop blobs whose mean colour is further than this from their class's "
+                         "learnt blob colour (inf = off)")
+      .Key("max_blob_colour_distance",
+           "drop colour blobs whose mean colour is further than this many sigmas from the "
+           "blob colour learnt for their class; inf = off");
   b->AddNumberOrInfinity(&d.max_view_distance, "max-view-distance", "SIGMAS",
                          "drop detections whose image shape and size standing on the floor are "
                          "further than this from their class's (inf = off)")

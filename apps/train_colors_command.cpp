@@ -60,14 +60,14 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
       throw Error::InFile(
           camera_path, "not found: outline examples need the camera (give --camera CAMERA.yaml)");
     const std::unique_ptr<CameraModel> camera = LoadCamera(camera_path);
-    trained = MeasureDetectorArcErrorsFromExamples(
+    trained = MeasureDetectorErrorsFromExamples(
         LearnImageShapesFromExamples(trained, examples, *camera), examples, *camera);
   }
   if (arguments.Has("from-ground-truth")) {
     const std::string run_dir = arguments.Get("from-ground-truth");
     // Runs simulated before visible_slices.csv existed still train colours.
     if (std::filesystem::exists(run_dir + "/ground_truth/visible_slices.csv"))
-      trained = MeasureDetectorArcErrors(LearnImageShapes(trained, run_dir), run_dir);
+      trained = MeasureDetectorErrors(LearnImageShapes(trained, run_dir), run_dir);
     else if (!arguments.Flag("quiet"))
       std::fprintf(
           stderr,

@@ -111,7 +111,8 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
   if (!colour.empty() && !colour.isNone()) {
     const std::string colour_key = key + "colour.";
     if (!colour.isMap()) file.Fail(key + "colour", "must be a mapping");
-    file.RequireOnlyKeys(colour, colour_key, {"yuv_mean", "yuv_std", "k_sigma"});
+    file.RequireOnlyKeys(colour, colour_key,
+                         {"yuv_mean", "yuv_std", "k_sigma", "blob_chroma_mean", "blob_chroma_std"});
     ColourBox box;
     const std::vector<double> mean = file.Doubles(colour, "yuv_mean", 3, colour_key);
     const std::vector<double> stddev = file.Doubles(colour, "yuv_std", 3, colour_key);
@@ -124,6 +125,23 @@ ObjectClass ParseClass(const YamlFile& file, const cv::FileNode& node, const std
     box.k_sigma = file.OptionalDouble(colour, "k_sigma", 3.0, colour_key);
     if (!(box.k_sigma > 0)) file.Fail(colour_key + "k_sigma", "must be positive");
     file.Within(box.k_sigma, colour_key + "k_sigma", 0, kMaxSigmas);
+    const bool has_blob_mean = !colour["blob_chroma_mean"].empty();
+    if (has_blob_mean != !colour["blob_chroma_std"].empty())
+      file.Fail(colour_key + (has_blob_mean ? "blob_chroma_std" : "blob_chroma_mean"),
+                "missing: blob_chroma_mean and blob_chroma_std come together");
+    if (has_blob_mean) {
+      BlobChroma blob;
+      const std::vector<double> blob_mean = file.Doubles(colour, "blob_chroma_mean", 2, colour_key);
+      const std::vector<double> blob_std = file.Doubles(colour, "blob_chroma_std", 2, colour_key);
+      for (int ch = 0; ch < 2; ++ch) {
+        blob.mean[ch] = blob_mean[ch];
+        blob.std[ch] = blob_std[ch];
+        file.Within(blob.mean[ch], colour_key + "blob_chroma_mean", -255, 255);
+        if (!(blob.std[ch] > 0)) file.Fail(colour_key + "blob_chroma_std", "must be positive");
+        file.Within(blob.std[ch], colour_key + "blob_chroma_std", 0, 255);
+      }
+      box.blob_chroma = blob;
+    }
     object_class.colour = box;
   }
   const cv::FileNode shape = node["image_shape"];
@@ -243,6 +261,10 @@ void WriteClasses(const std::vector<ObjectClass>& classes, const std::string& pa
       out << "      yuv_mean: " << NumberList(c.colour->yuv_mean) << "\n";
       out << "      yuv_std: " << NumberList(c.colour->yuv_std) << "\n";
       out << "      k_sigma: " << Number(c.colour->k_sigma) << "\n";
+      if (c.colour->blob_chroma) {
+        out << "      blob_chroma_mean: " << NumberList(c.colour->blob_chroma->mean) << "\n";
+        out << "      blob_chroma_std: " << NumberList(c.colour->blob_chroma->std) << "\n";
+      }
     }
     if (c.image_shape) {
       out << "    image_shape:\n";

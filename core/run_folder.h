@@ -21,11 +21,24 @@ namespace oslam {
 
 // ---- classes.yaml ----
 
+// The mean colour of a class's whole colour blobs, learnt in training
+// (docs/detection.md "Blob colour"): each blob's mean chroma (U − 128, V − 128)
+// scaled to its box's brightness (times yuv_mean[0] / Y), so a dimmer or
+// brighter view of the same paint lands on the same point; mean and standard
+// deviation over the training views. A pixel's colour varies with shading
+// across the object, a blob's mean far less: a pale carton whose pixels pass a
+// yellow box's colour test still has a mean colour no yellow box's blob has.
+struct BlobChroma {
+  std::array<double, 2> mean{};
+  std::array<double, 2> std{};
+};
+
 // CMVision-style colour box in YUV (OpenCV's YCrCb order is not used: Y, U, V).
 struct ColourBox {
   std::array<double, 3> yuv_mean{};
   std::array<double, 3> yuv_std{};
   double k_sigma = 3.0;  // box half-width in standard deviations (thesis: 3)
+  std::optional<BlobChroma> blob_chroma;  // learnt with the detector's errors; optional
 };
 
 // How a class's whole, unoccluded views look in the image, learnt from

@@ -31,6 +31,10 @@ bool BlobDetectorOptions::Validate(std::string* why) const {
     if (why) *why = "look_alike_coverage must be in (0, 1]";
     return false;
   }
+  if (!(max_blob_colour_distance > 0)) {
+    if (why) *why = "max_blob_colour_distance must be positive (inf = off)";
+    return false;
+  }
   if (!(max_view_distance > 0)) {
     if (why) *why = "max_view_distance must be positive (inf = off)";
     return false;
@@ -104,6 +108,16 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
       detections.push_back(DescribeBlob(labels, label, box, roi.tl(), yuv, class_bits, c, frame));
     }
   }
+  if (std::isfinite(options_.max_blob_colour_distance)) {
+    const double max2 = TwoDofSquaredDistanceOfSigmas(options_.max_blob_colour_distance);
+    detections.erase(std::remove_if(detections.begin(), detections.end(),
+                                    [&](const Detection& d) {
+                                      const ColourBox& box = *classes_[d.class_index].colour;
+                                      return box.blob_chroma &&
+                                             BlobChromaSquaredDistance(box, d.mean_yuv) > max2;
+                                    }),
+                     detections.end());
+  }
   if (options_.separate_look_alikes) SeparateLookAlikes(&detections);
   if (std::isfinite(options_.max_view_distance)) VerifyViews(&detections);
   if (std::isfinite(options_.max_shape_distance)) {
@@ -117,6 +131,11 @@ std::vector<Detection> BlobDetector::Detect(const cv::Mat& bgr, long frame) cons
                      detections.end());
   }
   return detections;
+}
+
+double TwoDofSquaredDistanceOfSigmas(double sigmas) {
+  if (std::isinf(sigmas)) return sigmas;
+  return -2.0 * std::log(std::erfc(sigmas / std::sqrt(2.0)));
 }
 
 double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice,

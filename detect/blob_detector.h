@@ -45,6 +45,12 @@ struct BlobDetectorOptions {
   int opening_radius_px = 1;       // morphological opening per class mask; 0 = off
   bool annulus_only = true;        // ignore the blind disc and everything beyond the mirror rim
   ColourClassifierOptions colour;  // box shape (thesis YUV box or brightness-scaled)
+  // Colour verification (docs/detection.md "Blob colour"): drop a blob whose
+  // mean colour lies further than this many standard deviations from its
+  // class's learnt blob colour (ColourBox::blob_chroma; classes without one
+  // pass): the tail probability of ± that many sigmas of a normal, as a
+  // chi-square of two degrees of freedom (3 → D² 11.8). inf = off.
+  double max_blob_colour_distance = 3.0;
   // Where the blobs of two classes are the same pixels (look-alike colours,
   // e.g. an orange ball and an orange bucket), keep only the class whose colour
   // and image shape (ObjectClass::image_shape) fit the blob better. Classes
@@ -87,6 +93,10 @@ struct BlobDetectorOptions {
 // when comparing with the model).
 double ShapeSquaredDistance(const ImageShapeModel& model, const BoundingSlice& slice,
                             double radial_std_px = 1.0, double arc_std_px = 1.0);
+
+// The D² of two degrees of freedom whose tail probability is that of a
+// normal beyond ± `sigmas` (−2 log erfc(sigmas / √2)); inf for inf.
+double TwoDofSquaredDistanceOfSigmas(double sigmas);
 
 // The view distance of a detection's slice under its class: the shape
 // distance (when the class has an image shape model; for a slice cut by the

@@ -141,6 +141,19 @@ double ColourClassifier::SquaredDistance(const ColourBox& box,
   return d2;
 }
 
+std::array<double, 2> ChromaAtBrightness(const std::array<double, 3>& yuv, double reference_y) {
+  const double scale = reference_y / std::max(1.0, yuv[0]);
+  return {scale * (yuv[1] - 128.0), scale * (yuv[2] - 128.0)};
+}
+
+double BlobChromaSquaredDistance(const ColourBox& box, const std::array<double, 3>& mean_yuv) {
+  const std::array<double, 2> chroma = ChromaAtBrightness(mean_yuv, box.yuv_mean[0]);
+  double d2 = 0;
+  for (int ch = 0; ch < 2; ++ch)
+    d2 += std::pow((chroma[ch] - box.blob_chroma->mean[ch]) / box.blob_chroma->std[ch], 2);
+  return d2;
+}
+
 ColourBox LearnColourBox(const std::vector<cv::Mat>& bgr_images, const std::vector<cv::Mat>& masks,
                          double k_sigma) {
   std::array<double, 3> sum{}, sum_sq{};

@@ -84,6 +84,14 @@ class ColourClassifier {
   std::vector<uint32_t> y_u_, y_v_;
 };
 
+// A colour's chroma (U − 128, V − 128) scaled to the brightness `reference_y`
+// (times reference_y / Y, Y at least 1): BlobChroma's coordinates.
+std::array<double, 2> ChromaAtBrightness(const std::array<double, 3>& yuv, double reference_y);
+
+// D² (two degrees of freedom) of a blob's mean colour from its class's blob
+// chroma (ColourBox::blob_chroma, which must be set).
+double BlobChromaSquaredDistance(const ColourBox& box, const std::array<double, 3>& mean_yuv);
+
 // Mean and standard deviation per YUV channel of the pixels of `bgr` where
 // `mask` is non-zero (the thesis' class colour model).
 ColourBox LearnColourBox(const std::vector<cv::Mat>& bgr_images, const std::vector<cv::Mat>& masks,

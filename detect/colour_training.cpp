@@ -215,10 +215,20 @@ struct TrueView {
   BoundingSlice slice;
 };
 
+// Whole views this long and wide (px) teach an image shape and the arc
+// error; narrower ones still teach a blob's colour.
+constexpr double kMinShapeViewPx = 8.0;
+constexpr double kMinColourViewPx = 3.0;
+
+bool ShapeSized(const BoundingSlice& slice) {
+  return slice.s_r_px >= kMinShapeViewPx && SliceArcWidth(slice) >= kMinShapeViewPx;
+}
+
 // The views of ground_truth/visible_slices.csv that show an object of one of
-// `classes` whole: at least 95 % visible, 8 px long and 8 px wide.
+// `classes` whole: at least 95 % visible, `min_extent_px` long and wide.
 std::vector<TrueView> WholeTrueViews(const std::vector<ObjectClass>& classes,
-                                     const std::string& run_dir) {
+                                     const std::string& run_dir,
+                                     double min_extent_px = kMinShapeViewPx) {
   const std::optional<GroundTruth> truth = ReadGroundTruth(run_dir);
   if (!truth) throw Error::InFile(run_dir, "no ground_truth/ folder to learn image shapes from");
   const CsvTable views = CsvTable::Read(
@@ -242,7 +252,7 @@ std::vector<TrueView> WholeTrueViews(const std::vector<ObjectClass>& classes,
     if (views.Double(row, visible_column) < 0.95 * views.Double(row, footprint_column)) continue;
     const BoundingSlice slice{views.Double(row, u_r_column), views.Double(row, u_phi_column),
                               views.Double(row, s_r_column), views.Double(row, s_phi_column)};
-    if (slice.s_r_px < 8 || SliceArcWidth(slice) < 8) continue;
+    if (slice.s_r_px < min_extent_px || SliceArcWidth(slice) < min_extent_px) continue;
     whole.push_back({views.Integer(row, frame_column), class_index, slice});
   }
   return whole;
@@ -268,18 +278,22 @@ BlobDetector ColourOnlyDetector(const CameraModel& camera,
   BlobDetectorOptions colour_only;
   colour_only.separate_look_alikes = false;
   colour_only.max_view_distance = std::numeric_limits<double>::infinity();
+  colour_only.max_blob_colour_distance = std::numeric_limits<double>::infinity();
   return BlobDetector(camera, classes, colour_only);
 }
 
-// Per class, the arc-width errors of the detector's blobs against known views.
-class ArcErrors {
+// Per class, the detector's blobs against known views: their arc-width errors
+// and their mean colours.
+class DetectorErrors {
  public:
-  explicit ArcErrors(size_t num_classes) : errors_(num_classes) {}
+  explicit DetectorErrors(size_t num_classes) : errors_(num_classes), chroma_(num_classes) {}
 
   // The class's largest blob of `found` lying mostly on `view` (as eval-detect
   // matches a sighting), if any: its arc width less the view's, in pixels at
-  // the view's middle radius.
-  void Add(const std::vector<Detection>& found, int class_index, const BoundingSlice& view) {
+  // the view's middle radius (when `arc_too`), and its mean chroma at the
+  // class's brightness.
+  void Add(const std::vector<Detection>& found, const std::vector<ObjectClass>& classes,
+           int class_index, const BoundingSlice& view, bool arc_too) {
     const Detection* largest = nullptr;
     for (const Detection& d : found)
       if (d.class_index == class_index && SliceCoverage(d.slice, view) >= 0.5 &&
@@ -287,30 +301,56 @@ class ArcErrors {
         largest = &d;
     if (!largest) return;
     const double middle_radius = view.u_r_px + 0.5 * view.s_r_px;
-    errors_[class_index].push_back((largest->slice.s_phi_rad - view.s_phi_rad) * middle_radius);
+    if (arc_too)
+      errors_[class_index].push_back((largest->slice.s_phi_rad - view.s_phi_rad) * middle_radius);
+    const std::optional<ColourBox>& box = classes[class_index].colour;
+    if (box) chroma_[class_index].push_back(ChromaAtBrightness(largest->mean_yuv, box->yuv_mean[0]));
   }
 
-  // `classes` with arc_error_px for every class with a shape model and at
-  // least min_views errors: the 68th percentile of |error| (one standard
-  // deviation of a normal error; a textured object's few views that lose a
-  // whole edge would inflate a root mean square several times), at least
-  // 0.5 px (the blob's edges are whole pixels).
-  std::vector<ObjectClass> Apply(const std::vector<ObjectClass>& classes, int min_views) const {
+  // `classes` with
+  // * arc_error_px for every class with a shape model and at least min_views
+  //   errors: the 68th percentile of |error| (one standard deviation of a
+  //   normal error; a textured object's few views that lose a whole edge
+  //   would inflate a root mean square several times), at least 0.5 px (the
+  //   blob's edges are whole pixels);
+  // * the blob chroma of every class with a colour box and at least min_views
+  //   blobs: mean and standard deviation, the latter at least
+  //   `blob_chroma_floor` times the box's (one lighting in training says
+  //   little about the next room's).
+  std::vector<ObjectClass> Apply(const std::vector<ObjectClass>& classes, int min_views,
+                                 double blob_chroma_floor) const {
     std::vector<ObjectClass> measured = classes;
     for (size_t c = 0; c < classes.size(); ++c) {
+      const size_t needed = static_cast<size_t>(std::max(2, min_views));
       const std::vector<double>& e = errors_[c];
-      if (!measured[c].image_shape || static_cast<int>(e.size()) < std::max(2, min_views)) continue;
-      std::vector<double> size(e.size());
-      for (size_t k = 0; k < e.size(); ++k) size[k] = std::abs(e[k]);
-      const size_t rank = static_cast<size_t>(0.68 * (size.size() - 1));
-      std::nth_element(size.begin(), size.begin() + rank, size.end());
-      measured[c].image_shape->arc_error_px = std::max(0.5, size[rank]);
+      if (measured[c].image_shape && e.size() >= needed) {
+        std::vector<double> size(e.size());
+        for (size_t k = 0; k < e.size(); ++k) size[k] = std::abs(e[k]);
+        const size_t rank = static_cast<size_t>(0.68 * (size.size() - 1));
+        std::nth_element(size.begin(), size.begin() + rank, size.end());
+        measured[c].image_shape->arc_error_px = std::max(0.5, size[rank]);
+      }
+      const std::vector<std::array<double, 2>>& chroma = chroma_[c];
+      if (measured[c].colour && chroma.size() >= needed) {
+        BlobChroma blob;
+        for (int ch = 0; ch < 2; ++ch) {
+          double sum = 0, sum_sq = 0;
+          for (const auto& value : chroma) sum += value[ch];
+          blob.mean[ch] = sum / chroma.size();
+          for (const auto& value : chroma) sum_sq += std::pow(value[ch] - blob.mean[ch], 2);
+          const double pixel_std = std::max(1.0, measured[c].colour->yuv_std[ch + 1]);
+          blob.std[ch] = std::max(std::sqrt(sum_sq / (chroma.size() - 1)),
+                                  blob_chroma_floor * pixel_std);
+        }
+        measured[c].colour->blob_chroma = blob;
+      }
     }
     return measured;
   }
 
  private:
   std::vector<std::vector<double>> errors_;
+  std::vector<std::vector<std::array<double, 2>>> chroma_;
 };
 
 // The slice of an outline example's mask (read when not in memory); nullopt
@@ -335,31 +375,32 @@ std::optional<BoundingSlice> OutlineSlice(const ColourExample& example, const Ca
 
 }  // namespace
 
-std::vector<ObjectClass> MeasureDetectorArcErrors(const std::vector<ObjectClass>& classes,
-                                                  const std::string& run_dir, int min_views) {
+std::vector<ObjectClass> MeasureDetectorErrors(const std::vector<ObjectClass>& classes,
+                                               const std::string& run_dir, int min_views,
+                                               double blob_chroma_floor) {
   std::map<long, std::vector<TrueView>> views_by_frame;
-  for (const TrueView& view : WholeTrueViews(classes, run_dir))
+  for (const TrueView& view : WholeTrueViews(classes, run_dir, kMinColourViewPx))
     views_by_frame[view.frame].push_back(view);
   const std::unique_ptr<CameraModel> camera =
       LoadCamera((fs::path(run_dir) / "camera.yaml").string());
   const BlobDetector detector = ColourOnlyDetector(*camera, classes);
   const FrameSource frames(run_dir);
-  ArcErrors errors(classes.size());
+  DetectorErrors errors(classes.size());
   for (const auto& [frame, views] : views_by_frame) {
     if (frame < 0 || static_cast<size_t>(frame) >= frames.size())
       throw Error::InFile(run_dir, "ground_truth/visible_slices.csv names frame " +
                                        std::to_string(frame) + ", which the run does not have");
     const std::vector<Detection> found = detector.Detect(frames.Read(frame), frame);
-    for (const TrueView& view : views) errors.Add(found, view.class_index, view.slice);
+    for (const TrueView& view : views) errors.Add(found, classes, view.class_index, view.slice, ShapeSized(view.slice));
   }
-  return errors.Apply(classes, min_views);
+  return errors.Apply(classes, min_views, blob_chroma_floor);
 }
 
-std::vector<ObjectClass> MeasureDetectorArcErrorsFromExamples(
+std::vector<ObjectClass> MeasureDetectorErrorsFromExamples(
     const std::vector<ObjectClass>& classes, const std::vector<ColourExample>& examples,
-    const CameraModel& camera, int min_views) {
+    const CameraModel& camera, int min_views, double blob_chroma_floor) {
   const BlobDetector detector = ColourOnlyDetector(camera, classes);
-  ArcErrors errors(classes.size());
+  DetectorErrors errors(classes.size());
   for (const ColourExample& example : examples) {
     if (!example.outline) continue;
     const int class_index = FindClass(classes, example.class_name);
@@ -367,9 +408,9 @@ std::vector<ObjectClass> MeasureDetectorArcErrorsFromExamples(
     const std::optional<BoundingSlice> view = OutlineSlice(example, camera);
     if (!view) continue;
     const cv::Mat image = ReadImage(example.image_path);
-    errors.Add(detector.Detect(image, 0), class_index, *view);
+    errors.Add(detector.Detect(image, 0), classes, class_index, *view, true);
   }
-  return errors.Apply(classes, min_views);
+  return errors.Apply(classes, min_views, blob_chroma_floor);
 }
 
 std::vector<ObjectClass> LearnImageShapesFromExamples(const std::vector<ObjectClass>& classes,

@@ -58,25 +58,36 @@ std::vector<ColourExample> ExamplesFromGroundTruth(const std::string& run_dir,
 std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classes,
                                           const std::string& run_dir, int min_views = 5);
 
-// Returns `classes` with ImageShapeModel::arc_error_px measured for every
-// class that has an image shape model and at least `min_views` whole views
-// (as LearnImageShapes takes them) matched by a blob: the 68th percentile of
-// |blob arc width − visible arc width| (one standard deviation of a normal
-// error, robust to the few views whose blob loses a whole edge), in pixels
-// at the view's middle radius, of the class's largest colour blob lying
-// mostly on the view (the colour detector alone, with `classes`' colour
-// models; floored at 0.5 px). The
-// view checks then know how well the detector measures the class's width.
+// The blob colour's standard deviation is at least this share of the colour
+// box's pixel standard deviation (docs/detection.md "Blob colour").
+constexpr double kDefaultBlobChromaFloor = 0.25;
+
+// Returns `classes` with what the colour detector alone (with `classes`'
+// colour models) measures on the whole views (as LearnImageShapes takes them)
+// of a simulated run, each matched to the class's largest blob lying mostly
+// on it:
+// * ImageShapeModel::arc_error_px, for every class that has an image shape
+//   model and at least `min_views` matched views: the 68th percentile of
+//   |blob arc width − visible arc width| (one standard deviation of a normal
+//   error, robust to the few views whose blob loses a whole edge), in pixels
+//   at the view's middle radius, floored at 0.5 px. The view checks then
+//   know how well the detector measures the class's width.
+// * ColourBox::blob_chroma, for every class with a colour box and at least
+//   `min_views` matched views: mean and standard deviation of the blobs'
+//   brightness-scaled mean chroma, the deviation at least
+//   `blob_chroma_floor` times the box's per channel.
 // Throws oslam::Error naming the file when the run is missing or malformed.
-std::vector<ObjectClass> MeasureDetectorArcErrors(const std::vector<ObjectClass>& classes,
-                                                  const std::string& run_dir, int min_views = 5);
+std::vector<ObjectClass> MeasureDetectorErrors(const std::vector<ObjectClass>& classes,
+                                               const std::string& run_dir, int min_views = 5,
+                                               double blob_chroma_floor = kDefaultBlobChromaFloor);
 
 // The same from outline examples (ColourExample::outline, as
 // LearnImageShapesFromExamples takes them): the colour detector runs on each
 // example's image, and its blob is compared with the outline's slice.
-std::vector<ObjectClass> MeasureDetectorArcErrorsFromExamples(
+std::vector<ObjectClass> MeasureDetectorErrorsFromExamples(
     const std::vector<ObjectClass>& classes, const std::vector<ColourExample>& examples,
-    const CameraModel& camera, int min_views = 3);
+    const CameraModel& camera, int min_views = 3,
+    double blob_chroma_floor = kDefaultBlobChromaFloor);
 
 // Returns `classes` with an image shape model for every class with at least
 // `min_views` outline examples (ColourExample::outline): mean and standard

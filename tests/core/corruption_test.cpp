@@ -84,7 +84,7 @@ TEST(Corruption, ClassesYaml) {
   c.name = "green box";
   c.diameter_mean_m = c.height_mean_m = 0.6;
   c.diameter_std_m = c.height_std_m = 0.2;
-  c.colour = ColourBox{{50, 110, 100}, {4, 2, 3}, 3};
+  c.colour = ColourBox{{50, 110, 100}, {4, 2, 3}, 3, std::nullopt};
   ObjectClass d = c;
   d.name = "door";
   WriteClasses({c, d}, dir.Path("classes.yaml"), ConfusionMatrix{{0.9, 0.1}, {0.2, 0.8}});

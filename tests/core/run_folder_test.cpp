@@ -45,7 +45,7 @@ TEST(Classes, WriteThenReadRoundTrips) {
   testing::TempDir dir;
   ObjectClass ball = GreenBox();
   ball.name = "pink ball";
-  ball.colour = ColourBox{{150, 120, 170}, {8, 3, 4}, 3.0};
+  ball.colour = ColourBox{{150, 120, 170}, {8, 3, 4}, 3.0, BlobChroma{{-12.5, 20}, {1.5, 0.75}}};
   ball.image_shape = ImageShapeModel{1.02, 0.04, 1.25};
   ball.shape = ObjectShape::kSphere;
   WriteClasses({GreenBox(), ball}, dir.Path("classes.yaml"));
@@ -57,6 +57,9 @@ TEST(Classes, WriteThenReadRoundTrips) {
   EXPECT_FALSE(read[0].colour.has_value());
   ASSERT_TRUE(read[1].colour.has_value());
   EXPECT_DOUBLE_EQ(read[1].colour->yuv_mean[2], 170);
+  ASSERT_TRUE(read[1].colour->blob_chroma.has_value());
+  EXPECT_EQ(read[1].colour->blob_chroma->mean, (std::array<double, 2>{-12.5, 20}));
+  EXPECT_EQ(read[1].colour->blob_chroma->std, (std::array<double, 2>{1.5, 0.75}));
   EXPECT_FALSE(read[0].image_shape.has_value());
   ASSERT_TRUE(read[1].image_shape.has_value());
   EXPECT_DOUBLE_EQ(read[1].image_shape->elongation_mean, 1.02);
@@ -75,7 +78,7 @@ TEST(Classes, NumbersAreWrittenShortAndReadBackExactly) {
   ObjectClass odd = GreenBox();
   odd.name = "say \"hi\" \\ box";
   odd.diameter_std_m = 0.1 + 0.2;  // 0.30000000000000004: must survive exactly
-  odd.colour = ColourBox{{150.25, 0.6, 1e-8}, {8, 3, 4}, 2.5};
+  odd.colour = ColourBox{{150.25, 0.6, 1e-8}, {8, 3, 4}, 2.5, std::nullopt};
   const ConfusionMatrix confusion = {{0.6, 0.4}, {0.3, 0.7}};
   WriteClasses({GreenBox(), odd}, dir.Path("classes.yaml"), confusion);
   const std::string text = ReadTextFile(dir.Path("classes.yaml"));
@@ -90,6 +93,8 @@ TEST(Classes, NumbersAreWrittenShortAndReadBackExactly) {
   ASSERT_TRUE(read[1].colour.has_value());
   EXPECT_EQ(read[1].colour->yuv_mean, odd.colour->yuv_mean);
   EXPECT_EQ(read[1].colour->k_sigma, 2.5);
+  EXPECT_FALSE(read[1].colour->blob_chroma.has_value());
+  EXPECT_FALSE(Contains(text, "blob_chroma")) << text;
   EXPECT_EQ(ReadConfusion(dir.Path("classes.yaml")), confusion);
 }
 
@@ -146,6 +151,16 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
   EXPECT_EQ(error_for(good + "    image_shape: {elongation_mean: 1.0, elongation_std: 0.1, "
                              "arc_error_px: -1}\n"),
             path + ": classes[0].image_shape.arc_error_px: must be >= 0");
+  const std::string colour =
+      "    colour: {yuv_mean: [100, 90, 160], yuv_std: [10, 3, 4], k_sigma: 3";
+  EXPECT_EQ(error_for(good + colour + ", blob_chroma_mean: [-30, 30]}\n"),
+            path + ": classes[0].colour.blob_chroma_std: missing: blob_chroma_mean and "
+                   "blob_chroma_std come together");
+  EXPECT_EQ(error_for(good + colour +
+                      ", blob_chroma_mean: [-30, 30], blob_chroma_std: [0.5, 0]}\n"),
+            path + ": classes[0].colour.blob_chroma_std: must be positive");
+  EXPECT_EQ(error_for(good + colour + ", blob_chroma_mean: [-30], blob_chroma_std: [1, 1]}\n"),
+            path + ": classes[0].colour.blob_chroma_mean: expected 2 numbers, found 1");
   std::string huge = good;
   huge.replace(huge.find("2.2"), 3, "2e9");
   EXPECT_EQ(error_for(huge), path +

@@ -244,9 +244,17 @@ TEST(ImageShapes, LearntFromOutlineExamplesAsTheDetectorMeasuresBlobs) {
   // The painted views are one flat colour: the colour blob is the outline
   // itself, so the detector's arc error is the floor of half a pixel.
   const std::vector<ObjectClass> measured =
-      MeasureDetectorArcErrorsFromExamples(learnt, examples, camera);
+      MeasureDetectorErrorsFromExamples(learnt, examples, camera);
   EXPECT_DOUBLE_EQ(measured[1].image_shape->arc_error_px, 0.5);
   EXPECT_FALSE(measured[0].image_shape.has_value());
+  // ... and its mean colour is the paint's: its chroma, the spread at the
+  // floor (a share of the colour box's 4 units).
+  ASSERT_TRUE(measured[1].colour && measured[1].colour->blob_chroma);
+  const cv::Vec3b orange_yuv = ToYuv(orange);
+  for (int ch = 0; ch < 2; ++ch) {
+    EXPECT_NEAR(measured[1].colour->blob_chroma->mean[ch], orange_yuv[ch + 1] - 128.0, 1e-6);
+    EXPECT_DOUBLE_EQ(measured[1].colour->blob_chroma->std[ch], kDefaultBlobChromaFloor * 4);
+  }
   // Fewer than three outlines: no model.
   const std::vector<ColourExample> two(examples.begin(), examples.begin() + 2);
   EXPECT_FALSE(LearnImageShapesFromExamples(classes, two, camera)[1].image_shape);
@@ -382,23 +390,35 @@ TEST_F(SimulatedRun, GroundTruthExamplesNeedTheGroundTruth) {
 // silhouette widened by the half pixel on each side (about 1 px); the can's
 // blue stripes at its edges are not its colour, so its blob loses whole
 // stripes there. Measured, the can's error is the larger, and classes without
-// an image shape model get none.
-TEST_F(SimulatedRun, DetectorArcErrorsAreMeasuredPerClass) {
+// an image shape model get none. The blobs' mean colour: in flat light and
+// without noise each blob is its object's main colour exactly, so the blob
+// chroma is that colour's (U − 128, V − 128) and its spread the floor.
+TEST_F(SimulatedRun, DetectorErrorsAreMeasuredPerClass) {
   const std::vector<ObjectClass> untrained = Classes();
   const std::vector<ObjectClass> coloured =
       TrainColourModels(untrained, ExamplesFromGroundTruth(Run(), untrained), 3.0);
   const std::vector<ObjectClass> measured =
-      MeasureDetectorArcErrors(LearnImageShapes(coloured, Run(), 3), Run(), 3);
+      MeasureDetectorErrors(LearnImageShapes(coloured, Run(), 3), Run(), 3);
   ASSERT_TRUE(measured[0].image_shape && measured[1].image_shape);
   std::printf("arc error: can %.2f px, ball %.2f px\n", measured[0].image_shape->arc_error_px,
               measured[1].image_shape->arc_error_px);
   EXPECT_GE(measured[1].image_shape->arc_error_px, 0.5);
   EXPECT_LT(measured[1].image_shape->arc_error_px, 1.6);
   EXPECT_GT(measured[0].image_shape->arc_error_px, measured[1].image_shape->arc_error_px + 1.0);
+  const cv::Vec3b red(30, 30, 200), green(50, 160, 40);  // BGR
+  for (int c = 0; c < 2; ++c) {
+    SCOPED_TRACE(measured[c].name);
+    ASSERT_TRUE(measured[c].colour && measured[c].colour->blob_chroma);
+    const cv::Vec3b yuv = ToYuv(c == 0 ? red : green);
+    for (int ch = 0; ch < 2; ++ch) {
+      EXPECT_NEAR(measured[c].colour->blob_chroma->mean[ch], yuv[ch + 1] - 128.0, 1e-6);
+      EXPECT_DOUBLE_EQ(measured[c].colour->blob_chroma->std[ch], kDefaultBlobChromaFloor);
+    }
+  }
   // Without a shape model there is nothing to attach the error to.
-  EXPECT_FALSE(MeasureDetectorArcErrors(coloured, Run(), 3)[0].image_shape.has_value());
+  EXPECT_FALSE(MeasureDetectorErrors(coloured, Run(), 3)[0].image_shape.has_value());
   // More views asked for than the run has: no measurement.
-  EXPECT_EQ(MeasureDetectorArcErrors(LearnImageShapes(coloured, Run(), 3), Run(), 1000)[1]
+  EXPECT_EQ(MeasureDetectorErrors(LearnImageShapes(coloured, Run(), 3), Run(), 1000)[1]
                 .image_shape->arc_error_px,
             0.0);
 }

@@ -13,7 +13,7 @@ namespace oslam {
 
 inline std::vector<ObjectClass> ClassesTrainedOnGroundTruth(const std::string& run) {
   const std::vector<ObjectClass> untrained = ReadClasses(run + "/classes.yaml");
-  return MeasureDetectorArcErrors(
+  return MeasureDetectorErrors(
       LearnImageShapes(TrainColourModels(untrained, ExamplesFromGroundTruth(run, untrained), 3.0),
                        run),
       run);

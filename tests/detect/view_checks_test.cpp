@@ -203,6 +203,7 @@ TEST(ViewChecks, DropLookAlikesOfTheWrongSizeAndKeepEveryTrueView) {
   };
   BlobDetectorOptions colour_only;
   colour_only.max_view_distance = std::numeric_limits<double>::infinity();
+  colour_only.max_blob_colour_distance = std::numeric_limits<double>::infinity();
   const DetectionEvaluation before = evaluate(colour_only);
   const DetectionEvaluation after = evaluate(BlobDetectorOptions{});
   for (size_t c = 0; c < classes.size(); ++c) {
