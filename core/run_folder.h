@@ -37,7 +37,7 @@ struct BlobChroma {
 struct ColourBox {
   std::array<double, 3> yuv_mean{};
   std::array<double, 3> yuv_std{};
-  double k_sigma = 3.0;  // box half-width in standard deviations (thesis: 3)
+  double k_sigma = 3.0;                   // box half-width in standard deviations (thesis: 3)
   std::optional<BlobChroma> blob_chroma;  // learnt with the detector's errors; optional
 };
 

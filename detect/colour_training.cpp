@@ -304,7 +304,8 @@ class DetectorErrors {
     if (arc_too)
       errors_[class_index].push_back((largest->slice.s_phi_rad - view.s_phi_rad) * middle_radius);
     const std::optional<ColourBox>& box = classes[class_index].colour;
-    if (box) chroma_[class_index].push_back(ChromaAtBrightness(largest->mean_yuv, box->yuv_mean[0]));
+    if (box)
+      chroma_[class_index].push_back(ChromaAtBrightness(largest->mean_yuv, box->yuv_mean[0]));
   }
 
   // `classes` with
@@ -339,8 +340,8 @@ class DetectorErrors {
           blob.mean[ch] = sum / chroma.size();
           for (const auto& value : chroma) sum_sq += std::pow(value[ch] - blob.mean[ch], 2);
           const double pixel_std = std::max(1.0, measured[c].colour->yuv_std[ch + 1]);
-          blob.std[ch] = std::max(std::sqrt(sum_sq / (chroma.size() - 1)),
-                                  blob_chroma_floor * pixel_std);
+          blob.std[ch] =
+              std::max(std::sqrt(sum_sq / (chroma.size() - 1)), blob_chroma_floor * pixel_std);
         }
         measured[c].colour->blob_chroma = blob;
       }
@@ -391,7 +392,8 @@ std::vector<ObjectClass> MeasureDetectorErrors(const std::vector<ObjectClass>& c
       throw Error::InFile(run_dir, "ground_truth/visible_slices.csv names frame " +
                                        std::to_string(frame) + ", which the run does not have");
     const std::vector<Detection> found = detector.Detect(frames.Read(frame), frame);
-    for (const TrueView& view : views) errors.Add(found, classes, view.class_index, view.slice, ShapeSized(view.slice));
+    for (const TrueView& view : views)
+      errors.Add(found, classes, view.class_index, view.slice, ShapeSized(view.slice));
   }
   return errors.Apply(classes, min_views, blob_chroma_floor);
 }

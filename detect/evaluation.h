@@ -26,12 +26,12 @@ struct DetectionEvaluationOptions {
 
 struct ClassDetectionStats {
   std::string class_name;
-  int sightings = 0;            // counted for recall
-  int sightings_found = 0;      // of those, matched by a detection of the right class
-  int detections = 0;           // of this class
-  int true_positives = 0;       // on an object of this class
-  int confused = 0;             // on an object of another class
-  int spurious = 0;             // on no class object (distractor or background)
+  int sightings = 0;        // counted for recall
+  int sightings_found = 0;  // of those, matched by a detection of the right class
+  int detections = 0;       // of this class
+  int true_positives = 0;   // on an object of this class
+  int confused = 0;         // on an object of another class
+  int spurious = 0;         // on no class object (distractor or background)
   double Recall() const { return sightings ? double(sightings_found) / sightings : 0.0; }
   double Precision() const { return detections ? double(true_positives) / detections : 0.0; }
 };

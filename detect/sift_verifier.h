@@ -19,14 +19,14 @@
 namespace oslam {
 
 struct SiftVerifierOptions {
-  double ratio = 0.75;              // Lowe's ratio test
-  int min_inliers = 6;              // RANSAC inliers needed to accept
+  double ratio = 0.75;  // Lowe's ratio test
+  int min_inliers = 6;  // RANSAC inliers needed to accept
   double ransac_threshold_px = 4.0;
   // The slice is widened by this share on every side; negative shrinks it.
   // Looking only inside the blob keeps the object's silhouette out: any box
   // outline matches any other, so it must not count as evidence.
   double padding = -0.1;
-  int min_patch_px = 96;            // patches are upsampled to at least this size
+  int min_patch_px = 96;  // patches are upsampled to at least this size
   bool Validate(std::string* why) const;
 };
 

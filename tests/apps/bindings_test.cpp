@@ -42,6 +42,8 @@ std::vector<KeyCase> Cases() {
       {"detect.keep_look_alikes", "1", [](O o) { return !o.detect.detector.separate_look_alikes; }},
       {"detect.max_shape_distance", "4",
        [](O o) { return o.detect.detector.max_shape_distance == 4.0; }},
+      {"detect.max_blob_colour_distance", "4.5",
+       [](O o) { return o.detect.detector.max_blob_colour_distance == 4.5; }},
       {"detect.max_view_distance", "inf",
        [](O o) { return std::isinf(o.detect.detector.max_view_distance); }},
       {"detect.fragment_gap_px", "7", [](O o) { return o.detect.detector.fragment_gap_px == 7.0; }},

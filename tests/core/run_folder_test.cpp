@@ -154,11 +154,12 @@ TEST(Classes, BadFilesAreReportedWithTheKey) {
   const std::string colour =
       "    colour: {yuv_mean: [100, 90, 160], yuv_std: [10, 3, 4], k_sigma: 3";
   EXPECT_EQ(error_for(good + colour + ", blob_chroma_mean: [-30, 30]}\n"),
-            path + ": classes[0].colour.blob_chroma_std: missing: blob_chroma_mean and "
-                   "blob_chroma_std come together");
-  EXPECT_EQ(error_for(good + colour +
-                      ", blob_chroma_mean: [-30, 30], blob_chroma_std: [0.5, 0]}\n"),
-            path + ": classes[0].colour.blob_chroma_std: must be positive");
+            path +
+                ": classes[0].colour.blob_chroma_std: missing: blob_chroma_mean and "
+                "blob_chroma_std come together");
+  EXPECT_EQ(
+      error_for(good + colour + ", blob_chroma_mean: [-30, 30], blob_chroma_std: [0.5, 0]}\n"),
+      path + ": classes[0].colour.blob_chroma_std: must be positive");
   EXPECT_EQ(error_for(good + colour + ", blob_chroma_mean: [-30], blob_chroma_std: [1, 1]}\n"),
             path + ": classes[0].colour.blob_chroma_mean: expected 2 numbers, found 1");
   std::string huge = good;

@@ -22,7 +22,8 @@ constexpr int kTexturedId = 0, kPlainId = 1;
 // The ground-truth object whose slice contains the detection's base angle, or -1.
 int ObjectOf(const Detection& d, const GroundTruth& truth) {
   for (const GroundTruthSighting& s : truth.sightings)
-    if (s.frame == d.frame && std::abs(WrapAngle(d.slice.u_phi_rad - s.u_phi_rad)) <= 0.5 * s.s_phi_rad)
+    if (s.frame == d.frame &&
+        std::abs(WrapAngle(d.slice.u_phi_rad - s.u_phi_rad)) <= 0.5 * s.s_phi_rad)
       return s.object_id;
   return -1;
 }
@@ -31,7 +32,8 @@ TEST(SiftVerifier, KeepsTheTexturedObjectAndRejectsSameColouredClutter) {
   testing::TempDir dir;
   const std::string run = dir.Path("run");
   SimulationOptions simulation;
-  Simulate(LoadScene(std::string(OSLAM_SOURCE_DIR) + "/tests/data/sift_clutter.yaml"), run, simulation);
+  Simulate(LoadScene(std::string(OSLAM_SOURCE_DIR) + "/tests/data/sift_clutter.yaml"), run,
+           simulation);
   const std::unique_ptr<CameraModel> camera = LoadCamera(run + "/camera.yaml");
   const std::vector<ObjectClass> untrained = ReadClasses(run + "/classes.yaml");
   const std::vector<ObjectClass> classes =
@@ -44,10 +46,12 @@ TEST(SiftVerifier, KeepsTheTexturedObjectAndRejectsSameColouredClutter) {
   const std::vector<long> template_frames = {0, 5, 10, 15};
   std::vector<cv::Mat> template_patches;
   for (long frame : template_frames) {
-    const auto sighting = std::find_if(truth.sightings.begin(), truth.sightings.end(),
-                                       [&](const auto& s) { return s.frame == frame && s.object_id == kTexturedId; });
+    const auto sighting =
+        std::find_if(truth.sightings.begin(), truth.sightings.end(),
+                     [&](const auto& s) { return s.frame == frame && s.object_id == kTexturedId; });
     ASSERT_NE(sighting, truth.sightings.end());
-    const BoundingSlice slice{sighting->u_r_px, sighting->u_phi_rad, sighting->s_r_px, sighting->s_phi_rad};
+    const BoundingSlice slice{sighting->u_r_px, sighting->u_phi_rad, sighting->s_r_px,
+                              sighting->s_phi_rad};
     template_patches.push_back(ExtractSlicePatch(frames.Read(frame), *camera, slice, -0.2, 96));
   }
   const SiftVerifier verifier(std::vector<std::vector<cv::Mat>>{template_patches});
@@ -91,8 +95,8 @@ TEST(SiftVerifier, ClassesWithoutTemplatesPassUnchecked) {
   const SiftVerifier verifier(std::vector<std::vector<cv::Mat>>(2));
   Detection d;
   d.class_index = 1;
-  const VerificationResult result =
-      verifier.Verify(cv::Mat(480, 640, CV_8UC3, cv::Scalar(0)), HyperbolicCamera::Preset("lpa"), d);
+  const VerificationResult result = verifier.Verify(cv::Mat(480, 640, CV_8UC3, cv::Scalar(0)),
+                                                    HyperbolicCamera::Preset("lpa"), d);
   EXPECT_TRUE(result.verified);
   EXPECT_FALSE(result.checked);
   SiftVerifierOptions bad;
