@@ -27,11 +27,15 @@ struct LabFrames {
     std::filesystem::remove_all(run_dir);
     SimulationOptions options;
     options.max_frames = 20;
-    Simulate(LoadScene(std::string(OSLAM_SOURCE_DIR) + "/samples/scenes/lab.yaml"), run_dir, options);
+    Simulate(LoadScene(std::string(OSLAM_SOURCE_DIR) + "/samples/scenes/lab.yaml"), run_dir,
+             options);
     camera = LoadCamera(run_dir + "/camera.yaml");
     const std::vector<ObjectClass> untrained = ReadClasses(run_dir + "/classes.yaml");
-    classes = LearnImageShapes(
-        TrainColourModels(untrained, ExamplesFromGroundTruth(run_dir, untrained), 3.0), run_dir);
+    classes = MeasureDetectorErrors(
+        LearnImageShapes(
+            TrainColourModels(untrained, ExamplesFromGroundTruth(run_dir, untrained), 3.0),
+            run_dir),
+        run_dir);
     const FrameSource source(run_dir);
     for (size_t i = 0; i < source.size(); ++i) frames.push_back(source.Read(i));
     std::filesystem::remove_all(run_dir);
@@ -45,13 +49,15 @@ const LabFrames& Lab() {
 
 // Args: opening radius; 1 = separate look-alike classes by image shape (the
 // default); 1 = view checks (size standing on the floor and image shape, the
-// default).
+// default); 1 = the check of each blob's mean colour (the default).
 void BM_ColourBlobDetection640x480(benchmark::State& state) {
   const LabFrames& lab = Lab();
   BlobDetectorOptions options;
   options.opening_radius_px = static_cast<int>(state.range(0));
   options.separate_look_alikes = state.range(1) != 0;
   if (state.range(2) == 0) options.max_view_distance = std::numeric_limits<double>::infinity();
+  if (state.range(3) == 0)
+    options.max_blob_colour_distance = std::numeric_limits<double>::infinity();
   const BlobDetector detector(*lab.camera, lab.classes, options);
   size_t i = 0, detections = 0;
   for (auto _ : state) {
@@ -63,10 +69,11 @@ void BM_ColourBlobDetection640x480(benchmark::State& state) {
   state.counters["detections_per_frame"] = double(detections) / state.iterations();
 }
 BENCHMARK(BM_ColourBlobDetection640x480)
-    ->Args({0, 1, 1})
-    ->Args({1, 1, 1})
-    ->Args({0, 1, 0})
-    ->Args({0, 0, 0})
+    ->Args({0, 1, 1, 1})
+    ->Args({1, 1, 1, 1})
+    ->Args({0, 1, 1, 0})
+    ->Args({0, 1, 0, 0})
+    ->Args({0, 0, 0, 0})
     ->Unit(benchmark::kMicrosecond);
 
 // Colour detection plus SIFT verification of every detection, on the SIFT
@@ -88,8 +95,8 @@ void BM_ColourDetectionWithSiftVerification(benchmark::State& state) {
   for (size_t i = 0; i < source.size(); ++i) frames.push_back(source.Read(i));
   for (const GroundTruthSighting& s : truth.sightings)
     if (s.object_id == 0 && s.frame % 5 == 0)
-      templates.push_back(ExtractSlicePatch(frames[s.frame], *camera,
-                                            {s.u_r_px, s.u_phi_rad, s.s_r_px, s.s_phi_rad}, -0.2, 96));
+      templates.push_back(ExtractSlicePatch(
+          frames[s.frame], *camera, {s.u_r_px, s.u_phi_rad, s.s_r_px, s.s_phi_rad}, -0.2, 96));
   std::filesystem::remove_all(run_dir);
   const BlobDetector detector(*camera, classes);
   const SiftVerifier verifier(std::vector<std::vector<cv::Mat>>{templates});
