@@ -1,6 +1,7 @@
 // oslam train-colors: learn the classes' YUV colour boxes from example regions
 // and store them, with the class-confusion matrix, in classes.yaml.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -32,6 +33,10 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
       "also learns each class's image shape (slice elongation) from its views");
   arguments.AddOption("k-sigma", "", "K", "half-width of the colour box in standard deviations",
                       "3");
+  arguments.AddOption("blob-colour-floor", "", "F",
+                      "least spread of the learnt blob colour, as a share of the colour box's\n"
+                      "(docs/detection.md, Verification by the blob's mean colour)",
+                      "0.25");
   arguments.AddOption("output", "-o", "OUT.yaml", "where to write (default: CLASSES.yaml)");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;
@@ -39,6 +44,9 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
     throw UsageError("give exactly one of --examples and --from-ground-truth");
   const double k_sigma = arguments.GetDouble("k-sigma");
   if (!(k_sigma > 0)) throw UsageError("--k-sigma must be positive");
+  const double blob_colour_floor = arguments.GetDouble("blob-colour-floor");
+  if (!(blob_colour_floor > 0) || std::isinf(blob_colour_floor))
+    throw UsageError("--blob-colour-floor must be positive");
   if (arguments.Has("camera") && !arguments.Has("examples"))
     throw UsageError("--camera applies only with --examples (outline examples)");
 
@@ -60,14 +68,16 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
       throw Error::InFile(
           camera_path, "not found: outline examples need the camera (give --camera CAMERA.yaml)");
     const std::unique_ptr<CameraModel> camera = LoadCamera(camera_path);
-    trained = MeasureDetectorErrorsFromExamples(
-        LearnImageShapesFromExamples(trained, examples, *camera), examples, *camera);
+    trained =
+        MeasureDetectorErrorsFromExamples(LearnImageShapesFromExamples(trained, examples, *camera),
+                                          examples, *camera, 3, blob_colour_floor);
   }
   if (arguments.Has("from-ground-truth")) {
     const std::string run_dir = arguments.Get("from-ground-truth");
     // Runs simulated before visible_slices.csv existed still train colours.
     if (std::filesystem::exists(run_dir + "/ground_truth/visible_slices.csv"))
-      trained = MeasureDetectorErrors(LearnImageShapes(trained, run_dir), run_dir);
+      trained =
+          MeasureDetectorErrors(LearnImageShapes(trained, run_dir), run_dir, 5, blob_colour_floor);
     else if (!arguments.Flag("quiet"))
       std::fprintf(
           stderr,
