@@ -123,6 +123,21 @@ TEST(Cli, TrainColorsTakesTheCameraOfOutlineExamples) {
   const std::vector<ObjectClass> trained = ReadClasses(dir.Path("classes.yaml"));
   ASSERT_TRUE(trained[0].colour.has_value());
   EXPECT_TRUE(trained[0].image_shape.has_value());
+  // The outlines' blobs teach the blob colour too; one flat paint: the spread
+  // is the floor, a share of the colour box's (at least 1 unit).
+  ASSERT_TRUE(trained[0].colour->blob_chroma.has_value());
+  const double pixel_std_v = std::max(1.0, trained[0].colour->yuv_std[2]);
+  EXPECT_DOUBLE_EQ(trained[0].colour->blob_chroma->std[1], 0.25 * pixel_std_v);
+  ASSERT_EQ(RunOslam(train + " --camera " + dir.Path("rig/camera.yaml") +
+                     " --blob-colour-floor 0.5 --quiet")
+                .exit_code,
+            0);
+  EXPECT_DOUBLE_EQ(ReadClasses(dir.Path("classes.yaml"))[0].colour->blob_chroma->std[1],
+                   0.5 * pixel_std_v);
+  const Result no_floor = RunOslam(train + " --blob-colour-floor 0");
+  EXPECT_EQ(no_floor.exit_code, 2);
+  EXPECT_NE(no_floor.err.find("--blob-colour-floor must be positive"), std::string::npos)
+      << no_floor.err;
   const std::string text = ReadTextFile(dir.Path("classes.yaml"));
   EXPECT_NE(text.find("diameter_mean_m: 0.2\n"), std::string::npos) << text;
   EXPECT_EQ(text.find("e-01"), std::string::npos) << text;
