@@ -26,7 +26,9 @@ Result RunOslam(const std::string& arguments) {
   return testing::RunShellCommand(std::string(OSLAM_BINARY) + " " + arguments);
 }
 
-int Lines(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
+int Lines(const std::string& text) {
+  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+}
 
 TEST(Cli, HelpAndVersion) {
   const Result help = RunOslam("--help");
