@@ -8,7 +8,6 @@
 
 #include <gtest/gtest.h>
 
-#include "calib/camera_io.h"
 #include "detect/blob_detector.h"
 #include "detect/colour_classifier.h"
 #include "detect/evaluation.h"
@@ -59,7 +58,6 @@ TEST(BlobColour, APalerLookAlikeIsDroppedAndEveryTrueViewKept) {
   testing::TempDir dir;
   const std::string run = dir.Path("run");
   Simulate(LoadScene(std::string(OSLAM_SOURCE_DIR) + "/tests/data/blob_colour.yaml"), run, {});
-  const std::unique_ptr<CameraModel> camera = LoadCamera(run + "/camera.yaml");
   const std::vector<ObjectClass> classes = ClassesTrainedOnGroundTruth(run);
   ASSERT_TRUE(classes[0].colour && classes[0].colour->blob_chroma);
   const BlobChroma& blob = *classes[0].colour->blob_chroma;
@@ -71,15 +69,8 @@ TEST(BlobColour, APalerLookAlikeIsDroppedAndEveryTrueViewKept) {
   for (int ch = 0; ch < 2; ++ch)
     EXPECT_GE(blob.std[ch],
               kDefaultBlobChromaFloor * std::max(1.0, classes[0].colour->yuv_std[ch + 1]) - 1e-12);
-  const GroundTruth truth = *ReadGroundTruth(run);
-  const FrameSource frames(run);
   auto evaluate = [&](const BlobDetectorOptions& options) {
-    const BlobDetector detector(*camera, classes, options);
-    std::vector<Detection> all;
-    for (size_t i = 0; i < frames.size(); ++i)
-      for (const Detection& d : detector.Detect(frames.Read(i), static_cast<long>(i)))
-        all.push_back(d);
-    return EvaluateDetections(all, truth, classes).per_class[0];
+    return EvaluateDetectorOnRun(run, classes, options).per_class[0];
   };
   BlobDetectorOptions box_only;
   box_only.max_blob_colour_distance = std::numeric_limits<double>::infinity();

@@ -189,17 +189,9 @@ TEST(ViewChecks, DropLookAlikesOfTheWrongSizeAndKeepEveryTrueView) {
   testing::TempDir dir;
   const std::string run = dir.Path("run");
   Simulate(LoadScene(std::string(OSLAM_SOURCE_DIR) + "/tests/data/view_checks.yaml"), run, {});
-  const std::unique_ptr<CameraModel> camera = LoadCamera(run + "/camera.yaml");
   const std::vector<ObjectClass> classes = ClassesTrainedOnGroundTruth(run);
-  const GroundTruth truth = *ReadGroundTruth(run);
-  const FrameSource frames(run);
   auto evaluate = [&](const BlobDetectorOptions& options) {
-    const BlobDetector detector(*camera, classes, options);
-    std::vector<Detection> all;
-    for (size_t i = 0; i < frames.size(); ++i)
-      for (const Detection& d : detector.Detect(frames.Read(i), static_cast<long>(i)))
-        all.push_back(d);
-    return EvaluateDetections(all, truth, classes);
+    return EvaluateDetectorOnRun(run, classes, options);
   };
   BlobDetectorOptions colour_only;
   colour_only.max_view_distance = std::numeric_limits<double>::infinity();
