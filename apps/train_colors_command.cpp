@@ -11,6 +11,7 @@
 #include "calib/camera_io.h"
 #include "core/error.h"
 #include "core/run_folder.h"
+#include "core/text.h"
 #include "detect/colour_classifier.h"
 #include "detect/colour_training.h"
 
@@ -36,7 +37,7 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
   arguments.AddOption("blob-colour-floor", "", "F",
                       "least spread of the learnt blob colour, as a share of the colour box's\n"
                       "(docs/detection.md, Verification by the blob's mean colour)",
-                      "0.25");
+                      Format("%g", kDefaultBlobChromaFloor));
   arguments.AddOption("output", "-o", "OUT.yaml", "where to write (default: CLASSES.yaml)");
   arguments.AddFlag("quiet", "print nothing but errors");
   if (!arguments.Parse(args)) return 0;

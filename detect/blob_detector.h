@@ -45,11 +45,10 @@ struct BlobDetectorOptions {
   int opening_radius_px = 1;       // morphological opening per class mask; 0 = off
   bool annulus_only = true;        // ignore the blind disc and everything beyond the mirror rim
   ColourClassifierOptions colour;  // box shape (thesis YUV box or brightness-scaled)
-  // Colour verification (docs/detection.md "Blob colour"): drop a blob whose
-  // mean colour lies further than this many standard deviations from its
-  // class's learnt blob colour (ColourBox::blob_chroma; classes without one
-  // pass): the tail probability of ± that many sigmas of a normal, as a
-  // chi-square of two degrees of freedom (3 → D² 11.8). inf = off.
+  // Colour verification (docs/detection.md "Verification by the blob's mean colour"): drop a blob
+  // whose mean colour lies further than this many standard deviations from its class's learnt blob
+  // colour (ColourBox::blob_chroma; classes without one pass): the tail probability of ± that many
+  // sigmas of a normal, as a chi-square of two degrees of freedom (3 → D² 11.8). inf = off.
   double max_blob_colour_distance = 3.0;
   // Where the blobs of two classes are the same pixels (look-alike colours,
   // e.g. an orange ball and an orange bucket), keep only the class whose colour

@@ -59,7 +59,7 @@ std::vector<ObjectClass> LearnImageShapes(const std::vector<ObjectClass>& classe
                                           const std::string& run_dir, int min_views = 5);
 
 // The blob colour's standard deviation is at least this share of the colour
-// box's pixel standard deviation (docs/detection.md "Blob colour").
+// box's pixel standard deviation (docs/detection.md "Verification by the blob's mean colour").
 constexpr double kDefaultBlobChromaFloor = 0.25;
 
 // Returns `classes` with what the colour detector alone (with `classes`'
