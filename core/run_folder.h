@@ -22,11 +22,13 @@ namespace oslam {
 // ---- classes.yaml ----
 
 // The mean colour of a class's whole colour blobs, learnt in training
-// (docs/detection.md "Verification by the blob's mean colour"): each blob's mean chroma (U − 128, V
-// − 128) scaled to its box's brightness (times yuv_mean[0] / Y), so a dimmer or brighter view of
-// the same paint lands on the same point; mean and standard deviation over the training views. A
-// pixel's colour varies with shading across the object, a blob's mean far less: a pale carton whose
-// pixels pass a yellow box's colour test still has a mean colour no yellow box's blob has.
+// (docs/detection.md, "Verification by the blob's mean colour"): each blob's
+// mean chroma (U − 128, V − 128) scaled to its box's brightness (times
+// yuv_mean[0] / Y), so a dimmer or brighter view of the same paint lands on
+// the same point; mean and standard deviation over the training views. A
+// pixel's colour varies with shading across the object, a blob's mean far
+// less: a pale carton whose pixels pass a yellow box's colour test still has
+// a mean colour no yellow box's blob has.
 struct BlobChroma {
   std::array<double, 2> mean{};
   std::array<double, 2> std{};
