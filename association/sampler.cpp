@@ -723,6 +723,12 @@ std::vector<AssociationState> TrackChanges(const StateEvaluation& current, int t
     add(-1, state.classes[from]);
     const int likeliest = likeliest_with_track({});
     if (likeliest != state.classes[from]) add(-1, likeliest);
+  } else {
+    // A track alone: its object at every other class, so that a scanned
+    // track's class is drawn as its place is (a one-track object's class
+    // otherwise changes only by the rare switch move that picks it).
+    for (int c = 0; c < model.num_classes(); ++c)
+      if (c != state.classes[from]) add(-1, c);
   }
   return changes;
 }
