@@ -103,9 +103,18 @@ int RunTrainColorsCommand(const std::vector<std::string>& args) {
         // 0: not measured (too few views matched by a blob), not a perfect detector.
         if (shape->arc_error_px > 0) std::printf(", arc error %.1f px", shape->arc_error_px);
       }
+      if (const auto& blob = box.blob_chroma)
+        std::printf("  blob chroma (%.1f, %.1f) ± (%.1f, %.1f)", blob->mean[0], blob->mean[1],
+                    blob->std[0], blob->std[1]);
       std::printf("\n");
     }
     std::printf("wrote %s\n", output.c_str());
+    // The confusion written is the colour models' estimate; a run's detector
+    // (image shapes, view and blob-colour checks) confuses classes less.
+    std::printf(
+        "class confusion: estimated from the colours; measure it on a run's detections with "
+        "'oslam eval-detect RUN --write-confusion %s' (docs/detection.md)\n",
+        output.c_str());
   }
   return 0;
 }
