@@ -67,14 +67,24 @@ void CreateParentFolder(const std::string& path) {
 }
 
 // A new, empty temp file beside `path`, opened for writing; its name in
-// `temp_path`. mkstemps' O_EXCL refuses an existing name, symlinks included.
-int CreateTempFile(const std::string& path, std::string* temp_path) {
+// `temp_path`, and in the signal handler's `*slot` (ClaimSlot; -1 when none
+// was free) from before the file exists: mkstemps fills in the name in the
+// slot itself, so an interrupt at any moment finds the file it must remove.
+// mkstemps' O_EXCL refuses an existing name, symlinks included.
+int CreateTempFile(const std::string& path, std::string* temp_path, int* slot) {
   const fs::path target(path);
   const std::string suffix = target.extension().string();
   std::string name =
       (target.parent_path() / ("." + target.stem().string() + ".tmp-XXXXXX" + suffix)).string();
-  const int fd = ::mkstemps(name.data(), static_cast<int>(suffix.size()));
-  if (fd < 0) throw Error::InFile(path, "cannot create a temp file beside it: " + Reason(errno));
+  *slot = ClaimSlot(name);
+  char* const buffer = *slot >= 0 ? slot_path[*slot] : name.data();
+  const int fd = ::mkstemps(buffer, static_cast<int>(suffix.size()));
+  if (fd < 0) {
+    const int saved = errno;
+    ReleaseSlot(*slot);
+    throw Error::InFile(path, "cannot create a temp file beside it: " + Reason(saved));
+  }
+  name = buffer;
   // mkstemps creates 0600; give the file the permissions a plain create would.
   const mode_t mask = ::umask(0);
   ::umask(mask);
@@ -162,8 +172,8 @@ void InstallInterruptCleanup() {
 void WriteFileAtomically(const std::string& path, std::string_view bytes, FileSync sync) {
   CreateParentFolder(path);
   std::string temp_path;
-  const int fd = CreateTempFile(path, &temp_path);
-  const int slot = ClaimSlot(temp_path);
+  int slot = -1;
+  const int fd = CreateTempFile(path, &temp_path, &slot);
   const auto fail = [&](const std::string& what) {
     ::unlink(temp_path.c_str());
     ReleaseSlot(slot);
