@@ -83,10 +83,9 @@ TEST(LandmarkWorldTest, HoldsWhatWasAskedAndRepeatsFromItsSeed) {
   EXPECT_THROW(SimulateLandmarkWorld(crowded), Error);
 }
 
-// A city drive whose heading drifts 0.03 rad per step: plain dead reckoning
-// (60 m off) and fixed stages of 50 or 10 poses all stop in false minima;
-// the adaptive stages reach the cost a start from the true trajectory and
-// landmarks reaches (method.md §16.1).
+// --lattice: every landmark on a distinct lattice point, between the least and
+// most offset from the nearest street; more landmarks than such points, or a
+// lattice in a park, are refused.
 TEST(LandmarkWorldTest, LatticeLandmarksStandOnItsPointsBesideTheStreets) {
   LandmarkWorldOptions o;
   o.blocks = 4;
@@ -121,6 +120,10 @@ TEST(LandmarkWorldTest, LatticeLandmarksStandOnItsPointsBesideTheStreets) {
   EXPECT_NE(why.find("lattice"), std::string::npos);
 }
 
+// A city drive whose heading drifts 0.03 rad per step: plain dead reckoning
+// (60 m off) and fixed stages of 50 or 10 poses all stop in false minima;
+// the adaptive stages reach the cost a start from the true trajectory and
+// landmarks reaches (method.md §16.1).
 TEST(LandmarkWorldTest, DefaultStartReachesTheOptimumOfAStartFromTheTruth) {
   LandmarkWorldOptions options;
   options.num_poses = 2000;
