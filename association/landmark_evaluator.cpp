@@ -403,6 +403,77 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   return std::isfinite(*delta);
 }
 
+bool LandmarkEvaluator::JointMergeDelta(const AssociationState& state,
+                                        const std::vector<std::vector<int>>& groups,
+                                        double* delta) {
+  if (!reference_factorised_ || !reference_ || !(reference_->state == state)) return false;
+  // MergeDelta's integral with several groups: x the positions of every
+  // block concerned (M of them), N(x; mu, Sigma) the reference's marginal,
+  // x = H l with l one position per group (G of them), and each group of n
+  // blocks keeping one location prior instead of n:
+  //   log int N(H l; mu, Sigma) prod_g N(l_g; m, s^2 I)^-(n_g - 1) dl
+  //   = -1/2 log|Sigma| - 1/2 log|P| + 1/2 b'P^-1 b - 1/2 mu'Lambda mu
+  //     + sum_g (n_g - 1) (log s^2 + |m|^2 / (2 s^2)),
+  // P = H'Lambda H - diag((n_g - 1) / s^2), b = H'Lambda mu - ((n_g - 1) m / s^2)_g
+  // (the 2 pi factors cancel since sum_g n_g = M).
+  std::vector<int> blocks, keys;
+  for (const auto& group : groups) {
+    if (group.size() < 2) return false;
+    for (int j : group) {
+      if (j < 0 || j >= static_cast<int>(reference_position_keys_.size()) ||
+          reference_position_keys_[j] < 0)
+        return false;
+      blocks.push_back(j);
+      keys.push_back(reference_position_keys_[j]);
+    }
+  }
+  const int m_blocks = static_cast<int>(blocks.size()), g_count = static_cast<int>(groups.size());
+  PrepareMerges(blocks);
+  Eigen::MatrixXd sigma(2 * m_blocks, 2 * m_blocks);
+  for (int a = 0; a < m_blocks; ++a)
+    for (int b = a; b < m_blocks; ++b) {
+      Eigen::Matrix4d pair;
+      if (!JointCovariance(keys[a], keys[b], &pair)) return false;
+      if (a == b) {
+        sigma.block<2, 2>(2 * a, 2 * a) = pair.topLeftCorner<2, 2>();
+        continue;
+      }
+      sigma.block<2, 2>(2 * a, 2 * b) = pair.topRightCorner<2, 2>();
+      sigma.block<2, 2>(2 * b, 2 * a) = pair.bottomLeftCorner<2, 2>();
+    }
+  Eigen::VectorXd mu(2 * m_blocks);
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2 * m_blocks, 2 * g_count);
+  for (int g = 0, row = 0; g < g_count; ++g)
+    for (size_t i = 0; i < groups[g].size(); ++i, ++row) {
+      mu.segment<2>(2 * row) = reference_->locations[groups[g][i]].head<2>();
+      h.block<2, 2>(2 * row, 2 * g).setIdentity();
+    }
+  const Eigen::LLT<Eigen::MatrixXd> sigma_llt(sigma);
+  if (sigma_llt.info() != Eigen::Success) return false;
+  const Eigen::MatrixXd lambda_h = sigma_llt.solve(h);
+  const Eigen::VectorXd lambda_mu = sigma_llt.solve(mu);
+  const double s2 = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
+  const Eigen::Vector2d m = options_.slam.landmark_prior_mean_m;
+  Eigen::MatrixXd p = h.transpose() * lambda_h;
+  Eigen::VectorXd b = h.transpose() * lambda_mu;
+  double prior_terms = 0;
+  for (int g = 0; g < g_count; ++g) {
+    const double extra = double(groups[g].size()) - 1;
+    p.block<2, 2>(2 * g, 2 * g) -= Eigen::Matrix2d::Identity() * extra / s2;
+    b.segment<2>(2 * g) -= extra * m / s2;
+    prior_terms += extra * (std::log(s2) + 0.5 * m.squaredNorm() / s2);
+  }
+  const Eigen::LLT<Eigen::MatrixXd> p_llt(p);
+  if (p_llt.info() != Eigen::Success) return false;
+  double log_det_sigma = 0, log_det_p = 0;
+  for (int i = 0; i < sigma.rows(); ++i) log_det_sigma += 2 * std::log(sigma_llt.matrixL()(i, i));
+  for (int i = 0; i < p.rows(); ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
+  *delta = -0.5 * log_det_sigma - 0.5 * log_det_p + 0.5 * b.dot(p_llt.solve(b)) -
+           0.5 * mu.dot(lambda_mu) + prior_terms;
+  ++marginal_merges_;
+  return std::isfinite(*delta);
+}
+
 void LandmarkEvaluator::PrepareMerges(const std::vector<int>& blocks) {
   if (!reference_factorised_) return;
   std::vector<std::vector<int>> missing;

@@ -93,6 +93,14 @@ class LandmarkEvaluator : public StateEvaluator {
   // batch (a forward solve per 64 columns) so that each pair's joint
   // covariance is a product of kept columns instead of a solve of its own.
   void PrepareMerges(const std::vector<int>& blocks);
+  // Marginal mode, `state` the reference: log_target(merged) -
+  // log_target(reference) in closed form, linearised at the reference, for
+  // merging each group of the reference's blocks `groups` (indices into
+  // state.blocks, disjoint, at least two each) into one landmark: the joint
+  // compatibility of several merges at once (docs/method.md §16.2). False
+  // when not computable (not the reference, a key without a position).
+  bool JointMergeDelta(const AssociationState& state, const std::vector<std::vector<int>>& groups,
+                       double* delta);
   // The full solution of `state` with landmark covariances, warm-started
   // from `from` when given (for the output map).
   LandmarkSlamResult Solve(const AssociationState& state, const StateEvaluation* from);

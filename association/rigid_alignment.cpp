@@ -213,9 +213,44 @@ struct Sampled {
   Support most, best_fit;
 };
 
+// The highest-scoring sampled transforms with distinct inlier pairs, best
+// first (a transform found again from other samples replaces its copy when
+// it scores more).
+class TopTransforms {
+ public:
+  explicit TopTransforms(int capacity) : capacity_(capacity) {}
+
+  void Offer(const Rigid2& rigid, const Support& support, const InlierCounter& counter) {
+    if (capacity_ <= 0) return;
+    if (static_cast<int>(kept_.size()) == capacity_ && support.score <= kept_.back().score) return;
+    RigidMatch match;
+    match.rigid = rigid;
+    match.score = support.score;
+    counter.Measure(rigid, &match.pairs);
+    const auto same = std::find_if(kept_.begin(), kept_.end(),
+                                   [&](const RigidMatch& k) { return k.pairs == match.pairs; });
+    if (same != kept_.end()) {
+      if (same->score >= match.score) return;
+      kept_.erase(same);
+    }
+    kept_.insert(std::upper_bound(kept_.begin(), kept_.end(), match,
+                                  [](const RigidMatch& x, const RigidMatch& y) {
+                                    return x.score > y.score;
+                                  }),
+                 std::move(match));
+    if (static_cast<int>(kept_.size()) > capacity_) kept_.pop_back();
+  }
+
+  const std::vector<RigidMatch>& kept() const { return kept_; }
+
+ private:
+  int capacity_;
+  std::vector<RigidMatch> kept_;
+};
+
 Sampled Sample(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
                const InlierCounter& counter, const RigidRansacOptions& options,
-               std::mt19937_64& rng) {
+               std::mt19937_64& rng, TopTransforms* top = nullptr) {
   const double inlier_m = options.inlier_m;
   std::uniform_int_distribution<size_t> pick(0, from.size() - 1);
   Sampled best;
@@ -241,6 +276,7 @@ Sampled Sample(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen
         rigid.t = 0.5 * (to[oa] + to[ob]) - Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
         const Support support = counter.Measure(rigid, nullptr);
         if (support.count < options.min_inliers) continue;
+        if (top) top->Offer(rigid, support, counter);
         if (support.count > best.most.count) {
           best.most = support;
           best.most_rigid = rigid;
@@ -296,6 +332,29 @@ RigidMatches MatchRigidlyBothWays(const std::vector<Eigen::Vector2d>& from,
   if (best.most.count == 0) return matches;
   matches.most_pairs = Refitted(from, to, counter, options, best.most_rigid);
   matches.best_fit = Refitted(from, to, counter, options, best.best_fit_rigid);
+  return matches;
+}
+
+std::vector<RigidMatch> MatchRigidlyTop(const std::vector<Eigen::Vector2d>& from,
+                                        const std::vector<Eigen::Vector2d>& to,
+                                        const RigidRansacOptions& options, int count,
+                                        std::mt19937_64& rng) {
+  std::vector<RigidMatch> matches;
+  if (from.size() < 2 || count <= 0) return matches;
+  InlierCounter counter(from, to, options);
+  if (counter.with_candidates() < options.min_inliers) return matches;
+  counter.Index();
+  TopTransforms top(count);
+  Sample(from, to, counter, options, rng, &top);
+  for (const RigidMatch& sampled : top.kept()) {
+    std::optional<RigidMatch> match = Refitted(from, to, counter, options, sampled.rigid);
+    if (!match) continue;
+    const bool seen = std::any_of(matches.begin(), matches.end(),
+                                  [&](const RigidMatch& m) { return m.pairs == match->pairs; });
+    if (!seen) matches.push_back(std::move(*match));
+  }
+  std::stable_sort(matches.begin(), matches.end(),
+                   [](const RigidMatch& x, const RigidMatch& y) { return x.score > y.score; });
   return matches;
 }
 

@@ -80,4 +80,13 @@ RigidMatches MatchRigidlyBothWays(const std::vector<Eigen::Vector2d>& from,
                                   const std::vector<Eigen::Vector2d>& to,
                                   const RigidRansacOptions& options, std::mt19937_64& rng);
 
+// Up to `count` of the highest-scoring transforms of one RANSAC run with
+// distinct inlier pairs, each refitted and checked as above, best first: the
+// candidates of a regular layout, for a judge that knows the drift (the joint
+// compatibility of the pairs, pipeline/landmark_association.h).
+std::vector<RigidMatch> MatchRigidlyTop(const std::vector<Eigen::Vector2d>& from,
+                                        const std::vector<Eigen::Vector2d>& to,
+                                        const RigidRansacOptions& options, int count,
+                                        std::mt19937_64& rng);
+
 }  // namespace oslam

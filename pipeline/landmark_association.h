@@ -172,6 +172,18 @@ struct UnknownAssociationOptions {
   // (docs/benchmarks.md); each try costs two or three solves.
   double joint_min_score = 7;
   int joint_every_poses = 50;  // RANSAC at most once per this many poses
+  // Small re-entries: when no alignment reaches the floors above, the
+  // joint_screen_candidates best-scoring alignments with at least
+  // joint_screen_min_inliers pairs are each judged by the joint merge of
+  // their pairs in closed form (LandmarkEvaluator::JointMergeDelta: the
+  // pairs' joint compatibility under the marginal covariance, so the drift's
+  // own uncertainty bounds the shift), and the best is tried as above when it
+  // gains more than joint_screen_min_gain. A few landmarks seen again after a
+  // drift of a landmark spacing each have rival single merges of nearly equal
+  // gain; together only the true alignment fits. joint_screen_candidates 0: off.
+  int joint_screen_candidates = 64;
+  int joint_screen_min_inliers = 4;
+  double joint_screen_min_gain = 5;
   // After a joint merge's solve, the worst-fitting pairs are split off again
   // and the problem re-solved while their landmarks' standardised residuals
   // exceed joint_misfit_z, at most joint_repair_rounds times (0: never).
@@ -318,7 +330,14 @@ class LandmarkAssociation {
   // Joint re-entry merge at window end n; returns the pairs merged.
   long JointMerge(int n);
   long TryJointMerge(int n);
+  JointAlignment RecentAndOldUnits(const StateEvaluation& before, int n) const;
   std::optional<JointAlignment> AlignRecentOntoOld(const StateEvaluation& before, int n);
+  std::optional<JointAlignment> ScreenedAlignment(const StateEvaluation& before, int n);
+  // The groups of `s`'s blocks that `match` merges (its pairs of whole
+  // recent landmarks with old ones that share no scan), for JointMergeDelta.
+  std::vector<std::vector<int>> MergedGroups(const AssociationState& s,
+                                             const JointAlignment& units, const RigidMatch& match,
+                                             int n) const;
   bool WorthATry(const AssociationState& s, JointAlignment* alignment) const;
   EvaluationPtr TryAnchor(const StateEvaluation& before, const JointAlignment& alignment,
                           const std::vector<double>& driven, int anchor, int n);

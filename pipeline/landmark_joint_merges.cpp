@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <utility>
 
@@ -42,7 +43,8 @@ long LandmarkAssociation::TryJointMerge(int n) {
   if (last_failure_ < recent_from) joint_needed_score_ = 0;
   if (recent_from <= 0) return 0;  // not driven that far yet
   const EvaluationPtr before = current_;
-  const std::optional<JointAlignment> alignment = AlignRecentOntoOld(*before, n);
+  std::optional<JointAlignment> alignment = AlignRecentOntoOld(*before, n);
+  if (!alignment) alignment = ScreenedAlignment(*before, n);
   if (!alignment) return 0;
   // Per anchor pose: the merges made since it are undone (they were made
   // under the drift), every pair merged, and the state solved from the
@@ -95,8 +97,8 @@ int LandmarkAssociation::LoopStart(const JointAlignment& alignment) const {
 // under the drift may be wrong) and the old part (tracks last seen before
 // that, at the landmark's position), by RANSAC (joint_close_ratio). nullopt
 // when no alignment is worth a try.
-std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRecentOntoOld(
-    const StateEvaluation& before, int n) {
+LandmarkAssociation::JointAlignment LandmarkAssociation::RecentAndOldUnits(
+    const StateEvaluation& before, int n) const {
   const int recent_from = StretchStart(n, options_.joint_recent_m);
   const AssociationState& s = before.state;
   JointAlignment units;
@@ -115,6 +117,13 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRec
       units.old.push_back(o);
     }
   }
+  return units;
+}
+
+std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRecentOntoOld(
+    const StateEvaluation& before, int n) {
+  const AssociationState& s = before.state;
+  JointAlignment units = RecentAndOldUnits(before, n);
   if (static_cast<int>(units.recent.size()) < options_.joint_min_inliers) return std::nullopt;
   std::vector<Eigen::Vector2d> from, to;
   for (const Unit& u : units.recent) from.push_back(u.position_m);
@@ -131,6 +140,138 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRec
   alignment.match = std::move(*match);
   if (!WorthATry(s, &alignment)) return std::nullopt;
   return alignment;
+}
+
+// A re-entry below the RANSAC floors (joint_screen_*): the best few
+// alignments judged by the closed-form joint merge of their pairs.
+std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::ScreenedAlignment(
+    const StateEvaluation& before, int n) {
+  if (options_.joint_screen_candidates <= 0) return std::nullopt;
+  const JointAlignment units = RecentAndOldUnits(before, n);
+  if (static_cast<int>(units.recent.size()) < options_.joint_screen_min_inliers)
+    return std::nullopt;
+  // Judged where the recent tracks are landmarks of their own: a merge made
+  // under the drift pins the trajectory and makes every other pair misfit.
+  const int anchor = std::max(0, StretchStart(n, options_.joint_recent_m) - 1);
+  if (anchor + 1 < held_poses_) return std::nullopt;
+  StateEvaluation seed;
+  seed.state = ReleasedAndMerged(before.state, JointAlignment(), anchor);
+  const bool release = !(seed.state == before.state);
+  for (const auto& block : seed.state.blocks) {
+    seed.locations.push_back(Eigen::Vector3d::Zero());
+    seed.locations.back().head<2>() =
+        first_pose_[block.front()] <= anchor
+            ? Eigen::Vector2d(before.locations[before.state.BlockOf(block.front())].head<2>())
+            : PlacedBy(block, before.solution->trajectory, n);
+  }
+  seed.solution = before.solution;
+  const EvaluationPtr released = release ? Refine(seed.state, &seed) : current_;
+  std::optional<JointAlignment> best;
+  // A try must promise more than the state before holds (its merges since
+  // the anchor included).
+  double best_gain = before.log_target - released->log_target + options_.joint_screen_min_gain;
+  size_t screened = 0;
+  if (released->valid) {
+    const JointAlignment free = RecentAndOldUnits(*released, n);
+    std::vector<Eigen::Vector2d> from, to;
+    for (const Unit& u : free.recent) from.push_back(u.position_m);
+    for (const Unit& u : free.old) to.push_back(u.position_m);
+    RigidRansacOptions ransac = JointRansacOptions(options_);
+    ransac.min_inliers = options_.joint_screen_min_inliers;
+    const std::vector<RigidMatch> matches =
+        MatchRigidlyTop(from, to, ransac, options_.joint_screen_candidates, rng_);
+    screened = matches.size();
+    for (const RigidMatch& match : matches) {
+      const std::vector<std::vector<int>> groups = MergedGroups(released->state, free, match, n);
+      int merged = 0;
+      for (const auto& group : groups) merged += static_cast<int>(group.size()) - 1;
+      double gain = 0;
+      const bool ok = merged >= options_.joint_screen_min_inliers &&
+                      evaluator_->JointMergeDelta(released->state, groups, &gain);
+      if (!ok || !(gain > best_gain)) continue;
+      // The same pairs as units of the state before (by their tracks).
+      JointAlignment alignment = units;
+      std::vector<Eigen::Vector2d> matched_from, matched_to;
+      for (const auto& [r, o] : match.pairs) {
+        const auto unit_of = [](const std::vector<Unit>& list, int track) {
+          for (size_t i = 0; i < list.size(); ++i)
+            if (list[i].tracks.front() == track) return static_cast<int>(i);
+          return -1;
+        };
+        const int rb = unit_of(units.recent, free.recent[r].tracks.front());
+        const int ob = unit_of(units.old, free.old[o].tracks.front());
+        if (rb < 0 || ob < 0) continue;
+        alignment.match.pairs.push_back({rb, ob});
+        matched_from.push_back(units.recent[rb].position_m);
+        matched_to.push_back(units.old[ob].position_m);
+      }
+      if (static_cast<int>(matched_from.size()) < options_.joint_screen_min_inliers) continue;
+      alignment.match.rigid = FitRigid(matched_from, matched_to);
+      alignment.match.score = match.score;
+      if (!WorthATry(before.state, &alignment)) continue;
+      best_gain = gain;
+      best = std::move(alignment);
+    }
+  }
+  if (release) current_ = Refine(before.state, &before);  // the reference back at before
+  if (best)
+    Say(Format("joint merge at %.0f poses: %.0f pairs of %.0f alignments screened gain %.1f "
+               "in closed form",
+               double(n), double(best->match.pairs.size()), double(screened), best_gain) + Format(" released %.1f before %.1f", released->log_target, before.log_target));
+  return best;
+}
+
+std::vector<std::vector<int>> LandmarkAssociation::MergedGroups(const AssociationState& s,
+                                                                const JointAlignment& units,
+                                                                const RigidMatch& match,
+                                                                int n) const {
+  // Union-find over the blocks; a pair joins its recent landmark (whole: one
+  // with older tracks was merged under the drift and is left to the trial)
+  // to its old one unless their scans overlap.
+  std::vector<int> parent(s.blocks.size());
+  for (size_t j = 0; j < parent.size(); ++j) parent[j] = static_cast<int>(j);
+  const auto root = [&](int j) {
+    while (parent[j] != j) j = parent[j] = parent[parent[j]];
+    return j;
+  };
+  std::vector<std::vector<int>> scans(s.blocks.size());  // sorted poses of each block
+  const auto scans_of = [&](int j) -> const std::vector<int>& {
+    if (scans[j].empty()) {
+      for (int t : s.blocks[j])
+        for (int k : result_.tracks[t])
+          if (data_->sightings[k].pose < n) scans[j].push_back(data_->sightings[k].pose);
+      std::sort(scans[j].begin(), scans[j].end());
+    }
+    return scans[j];
+  };
+  std::vector<std::vector<int>> members(s.blocks.size());
+  for (size_t j = 0; j < s.blocks.size(); ++j) members[j] = {static_cast<int>(j)};
+  for (const auto& [r, o] : match.pairs) {
+    const Unit& recent = units.recent[r];
+    const int jr = s.BlockOf(recent.tracks.front()), jo = s.BlockOf(units.old[o].tracks.front());
+    if (recent.tracks.size() != s.blocks[jr].size()) continue;  // not a whole landmark
+    int a = root(jr), b = root(jo);
+    if (a == b) continue;
+    bool overlap = false;
+    for (int x : members[a])
+      for (int y : members[b]) {
+        const std::vector<int>&sx = scans_of(x), &sy = scans_of(y);
+        std::vector<int> common;
+        std::set_intersection(sx.begin(), sx.end(), sy.begin(), sy.end(),
+                              std::back_inserter(common));
+        overlap = overlap || !common.empty();
+      }
+    if (overlap) continue;
+    if (members[a].size() < members[b].size()) std::swap(a, b);
+    parent[b] = a;
+    members[a].insert(members[a].end(), members[b].begin(), members[b].end());
+    members[b].clear();
+  }
+  std::vector<std::vector<int>> groups;
+  for (size_t j = 0; j < s.blocks.size(); ++j)
+    if (root(static_cast<int>(j)) == static_cast<int>(j) && members[j].size() > 1)
+      groups.push_back(members[j]);
+  return groups;
 }
 
 // Sets the alignment's pivot; false when it hardly moves the recent
