@@ -233,10 +233,9 @@ class TopTransforms {
       if (same->score >= match.score) return;
       kept_.erase(same);
     }
-    kept_.insert(std::upper_bound(kept_.begin(), kept_.end(), match,
-                                  [](const RigidMatch& x, const RigidMatch& y) {
-                                    return x.score > y.score;
-                                  }),
+    kept_.insert(std::upper_bound(
+                     kept_.begin(), kept_.end(), match,
+                     [](const RigidMatch& x, const RigidMatch& y) { return x.score > y.score; }),
                  std::move(match));
     if (static_cast<int>(kept_.size()) > capacity_) kept_.pop_back();
   }

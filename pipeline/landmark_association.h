@@ -335,9 +335,8 @@ class LandmarkAssociation {
   std::optional<JointAlignment> ScreenedAlignment(const StateEvaluation& before, int n);
   // The groups of `s`'s blocks that `match` merges (its pairs of whole
   // recent landmarks with old ones that share no scan), for JointMergeDelta.
-  std::vector<std::vector<int>> MergedGroups(const AssociationState& s,
-                                             const JointAlignment& units, const RigidMatch& match,
-                                             int n) const;
+  std::vector<std::vector<int>> MergedGroups(const AssociationState& s, const JointAlignment& units,
+                                             const RigidMatch& match, int n) const;
   bool WorthATry(const AssociationState& s, JointAlignment* alignment) const;
   EvaluationPtr TryAnchor(const StateEvaluation& before, const JointAlignment& alignment,
                           const std::vector<double>& driven, int anchor, int n);

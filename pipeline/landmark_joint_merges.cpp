@@ -217,7 +217,8 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
   if (best)
     Say(Format("joint merge at %.0f poses: %.0f pairs of %.0f alignments screened gain %.1f "
                "in closed form",
-               double(n), double(best->match.pairs.size()), double(screened), best_gain) + Format(" released %.1f before %.1f", released->log_target, before.log_target));
+               double(n), double(best->match.pairs.size()), double(screened), best_gain) +
+        Format(" released %.1f before %.1f", released->log_target, before.log_target));
   return best;
 }
 

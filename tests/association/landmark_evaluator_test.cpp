@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <random>
 #include <set>
 
@@ -145,6 +146,68 @@ TEST(LandmarkEvaluatorTest, MarginalMergeScoresDiametersLikeExact) {
   EXPECT_GE(true_merges, 10);
   EXPECT_EQ(agree, compared);
   EXPECT_LT(worst_true, 0.5);
+}
+
+// Several merges scored at once in closed form (JointMergeDelta): one pair
+// as the single closed-form merge; every true merge of the drive at once
+// (two laps, so loop closures that bend the trajectory) close to the
+// converged exact re-solve of that state, and far above any state that
+// also joins two different trees.
+TEST(LandmarkEvaluatorTest, JointMergeDeltaScoresSeveralMergesAtOnce) {
+  const LandmarkDataset data = SimulateDrive(4, nullptr);
+  LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};
+  LandmarkEvaluator exact(target, DriveTargetOptions(LandmarkEvaluationMode::kExact));
+  LandmarkEvaluator marginal(target, DriveTargetOptions(LandmarkEvaluationMode::kMarginal));
+  const AssociationState separate = Separate(target.tracks.size());
+  const EvaluationPtr start = marginal.Refine(separate, nullptr);
+  const EvaluationPtr exact_start = exact.Refine(separate, nullptr);
+  ASSERT_TRUE(start->valid && exact_start->valid);
+
+  // The tracks of each tree, as groups of the separate state's blocks.
+  std::map<int, std::vector<int>> by_tree;
+  for (size_t t = 0; t < target.tracks.size(); ++t)
+    by_tree[data.sightings[target.tracks[t][0]].landmark].push_back(
+        separate.BlockOf(static_cast<int>(t)));
+  std::vector<std::vector<int>> groups;
+  AssociationState truth;
+  for (const auto& [tree, blocks] : by_tree) {
+    if (blocks.size() > 1) groups.push_back(blocks);
+    truth.blocks.emplace_back();
+    for (int j : blocks) truth.blocks.back().push_back(separate.blocks[j].front());
+    truth.classes.push_back(0);
+  }
+  truth.Canonicalize();
+  ASSERT_GE(groups.size(), 5u);
+
+  const std::vector<int>& first = groups.front();
+  double one = 0, all = 0;
+  ASSERT_TRUE(marginal.JointMergeDelta(separate, {{first[0], first[1]}}, &one));
+  const EvaluationPtr single = marginal.Evaluate(
+      Merged(separate, separate.blocks[first[0]].front(), separate.blocks[first[1]].front()),
+      start.get());
+  ASSERT_TRUE(single->valid);
+  EXPECT_NEAR(one, single->log_target - start->log_target, 1e-6);
+
+  ASSERT_TRUE(marginal.JointMergeDelta(separate, groups, &all));
+  const EvaluationPtr solved = exact.Refine(truth, exact_start.get());
+  ASSERT_TRUE(solved->valid);
+  const double exact_gain = solved->log_target - exact_start->log_target;
+  std::printf("%zu trees merged at once: closed form %.2f, converged re-solve %.2f\n",
+              groups.size(), all, exact_gain);
+  EXPECT_GT(all, 20.0);
+  EXPECT_NEAR(all, exact_gain, 0.02 * std::abs(exact_gain) + 1.0);
+
+  // Also joining two different trees costs: the closed form says so.
+  std::vector<std::vector<int>> wrong = groups;
+  wrong[0].insert(wrong[0].end(), wrong[1].begin(), wrong[1].end());
+  wrong.erase(wrong.begin() + 1);
+  double worse = 0;
+  ASSERT_TRUE(marginal.JointMergeDelta(separate, wrong, &worse));
+  EXPECT_LT(worse, all - 10.0);
+
+  // Only at the reference, and only for groups of two or more.
+  EXPECT_FALSE(marginal.JointMergeDelta(truth, {{0, 1}}, &all));
+  EXPECT_FALSE(marginal.JointMergeDelta(separate, {{first[0]}}, &all));
 }
 
 // Two tracks seen from one pose (two trees in one scan).
