@@ -351,6 +351,7 @@ EvaluationPtr LandmarkEvaluator::Refine(const AssociationState& state,
     reference_position_keys_ = last_refine_keys_;
     roots_.clear();  // of the factor before
     root_bytes_ = 0;
+    cross_covariances_.clear();
   }
   Store(evaluation);
   return evaluation;
@@ -432,14 +433,25 @@ bool LandmarkEvaluator::JointMergeDelta(const AssociationState& state,
   Eigen::MatrixXd sigma(2 * m_blocks, 2 * m_blocks);
   for (int a = 0; a < m_blocks; ++a)
     for (int b = a; b < m_blocks; ++b) {
-      Eigen::Matrix4d pair;
-      if (!JointCovariance(keys[a], keys[b], &pair)) return false;
+      // Kept per pair of keys at this reference: a screen scores many
+      // overlapping sets of merges.
+      const std::pair<int, int> pair_keys(std::min(keys[a], keys[b]), std::max(keys[a], keys[b]));
+      auto kept = cross_covariances_.find(pair_keys);
+      if (kept == cross_covariances_.end()) {
+        Eigen::Matrix4d pair;
+        if (!JointCovariance(pair_keys.first, pair_keys.second, &pair)) return false;
+        if (cross_covariances_.size() >= kMaxCrossCovariances) cross_covariances_.clear();
+        kept = cross_covariances_.emplace(pair_keys, pair).first;
+      }
+      const Eigen::Matrix4d& pair = kept->second;
+      const bool swapped = keys[a] > keys[b];
       if (a == b) {
         sigma.block<2, 2>(2 * a, 2 * a) = pair.topLeftCorner<2, 2>();
         continue;
       }
-      sigma.block<2, 2>(2 * a, 2 * b) = pair.topRightCorner<2, 2>();
-      sigma.block<2, 2>(2 * b, 2 * a) = pair.bottomLeftCorner<2, 2>();
+      sigma.block<2, 2>(2 * a, 2 * b) =
+          swapped ? pair.bottomLeftCorner<2, 2>() : pair.topRightCorner<2, 2>();
+      sigma.block<2, 2>(2 * b, 2 * a) = sigma.block<2, 2>(2 * a, 2 * b).transpose();
     }
   Eigen::VectorXd mu(2 * m_blocks);
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2 * m_blocks, 2 * g_count);

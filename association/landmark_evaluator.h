@@ -154,6 +154,15 @@ class LandmarkEvaluator : public StateEvaluator {
   std::unordered_map<int, CovarianceRoot> roots_;
   double root_bytes_ = 0;
   static constexpr double kMaxRootBytes = 256e6;
+  // JointMergeDelta: the 4 x 4 joint covariances of key pairs (lower key
+  // first) at the reference's factor.
+  struct KeyPairHash {
+    size_t operator()(const std::pair<int, int>& keys) const {
+      return std::hash<long long>()((static_cast<long long>(keys.first) << 32) ^ keys.second);
+    }
+  };
+  std::unordered_map<std::pair<int, int>, Eigen::Matrix4d, KeyPairHash> cross_covariances_;
+  static constexpr size_t kMaxCrossCovariances = 1 << 20;
 };
 
 // Squared whitened range-bearing residuals of the sightings `sightings` of a

@@ -15,8 +15,9 @@ namespace oslam {
 struct KnownAssociationOptions {
   double pixel_noise_px = 30.0;  // E: u_r gets E, u_phi E/u_r, s_r and s_phi sqrt(2) times that
   unsigned long seed = 1;
-  double min_visible_fraction = 0.5;                // drop sightings of mostly occluded objects
-  Eigen::Vector3d location_std_m{10.0, 10.0, 2.0};  // Gamma(c) for every class (docs/method.md §5.1 [G])
+  double min_visible_fraction = 0.5;  // drop sightings of mostly occluded objects
+  Eigen::Vector3d location_std_m{10.0, 10.0,
+                                 2.0};  // Gamma(c) for every class (docs/method.md §5.1 [G])
 
   bool Validate(std::string* why) const;
 };

@@ -183,6 +183,7 @@ struct UnknownAssociationOptions {
   // gain; together only the true alignment fits. joint_screen_candidates 0: off.
   int joint_screen_candidates = 64;
   int joint_screen_min_inliers = 4;
+  double joint_screen_min_score = 4;
   double joint_screen_min_gain = 5;
   // After a joint merge's solve, the worst-fitting pairs are split off again
   // and the problem re-solved while their landmarks' standardised residuals
@@ -333,6 +334,8 @@ class LandmarkAssociation {
   JointAlignment RecentAndOldUnits(const StateEvaluation& before, int n) const;
   std::optional<JointAlignment> AlignRecentOntoOld(const StateEvaluation& before, int n);
   std::optional<JointAlignment> ScreenedAlignment(const StateEvaluation& before, int n);
+  bool JointGainOfBestPairs(const StateEvaluation& at, const JointAlignment& units, int n,
+                            RigidMatch* match, double* gain);
   // The groups of `s`'s blocks that `match` merges (its pairs of whole
   // recent landmarks with old ones that share no scan), for JointMergeDelta.
   std::vector<std::vector<int>> MergedGroups(const AssociationState& s, const JointAlignment& units,

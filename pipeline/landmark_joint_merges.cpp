@@ -147,13 +147,38 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRec
 std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::ScreenedAlignment(
     const StateEvaluation& before, int n) {
   if (options_.joint_screen_candidates <= 0) return std::nullopt;
-  const JointAlignment units = RecentAndOldUnits(before, n);
+  JointAlignment units = RecentAndOldUnits(before, n);
   if (static_cast<int>(units.recent.size()) < options_.joint_screen_min_inliers)
     return std::nullopt;
-  // Judged where the recent tracks are landmarks of their own: a merge made
-  // under the drift pins the trajectory and makes every other pair misfit.
+  // The candidates: alignments scoring at least joint_screen_min_score that
+  // would merge at least joint_screen_min_inliers recent landmarks not
+  // merged with an old one yet (where the recent tracks re-seen are merged
+  // already, the targeted merges have closed the re-entry).
+  std::vector<Eigen::Vector2d> from, to;
+  for (const Unit& u : units.recent) from.push_back(u.position_m);
+  for (const Unit& u : units.old) to.push_back(u.position_m);
+  RigidRansacOptions ransac = JointRansacOptions(options_);
+  ransac.min_inliers = options_.joint_screen_min_inliers;
+  std::vector<RigidMatch> candidates;
+  for (RigidMatch& match :
+       MatchRigidlyTop(from, to, ransac, options_.joint_screen_candidates, rng_)) {
+    if (match.score < options_.joint_screen_min_score) break;  // best first
+    int new_merges = 0;  // of recent landmarks not merged with an old one yet
+    for (const auto& [r, o] : match.pairs) {
+      const int jr = before.state.BlockOf(units.recent[r].tracks.front());
+      new_merges += jr != before.state.BlockOf(units.old[o].tracks.front()) &&
+                    units.recent[r].tracks.size() == before.state.blocks[jr].size();
+    }
+    units.match = match;
+    units.pivot.setZero();
+    if (new_merges >= options_.joint_screen_min_inliers && WorthATry(before.state, &units))
+      candidates.push_back(std::move(match));
+  }
   const int anchor = std::max(0, StretchStart(n, options_.joint_recent_m) - 1);
-  if (anchor + 1 < held_poses_) return std::nullopt;
+  if (candidates.empty() || anchor + 1 < held_poses_) return std::nullopt;
+  // Judged where the recent tracks are landmarks of their own: a merge made
+  // under the drift pins the trajectory and makes every other pair misfit
+  // (when there is one, a solve there and one back).
   StateEvaluation seed;
   seed.state = ReleasedAndMerged(before.state, JointAlignment(), anchor);
   const bool release = !(seed.state == before.state);
@@ -166,60 +191,70 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
   }
   seed.solution = before.solution;
   const EvaluationPtr released = release ? Refine(seed.state, &seed) : current_;
-  std::optional<JointAlignment> best;
   // A try must promise more than the state before holds (its merges since
   // the anchor included).
   double best_gain = before.log_target - released->log_target + options_.joint_screen_min_gain;
-  size_t screened = 0;
-  if (released->valid) {
-    const JointAlignment free = RecentAndOldUnits(*released, n);
-    std::vector<Eigen::Vector2d> from, to;
-    for (const Unit& u : free.recent) from.push_back(u.position_m);
-    for (const Unit& u : free.old) to.push_back(u.position_m);
-    RigidRansacOptions ransac = JointRansacOptions(options_);
-    ransac.min_inliers = options_.joint_screen_min_inliers;
-    const std::vector<RigidMatch> matches =
-        MatchRigidlyTop(from, to, ransac, options_.joint_screen_candidates, rng_);
-    screened = matches.size();
-    for (const RigidMatch& match : matches) {
-      const std::vector<std::vector<int>> groups = MergedGroups(released->state, free, match, n);
-      int merged = 0;
-      for (const auto& group : groups) merged += static_cast<int>(group.size()) - 1;
-      double gain = 0;
-      const bool ok = merged >= options_.joint_screen_min_inliers &&
-                      evaluator_->JointMergeDelta(released->state, groups, &gain);
-      if (!ok || !(gain > best_gain)) continue;
-      // The same pairs as units of the state before (by their tracks).
-      JointAlignment alignment = units;
-      std::vector<Eigen::Vector2d> matched_from, matched_to;
-      for (const auto& [r, o] : match.pairs) {
-        const auto unit_of = [](const std::vector<Unit>& list, int track) {
-          for (size_t i = 0; i < list.size(); ++i)
-            if (list[i].tracks.front() == track) return static_cast<int>(i);
-          return -1;
-        };
-        const int rb = unit_of(units.recent, free.recent[r].tracks.front());
-        const int ob = unit_of(units.old, free.old[o].tracks.front());
-        if (rb < 0 || ob < 0) continue;
-        alignment.match.pairs.push_back({rb, ob});
-        matched_from.push_back(units.recent[rb].position_m);
-        matched_to.push_back(units.old[ob].position_m);
-      }
-      if (static_cast<int>(matched_from.size()) < options_.joint_screen_min_inliers) continue;
-      alignment.match.rigid = FitRigid(matched_from, matched_to);
-      alignment.match.score = match.score;
-      if (!WorthATry(before.state, &alignment)) continue;
+  std::optional<RigidMatch> best;
+  for (RigidMatch& match : candidates) {
+    double gain = 0;
+    if (released->valid && JointGainOfBestPairs(*released, units, n, &match, &gain) &&
+        gain > best_gain) {
       best_gain = gain;
-      best = std::move(alignment);
+      best = std::move(match);
     }
   }
   if (release) current_ = Refine(before.state, &before);  // the reference back at before
-  if (best)
-    Say(Format("joint merge at %.0f poses: %.0f pairs of %.0f alignments screened gain %.1f "
-               "in closed form",
-               double(n), double(best->match.pairs.size()), double(screened), best_gain) +
-        Format(" released %.1f before %.1f", released->log_target, before.log_target));
-  return best;
+  if (!best) return std::nullopt;
+  Say(
+      Format("joint merge at %.0f poses: of %.0f alignments screened, %.0f pairs gain %.1f in "
+             "closed form",
+             double(n), double(candidates.size()), double(best->pairs.size()), best_gain));
+  std::vector<Eigen::Vector2d> matched_from, matched_to;
+  for (const auto& [r, o] : best->pairs) {
+    matched_from.push_back(units.recent[r].position_m);
+    matched_to.push_back(units.old[o].position_m);
+  }
+  best->rigid = FitRigid(matched_from, matched_to);
+  units.match = *best;
+  units.pivot.setZero();
+  WorthATry(before.state, &units);  // sets the pivot
+  return units;
+}
+
+// The closed-form gain of merging `match`'s pairs at `at` (a state whose
+// recent tracks are landmarks of their own), after leaving out, one at a
+// time, the pair whose removal raises it most while that helps and at least
+// joint_screen_min_inliers pairs remain: the largest jointly compatible set
+// found greedily (a pair 2 m off among right ones is a wrong tree). False
+// when not computable.
+bool LandmarkAssociation::JointGainOfBestPairs(const StateEvaluation& at,
+                                               const JointAlignment& units, int n,
+                                               RigidMatch* match, double* gain) {
+  const auto gain_of = [&](const RigidMatch& m, double* g) {
+    const std::vector<std::vector<int>> groups = MergedGroups(at.state, units, m, n);
+    int merges = 0;
+    for (const auto& group : groups) merges += static_cast<int>(group.size()) - 1;
+    return merges >= options_.joint_screen_min_inliers &&
+           evaluator_->JointMergeDelta(at.state, groups, g);
+  };
+  if (!gain_of(*match, gain)) return false;
+  while (static_cast<int>(match->pairs.size()) > options_.joint_screen_min_inliers) {
+    double best = *gain;
+    int drop = -1;
+    for (size_t i = 0; i < match->pairs.size(); ++i) {
+      RigidMatch without = *match;
+      without.pairs.erase(without.pairs.begin() + i);
+      double g = 0;
+      if (gain_of(without, &g) && g > best) {
+        best = g;
+        drop = static_cast<int>(i);
+      }
+    }
+    if (drop < 0) break;
+    match->pairs.erase(match->pairs.begin() + drop);
+    *gain = best;
+  }
+  return true;
 }
 
 std::vector<std::vector<int>> LandmarkAssociation::MergedGroups(const AssociationState& s,
