@@ -298,6 +298,10 @@ void LandmarkMode::Declare(Arguments* arguments) {
                     "on|off",
                     "unknown association: joint merges also try the correction spread along the "
                     "whole loop, from where its old landmarks were last seen");
+  b.Add(&u.joint_screen_candidates, "joint-screen", "N",
+        "unknown association: re-entries below the joint merges' floors: the N best alignments "
+        "of at least 4 pairs judged by the closed-form evidence of merging their pairs at once "
+        "(0: off)");
   b.AddChoice<bool>(&u.calibrate_on_tracks, {{"on", true}, {"off", false}}, "calibrate-tracks",
                     "on|off",
                     "unknown association: estimate the noise's variance components with every "

@@ -66,6 +66,16 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
           "close ratio, retry and least score >= 0 and, with a close ratio, a score std > 0";
     return false;
   }
+  if (joint_screen_candidates < 0 ||
+      (joint_screen_candidates > 0 &&
+       (joint_screen_min_inliers < 3 || !(joint_screen_min_score >= 0) ||
+        !std::isfinite(joint_screen_min_gain)))) {
+    if (why)
+      *why =
+          "the joint-merge screen needs >= 0 candidates (0: off) and, when on, >= 3 inliers, a "
+          "least score >= 0 and a finite least gain";
+    return false;
+  }
   return true;
 }
 

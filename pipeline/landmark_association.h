@@ -180,7 +180,8 @@ struct UnknownAssociationOptions {
   // own uncertainty bounds the shift), and the best is tried as above when it
   // gains more than joint_screen_min_gain. A few landmarks seen again after a
   // drift of a landmark spacing each have rival single merges of nearly equal
-  // gain; together only the true alignment fits. joint_screen_candidates 0: off.
+  // gain; together only the true alignment fits. joint_screen_candidates 0:
+  // off; inert unless the evaluation is marginal (the closed form).
   int joint_screen_candidates = 64;
   int joint_screen_min_inliers = 4;
   double joint_screen_min_score = 4;

@@ -146,7 +146,9 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::AlignRec
 // alignments judged by the closed-form joint merge of their pairs.
 std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::ScreenedAlignment(
     const StateEvaluation& before, int n) {
-  if (options_.joint_screen_candidates <= 0) return std::nullopt;
+  if (options_.joint_screen_candidates <= 0 ||
+      options_.target.mode != LandmarkEvaluationMode::kMarginal)
+    return std::nullopt;
   JointAlignment units = RecentAndOldUnits(before, n);
   if (static_cast<int>(units.recent.size()) < options_.joint_screen_min_inliers)
     return std::nullopt;

@@ -158,6 +158,8 @@ TEST(LandmarkMapCommand, UnknownAssociationComparesWithTheIds) {
   EXPECT_EQ(RunOslam(common + " --track-gate 0").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --landmark-prior-std 0").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --min-track 0").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --joint-screen -1").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --joint-screen 0").exit_code, 0);
   EXPECT_EQ(RunOslam(common + " --poses -1").exit_code, 2);
   // --poses: a prefix; --association-out: one id per sighting of it.
   const testing::CommandResult prefix =

@@ -183,10 +183,12 @@ TEST(LandmarkAssociationTest, TheAlignmentWeightedByFitClosesALoopInARepeatingGr
   world_options.num_landmarks = 250;
   world_options.seed = 3;
   const LandmarkWorld world = SimulateLandmarkWorld(world_options);
-  // Windows of 40 poses only: the drift-bounded windows close this loop
-  // with either alignment rule (below).
+  // Windows of 40 poses only, and no screen of the alignments below the
+  // floors: the drift-bounded windows, and the screen, close this loop with
+  // either alignment rule (below).
   UnknownAssociationOptions weighted;
   weighted.window_drift_spacing = 0;
+  weighted.joint_screen_candidates = 0;
   UnknownAssociationOptions by_count = weighted;
   by_count.joint_close_ratio = 0;
   const UnknownAssociationResult a = SolveUnknownAssociation(world.data, by_count);
@@ -214,6 +216,15 @@ TEST(LandmarkAssociationTest, TheAlignmentWeightedByFitClosesALoopInARepeatingGr
   std::printf("by count, drift-bounded windows: P %.4f R %.4f\n", pc.precision, pc.recall);
   EXPECT_GT(pc.recall, 0.99);
   EXPECT_GT(pc.precision, 0.99);
+  // So does the screen: the alignments below the floors judged by the joint
+  // compatibility of their pairs.
+  by_count.window_drift_spacing = 0;
+  by_count.joint_screen_candidates = 64;
+  const PairwiseAgreement pd = ComparePairwise(
+      SolveUnknownAssociation(world.data, by_count).association, world.true_association);
+  std::printf("by count, screened: P %.4f R %.4f\n", pd.precision, pd.recall);
+  EXPECT_GT(pd.recall, 0.99);
+  EXPECT_GT(pd.precision, 0.99);
 }
 
 // Two trees 0.9 m apart seen with a loose sighting noise (as GTSAM's file
@@ -523,6 +534,17 @@ TEST(LandmarkAssociationTest, RejectsInvalidOptions) {
   EXPECT_TRUE(targeted.Validate(&why));
   targeted.sweep_radius_m = 1.0;
   EXPECT_FALSE(targeted.Validate(&why));
+  UnknownAssociationOptions screen;
+  screen.joint_screen_candidates = -1;
+  EXPECT_FALSE(screen.Validate(&why));
+  screen.joint_screen_candidates = 64;
+  screen.joint_screen_min_inliers = 2;
+  EXPECT_FALSE(screen.Validate(&why));
+  screen.joint_screen_min_inliers = 4;
+  screen.joint_screen_min_gain = std::nan("");
+  EXPECT_FALSE(screen.Validate(&why));
+  screen.joint_screen_candidates = 0;  // off: the rest unused
+  EXPECT_TRUE(screen.Validate(&why));
   UnknownAssociationOptions flat;
   flat.target.slam.landmark_prior_std_m = 0;
   EXPECT_FALSE(flat.Validate(&why));
