@@ -10,6 +10,7 @@
 
 #include "association/association_metrics.h"
 #include "pipeline/landmark_association.h"
+#include "slam/landmark_noise.h"
 #include "slam/landmark_simulation.h"
 #include "slam/landmark_slam.h"
 
@@ -72,7 +73,9 @@ TEST(LandmarkWorldSlowTest, AFewTreesSeenAgainAfterDriftAreMergedTogether) {
   without.joint_screen_candidates = 0;
   const UnknownAssociationResult a = SolveUnknownAssociation(data, without);
   const UnknownAssociationResult b = SolveUnknownAssociation(data, {});
-  const LandmarkSlamResult file = LandmarkSlam(b.slam_options).Solve(data, ids);
+  // The file's association under the search's own model (noise and prior).
+  const LandmarkSlamResult file =
+      LandmarkSlam(b.slam_options).Solve(WithNoiseScales(data, b.noise_scales), ids);
   const double ate_a = TrajectoryRmse(a.solution.trajectory, truth);
   const double ate_b = TrajectoryRmse(b.solution.trajectory, truth);
   const double ate_file = TrajectoryRmse(file.trajectory, truth);
