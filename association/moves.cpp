@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
 namespace oslam {
 namespace {
@@ -38,17 +39,45 @@ std::vector<double> LogClassProposal(const ClassConfusionModel& model,
   return log_q;
 }
 
-// log d~_j normalised (Algorithm 5 steps 2-3); false if all are zero.
+// log d~_j normalised (Algorithm 5 steps 2-3); false if all are zero. The
+// neighbours within d_thr are found in a grid of d_thr cells (x, y) instead
+// of among all pairs: the same counts, in time linear in the objects (a
+// landmark map holds thousands, and every merge proposal needs them).
 bool MergeFirstWeights(const StateEvaluation& s, const MoveOptions& options,
                        std::vector<double>* log_d) {
   const size_t n = s.state.blocks.size();
+  const double d = options.merge_distance_m;
   log_d->assign(n, kNegInf);
+  const auto cell_of = [d](double v) { return static_cast<long long>(std::floor(v / d)); };
+  const auto key = [](long long x, long long y) {
+    return static_cast<long long>((static_cast<unsigned long long>(x) << 32) ^
+                                  (static_cast<unsigned long long>(y) & 0xffffffffULL));
+  };
+  std::unordered_map<long long, std::vector<int>> cells;
+  bool finite = std::isfinite(d);
+  for (size_t k = 0; k < n && finite; ++k) {
+    finite = std::isfinite(s.locations[k].x()) && std::isfinite(s.locations[k].y());
+    if (finite)
+      cells[key(cell_of(s.locations[k].x()), cell_of(s.locations[k].y()))].push_back(
+          static_cast<int>(k));
+  }
   for (size_t j = 0; j < n; ++j) {
     double count = options.merge_count_includes_self ? 1.0 : 0.0;
-    for (size_t k = 0; k < n; ++k)
-      if (k != j && s.state.classes[k] == s.state.classes[j] &&
-          (s.locations[k] - s.locations[j]).norm() < options.merge_distance_m)
-        count += 1.0;
+    const auto near = [&](size_t k) {
+      return k != j && s.state.classes[k] == s.state.classes[j] &&
+             (s.locations[k] - s.locations[j]).norm() < d;
+    };
+    if (!finite) {  // no grid: every pair
+      for (size_t k = 0; k < n; ++k) count += near(k) ? 1.0 : 0.0;
+    } else {
+      const long long cx = cell_of(s.locations[j].x()), cy = cell_of(s.locations[j].y());
+      for (long long x = cx - 1; x <= cx + 1; ++x)
+        for (long long y = cy - 1; y <= cy + 1; ++y) {
+          const auto cell = cells.find(key(x, y));
+          if (cell == cells.end()) continue;
+          for (int k : cell->second) count += near(static_cast<size_t>(k)) ? 1.0 : 0.0;
+        }
+    }
     (*log_d)[j] = LogOf(count + options.merge_count_smoothing);
   }
   return NormaliseLog(log_d);
