@@ -752,14 +752,26 @@ long LandmarkAssociation::JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id
     for (int k : members[id]) at[data.sightings[k].pose] = k;
     return at;
   };
-  // Pairs whose positions agree within the gate and that share a scan.
+  // Pairs whose positions agree within the gate and that share a scan. Two
+  // landmarks seen from the same scans are placed relative to each other by
+  // their sightings alone (the poses' uncertainty is common to both): the
+  // gate takes each one's covariance given the poses, not its marginal,
+  // which the drive's drift makes metres wide.
   std::vector<std::tuple<double, int, int>> pairs;  // (squared distance in sigmas, a, b)
   const std::vector<MappedLandmark>& marks = result_.solution.landmarks;
+  std::vector<Eigen::Matrix2d> given_poses(marks.size(), Eigen::Matrix2d::Zero());
+  for (size_t i = 0; i < marks.size(); ++i) {
+    Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
+    for (int k : members[marks[i].id])
+      information += SightingInformation(data.sightings[k],
+                                         result_.solution.trajectory[data.sightings[k].pose],
+                                         marks[i].position_m, data.sensor_offset_m);
+    if (std::abs(information.determinant()) > 0) given_poses[i] = information.inverse();
+  }
   for (size_t i = 0; i < marks.size(); ++i)
     for (size_t j = i + 1; j < marks.size(); ++j) {
       const Eigen::Vector2d d = marks[i].position_m - marks[j].position_m;
-      const Eigen::Matrix2d s =
-          marks[i].covariance.topLeftCorner<2, 2>() + marks[j].covariance.topLeftCorner<2, 2>();
+      const Eigen::Matrix2d s = given_poses[i] + given_poses[j];
       const Eigen::LLT<Eigen::Matrix2d> llt(s);
       if (llt.info() != Eigen::Success || !(s.determinant() > 0)) continue;
       const double m2 = d.dot(llt.solve(d));
@@ -798,6 +810,13 @@ long LandmarkAssociation::JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id
       };
       trial[error(ka->second) > error(kb) ? ka->second : kb] = *next_id + split++;
     }
+    // Every sighting of one of them split off again: no join, only new ids.
+    const auto kept_of = [&](int id) {
+      int kept = 0;
+      for (int k : members[id]) kept += trial[k] == a;
+      return kept;
+    };
+    if (kept_of(a) == 0 || kept_of(b) == 0) continue;
     if (!KeepIfBetter(slam, std::move(trial), split)) continue;
     *next_id += split;
     touched.insert(a);

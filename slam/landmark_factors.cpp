@@ -4,6 +4,8 @@
 #include <limits>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 
 #include "core/angles.h"
 #include "core/error.h"
@@ -146,6 +148,25 @@ double SightingSquaredError(const LandmarkSighting& s, const Pose2& pose,
   const double bearing_error =
       WrapAngle(std::atan2(d.y(), d.x()) - pose.theta - s.bearing_rad) / s.bearing_std_rad;
   return range_error * range_error + bearing_error * bearing_error;
+}
+
+Eigen::Matrix2d SightingInformation(const LandmarkSighting& s, const Pose2& pose,
+                                    const Eigen::Vector2d& landmark_m,
+                                    const Eigen::Vector2d& mount_offset_m) {
+  if (s.cartesian) {
+    // e = L^-1 R^T (l - sensor) - ...: J = L^-1 R^T, J^T J = R C^-1 R^T.
+    const Eigen::Matrix2d rotation = Eigen::Rotation2Dd(pose.theta).toRotationMatrix();
+    return rotation * s.xy_covariance.inverse() * rotation.transpose();
+  }
+  const Eigen::Vector3d sensor =
+      pose.RobotToWorld(Eigen::Vector3d(mount_offset_m.x(), mount_offset_m.y(), 0.0));
+  const Eigen::Vector2d d = landmark_m - sensor.head<2>();
+  const double range = d.norm();
+  if (!(range > 0)) return Eigen::Matrix2d::Zero();
+  // d(range)/dl = u^T, d(bearing)/dl = n^T / range (u along d, n across).
+  const Eigen::Vector2d u = d / range, n(-u.y(), u.x());
+  return u * u.transpose() / (s.range_std_m * s.range_std_m) +
+         n * n.transpose() / (range * range * s.bearing_std_rad * s.bearing_std_rad);
 }
 
 // ---------------------------------------------------------------------------

@@ -96,6 +96,14 @@ double SightingSquaredError(const LandmarkSighting& s, const Pose2& pose,
                             const Eigen::Vector2d& landmark_m,
                             const Eigen::Vector2d& mount_offset_m);
 
+// The information (inverse covariance) that sighting `s` from `pose` gives
+// about the position of a landmark at `landmark_m`, the pose held: the
+// factor's J^T J in the landmark's coordinates (zero for a range-bearing
+// sighting of a landmark on the sensor).
+Eigen::Matrix2d SightingInformation(const LandmarkSighting& s, const Pose2& pose,
+                                    const Eigen::Vector2d& landmark_m,
+                                    const Eigen::Vector2d& mount_offset_m);
+
 // Pose b seen from pose a: z = (dx, dy, dtheta) in a's frame with a full
 // covariance P (GTSAM's BetweenFactor<Pose2> up to second order):
 //

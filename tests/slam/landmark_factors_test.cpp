@@ -130,6 +130,45 @@ TEST(PointSightingFactorTest, JacobiansMatchAndZeroOnTheModel) {
   EXPECT_THROW(PointSightingFactor(0, 1, Eigen::Vector2d(1, 1), Eigen::Matrix2d::Zero()), Error);
 }
 
+// A sighting's information about its landmark, the pose held, is the
+// Hessian of half its squared error where the error is zero (J^T J exactly
+// there): compared with central second differences, range-bearing and
+// Cartesian, with and without a mount offset.
+TEST(SightingInformationTest, IsTheHessianOfHalfTheSquaredErrorOnTheModel) {
+  Eigen::Matrix2d covariance;
+  covariance << 0.04, 0.01, 0.01, 0.09;
+  const Pose2 pose{1.0, 2.0, 0.6};
+  for (const Eigen::Vector2d& mount : {Eigen::Vector2d(0, 0), Eigen::Vector2d(3.78, 0.5)})
+    for (const bool cartesian : {false, true}) {
+      LandmarkSighting s;
+      s.cartesian = cartesian;
+      s.xy_covariance = covariance;
+      s.range_m = 9.0;
+      s.bearing_rad = 0.3;
+      s.range_std_m = 0.05;
+      s.bearing_std_rad = 0.01;
+      const Eigen::Vector2d landmark = LandmarkFromRangeBearing(pose, 9.0, 0.3, mount);
+      const Eigen::Matrix2d info = SightingInformation(s, pose, landmark, mount);
+      const double h = 1e-4;
+      Eigen::Matrix2d numeric;
+      for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j) {
+          const auto f = [&](double di, double dj) {
+            Eigen::Vector2d at = landmark;
+            at(i) += di;
+            at(j) += dj;
+            return 0.5 * SightingSquaredError(s, pose, at, mount);
+          };
+          numeric(i, j) = (f(h, h) - f(h, -h) - f(-h, h) + f(-h, -h)) / (4 * h * h);
+        }
+      EXPECT_LT((info - numeric).norm(), 1e-4 * info.norm()) << "cartesian " << cartesian;
+      EXPECT_LT((info - info.transpose()).norm(), 1e-12);
+    }
+  LandmarkSighting on_sensor;
+  EXPECT_EQ(SightingInformation(on_sensor, pose, Eigen::Vector2d(1.0, 2.0), Eigen::Vector2d(0, 0)),
+            Eigen::Matrix2d::Zero());
+}
+
 TEST(RelativePoseFactorTest, JacobiansMatchCentralDifferences) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
