@@ -8,6 +8,7 @@
 #include <array>
 #include <chrono>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -338,9 +339,11 @@ class LandmarkAssociation {
   bool JointGainOfBestPairs(const StateEvaluation& at, const JointAlignment& units, int n,
                             RigidMatch* match, double* gain);
   // The groups of `s`'s blocks that `match` merges (its pairs of whole
-  // recent landmarks with old ones that share no scan), for JointMergeDelta.
+  // recent landmarks with old ones that share no scan), for JointMergeDelta;
+  // `scans` caches each block's sorted poses across calls on `s`.
   std::vector<std::vector<int>> MergedGroups(const AssociationState& s, const JointAlignment& units,
-                                             const RigidMatch& match, int n) const;
+                                             const RigidMatch& match, int n,
+                                             std::map<int, std::vector<int>>* scans) const;
   bool WorthATry(const AssociationState& s, JointAlignment* alignment) const;
   EvaluationPtr TryAnchor(const StateEvaluation& before, const JointAlignment& alignment,
                           const std::vector<double>& driven, int anchor, int n);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <utility>
 
 #include "core/angles.h"
@@ -232,8 +233,9 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
 bool LandmarkAssociation::JointGainOfBestPairs(const StateEvaluation& at,
                                                const JointAlignment& units, int n,
                                                RigidMatch* match, double* gain) {
+  std::map<int, std::vector<int>> scans;
   const auto gain_of = [&](const RigidMatch& m, double* g) {
-    const std::vector<std::vector<int>> groups = MergedGroups(at.state, units, m, n);
+    const std::vector<std::vector<int>> groups = MergedGroups(at.state, units, m, n, &scans);
     int merges = 0;
     for (const auto& group : groups) merges += static_cast<int>(group.size()) - 1;
     return merges >= options_.joint_screen_min_inliers &&
@@ -259,56 +261,63 @@ bool LandmarkAssociation::JointGainOfBestPairs(const StateEvaluation& at,
   return true;
 }
 
-std::vector<std::vector<int>> LandmarkAssociation::MergedGroups(const AssociationState& s,
-                                                                const JointAlignment& units,
-                                                                const RigidMatch& match,
-                                                                int n) const {
-  // Union-find over the blocks; a pair joins its recent landmark (whole: one
-  // with older tracks was merged under the drift and is left to the trial)
-  // to its old one unless their scans overlap.
-  std::vector<int> parent(s.blocks.size());
-  for (size_t j = 0; j < parent.size(); ++j) parent[j] = static_cast<int>(j);
+std::vector<std::vector<int>> LandmarkAssociation::MergedGroups(
+    const AssociationState& s, const JointAlignment& units, const RigidMatch& match, int n,
+    std::map<int, std::vector<int>>* scans) const {
+  // Union-find over the blocks the pairs touch; a pair joins its recent
+  // landmark (whole: one with older tracks was merged under the drift and
+  // is left to the trial) to its old one unless their scans overlap.
+  // `scans` keeps each block's sorted poses for the next call on `s`.
+  std::map<int, int> parent;
   const auto root = [&](int j) {
+    parent.emplace(j, j);
     while (parent[j] != j) j = parent[j] = parent[parent[j]];
     return j;
   };
-  std::vector<std::vector<int>> scans(s.blocks.size());  // sorted poses of each block
   const auto scans_of = [&](int j) -> const std::vector<int>& {
-    if (scans[j].empty()) {
+    auto [at, added] = scans->emplace(j, std::vector<int>());
+    if (added) {
       for (int t : s.blocks[j])
         for (int k : result_.tracks[t])
-          if (data_->sightings[k].pose < n) scans[j].push_back(data_->sightings[k].pose);
-      std::sort(scans[j].begin(), scans[j].end());
+          if (data_->sightings[k].pose < n) at->second.push_back(data_->sightings[k].pose);
+      std::sort(at->second.begin(), at->second.end());
     }
-    return scans[j];
+    return at->second;
   };
-  std::vector<std::vector<int>> members(s.blocks.size());
-  for (size_t j = 0; j < s.blocks.size(); ++j) members[j] = {static_cast<int>(j)};
+  std::map<int, std::vector<int>> members;  // root -> its blocks
   for (const auto& [r, o] : match.pairs) {
     const Unit& recent = units.recent[r];
     const int jr = s.BlockOf(recent.tracks.front()), jo = s.BlockOf(units.old[o].tracks.front());
     if (recent.tracks.size() != s.blocks[jr].size()) continue;  // not a whole landmark
     int a = root(jr), b = root(jo);
     if (a == b) continue;
+    std::vector<int>& ma = members.emplace(a, std::vector<int>{a}).first->second;
+    std::vector<int>& mb = members.emplace(b, std::vector<int>{b}).first->second;
     bool overlap = false;
-    for (int x : members[a])
-      for (int y : members[b]) {
-        const std::vector<int>&sx = scans_of(x), &sy = scans_of(y);
-        std::vector<int> common;
-        std::set_intersection(sx.begin(), sx.end(), sy.begin(), sy.end(),
-                              std::back_inserter(common));
-        overlap = overlap || !common.empty();
+    for (size_t x = 0; x < ma.size() && !overlap; ++x)
+      for (size_t y = 0; y < mb.size() && !overlap; ++y) {
+        const std::vector<int>&sx = scans_of(ma[x]), &sy = scans_of(mb[y]);
+        for (size_t i = 0, k = 0; i < sx.size() && k < sy.size() && !overlap;) {
+          overlap = sx[i] == sy[k];
+          if (sx[i] < sy[k])
+            ++i;
+          else
+            ++k;
+        }
       }
     if (overlap) continue;
-    if (members[a].size() < members[b].size()) std::swap(a, b);
+    if (ma.size() < mb.size()) {
+      std::swap(a, b);
+    }
+    std::vector<int>& into = members[a];
+    std::vector<int>& from = members[b];
     parent[b] = a;
-    members[a].insert(members[a].end(), members[b].begin(), members[b].end());
-    members[b].clear();
+    into.insert(into.end(), from.begin(), from.end());
+    members.erase(b);
   }
   std::vector<std::vector<int>> groups;
-  for (size_t j = 0; j < s.blocks.size(); ++j)
-    if (root(static_cast<int>(j)) == static_cast<int>(j) && members[j].size() > 1)
-      groups.push_back(members[j]);
+  for (auto& [r, blocks] : members)
+    if (blocks.size() > 1) groups.push_back(std::move(blocks));
   return groups;
 }
 
