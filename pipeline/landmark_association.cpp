@@ -33,8 +33,8 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     return false;
   }
   if (calibration_rounds > 0 && !calibration.Validate(why)) return false;
-  if (!(sighting_split_gate >= 0) || sighting_split_rounds < 0) {
-    if (why) *why = "the sighting split gate and rounds must be >= 0";
+  if (!(sighting_split_gate >= 0) || sighting_split_rounds < 0 || !(shared_scan_join_gate >= 0)) {
+    if (why) *why = "the sighting split and shared-scan join gates and the rounds must be >= 0";
     return false;
   }
   if (min_track_sightings < 1 || targeted_max_candidates < 0 || !(sweep_radius_m >= 0)) {
@@ -775,7 +775,7 @@ long LandmarkAssociation::JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id
       const Eigen::LLT<Eigen::Matrix2d> llt(s);
       if (llt.info() != Eigen::Success || !(s.determinant() > 0)) continue;
       const double m2 = d.dot(llt.solve(d));
-      if (!(m2 <= options_.sighting_split_gate)) continue;
+      if (!(m2 <= options_.shared_scan_join_gate)) continue;
       const std::map<int, int> a = poses_of(marks[i].id), b = poses_of(marks[j].id);
       bool shared = false;
       for (const auto& entry : b) shared = shared || a.count(entry.first);

@@ -527,6 +527,9 @@ TEST(LandmarkAssociationTest, RejectsInvalidOptions) {
   split.sighting_split_gate = 0;  // off
   split.sighting_split_rounds = -1;
   EXPECT_FALSE(split.Validate(&why));
+  split.sighting_split_rounds = 5;
+  split.shared_scan_join_gate = std::nan("");
+  EXPECT_FALSE(split.Validate(&why));
   UnknownAssociationOptions targeted;  // the targeted merges need the closed form
   targeted.target.mode = LandmarkEvaluationMode::kLocal;
   EXPECT_FALSE(targeted.Validate(&why));
