@@ -482,6 +482,7 @@ bool LandmarkEvaluator::JointMergeDelta(const AssociationState& state,
   for (int i = 0; i < p.rows(); ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
   *delta = -0.5 * log_det_sigma - 0.5 * log_det_p + 0.5 * b.dot(p_llt.solve(b)) -
            0.5 * mu.dot(lambda_mu) + prior_terms;
+  for (const auto& group : groups) *delta += DiameterGroupMergeDelta(group);
   ++marginal_merges_;
   return std::isfinite(*delta);
 }
@@ -533,6 +534,37 @@ bool LandmarkEvaluator::JointCovariance(int ka, int kb, Eigen::Matrix4d* sigma) 
     return false;
   *sigma = blocks[0];
   return true;
+}
+
+double LandmarkEvaluator::DiameterGroupMergeDelta(const std::vector<int>& group) const {
+  // DiameterMergeDelta for k blocks with measurements (counts n_i, means
+  // d_i, N = sum n_i, D = sum n_i d_i / N):
+  //   -1/(2 sigma^2) sum n_i (d_i - D)^2 + 1/2 log(prod n_i / N) - (k - 1)/2 log(2 pi sigma^2).
+  double total = 0, weighted = 0, log_counts = 0;
+  std::vector<std::pair<int, double>> measured;  // (count, mean)
+  for (int j : group) {
+    int count = 0;
+    double sum = 0;
+    for (int t : reference_->state.blocks[j])
+      for (int k : data_.tracks[t]) {
+        const double d = data_.data->sightings[k].diameter_m;
+        if (!std::isfinite(d)) continue;
+        sum += d;
+        ++count;
+      }
+    if (count == 0) continue;
+    measured.push_back({count, sum / count});
+    total += count;
+    weighted += sum;
+    log_counts += std::log(double(count));
+  }
+  if (measured.size() < 2) return 0;
+  const double var = options_.slam.diameter_std_m * options_.slam.diameter_std_m;
+  const double mean = weighted / total;
+  double spread = 0;
+  for (const auto& [count, d] : measured) spread += count * (d - mean) * (d - mean);
+  return -spread / (2 * var) + 0.5 * (log_counts - std::log(total)) -
+         0.5 * double(measured.size() - 1) * std::log(2 * kPi * var);
 }
 
 double LandmarkEvaluator::DiameterMergeDelta(int ja, int jb) const {

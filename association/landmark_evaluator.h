@@ -96,7 +96,8 @@ class LandmarkEvaluator : public StateEvaluator {
   // Marginal mode, `state` the reference: log_target(merged) -
   // log_target(reference) in closed form, linearised at the reference, for
   // merging each group of the reference's blocks `groups` (indices into
-  // state.blocks, disjoint, at least two each) into one landmark: the joint
+  // state.blocks, disjoint, at least two each) into one landmark, trunk
+  // diameters included: the joint
   // compatibility of several merges at once (docs/method.md §16.2). False
   // when not computable (not the reference, a key without a position).
   bool JointMergeDelta(const AssociationState& state, const std::vector<std::vector<int>>& groups,
@@ -148,6 +149,8 @@ class LandmarkEvaluator : public StateEvaluator {
   bool JointCovariance(int ka, int kb, Eigen::Matrix4d* sigma);
   // The trunk diameters' part of MergeDelta (0 unless both blocks have one).
   double DiameterMergeDelta(int ja, int jb) const;
+  // The same for merging a group of the reference's blocks into one.
+  double DiameterGroupMergeDelta(const std::vector<int>& group) const;
   size_t solves_ = 0, hits_ = 0, marginal_merges_ = 0;
   // Covariance roots (SparseSolver::CovarianceRoots) of landmark positions
   // at the reference's factor, by solver key; at most kMaxRootBytes kept.

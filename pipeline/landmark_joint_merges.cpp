@@ -200,11 +200,22 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
   std::optional<RigidMatch> best;
   for (RigidMatch& match : candidates) {
     double gain = 0;
-    if (released->valid && JointGainOfBestPairs(*released, units, n, &match, &gain) &&
-        gain > best_gain) {
-      best_gain = gain;
-      best = std::move(match);
+    if (!released->valid || !JointGainOfBestPairs(*released, units, n, &match, &gain) ||
+        !(gain > best_gain))
+      continue;
+    // The pairs left, refitted on the state before's places, must still
+    // be worth a try (move something, merge something new).
+    std::vector<Eigen::Vector2d> matched_from, matched_to;
+    for (const auto& [r, o] : match.pairs) {
+      matched_from.push_back(units.recent[r].position_m);
+      matched_to.push_back(units.old[o].position_m);
     }
+    match.rigid = FitRigid(matched_from, matched_to);
+    units.match = match;
+    units.pivot.setZero();
+    if (!WorthATry(before.state, &units)) continue;
+    best_gain = gain;
+    best = std::move(match);
   }
   if (release) current_ = Refine(before.state, &before);  // the reference back at before
   if (!best) return std::nullopt;
@@ -212,12 +223,6 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
       Format("joint merge at %.0f poses: of %.0f alignments screened, %.0f pairs gain %.1f in "
              "closed form",
              double(n), double(candidates.size()), double(best->pairs.size()), best_gain));
-  std::vector<Eigen::Vector2d> matched_from, matched_to;
-  for (const auto& [r, o] : best->pairs) {
-    matched_from.push_back(units.recent[r].position_m);
-    matched_to.push_back(units.old[o].position_m);
-  }
-  best->rigid = FitRigid(matched_from, matched_to);
   units.match = *best;
   units.pivot.setZero();
   WorthATry(before.state, &units);  // sets the pivot

@@ -133,6 +133,9 @@ TEST(LandmarkEvaluatorTest, MarginalMergeScoresDiametersLikeExact) {
       ASSERT_TRUE(g->valid);
       const double de = e->log_target - exact_start->log_target;
       const double dg = g->log_target - marginal_start->log_target;
+      double joint = 0;  // the same merge as a group of two
+      ASSERT_TRUE(marginal.JointMergeDelta(separate, {{int(a), int(b)}}, &joint));
+      EXPECT_NEAR(joint, dg, 1e-6);
       ++compared;
       agree += (de > 0) == (dg > 0);
       if (data.sightings[target.tracks[a][0]].landmark ==
