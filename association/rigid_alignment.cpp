@@ -220,13 +220,21 @@ class TopTransforms {
  public:
   explicit TopTransforms(int capacity) : capacity_(capacity) {}
 
-  void Offer(const Rigid2& rigid, const Support& support, const InlierCounter& counter) {
-    if (capacity_ <= 0) return;
-    if (static_cast<int>(kept_.size()) == capacity_ && support.score <= kept_.back().score) return;
+  // Whether a transform of this score would be kept (before its pairs are
+  // listed).
+  bool Wants(double score) const {
+    return capacity_ > 0 &&
+           (static_cast<int>(kept_.size()) < capacity_ || score > kept_.back().score);
+  }
+
+  // `pairs` are the transform's inliers (InlierCounter::Measure's).
+  void Offer(const Rigid2& rigid, const Support& support,
+             const std::vector<std::pair<int, int>>& pairs) {
+    if (!Wants(support.score)) return;
     RigidMatch match;
     match.rigid = rigid;
     match.score = support.score;
-    counter.Measure(rigid, &match.pairs);
+    match.pairs = pairs;
     const auto same = std::find_if(kept_.begin(), kept_.end(),
                                    [&](const RigidMatch& k) { return k.pairs == match.pairs; });
     if (same != kept_.end()) {
@@ -253,6 +261,7 @@ Sampled Sample(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen
   const double inlier_m = options.inlier_m;
   std::uniform_int_distribution<size_t> pick(0, from.size() - 1);
   Sampled best;
+  std::vector<std::pair<int, int>> pairs;  // a transform's inliers, when `top` keeps them
   for (int sample = 0; sample < options.iterations; ++sample) {
     const size_t a = pick(rng), b = pick(rng);
     if (a == b || counter.near(a).empty() || counter.near(b).empty()) continue;
@@ -273,9 +282,9 @@ Sampled Sample(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen
         Rigid2 rigid;
         rigid.angle = angle;
         rigid.t = 0.5 * (to[oa] + to[ob]) - Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
-        const Support support = counter.Measure(rigid, nullptr);
+        const Support support = counter.Measure(rigid, top ? &pairs : nullptr);
         if (support.count < options.min_inliers) continue;
-        if (top) top->Offer(rigid, support, counter);
+        if (top) top->Offer(rigid, support, pairs);
         if (support.count > best.most.count) {
           best.most = support;
           best.most_rigid = rigid;

@@ -230,11 +230,11 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
 }
 
 // The closed-form gain of merging `match`'s pairs at `at` (a state whose
-// recent tracks are landmarks of their own), after leaving out, one at a
-// time, the pair whose removal raises it most while that helps and at least
-// joint_screen_min_inliers pairs remain: the largest jointly compatible set
-// found greedily (a pair 2 m off among right ones is a wrong tree). False
-// when not computable.
+// recent tracks are landmarks of their own), after leaving out the pairs
+// individually incompatible and then, one at a time, the pair whose removal
+// raises it most while that helps and at least joint_screen_min_inliers
+// pairs remain: the largest jointly compatible set found greedily (a pair 2 m off among right ones
+// is a wrong tree). False when not computable.
 bool LandmarkAssociation::JointGainOfBestPairs(const StateEvaluation& at,
                                                const JointAlignment& units, int n,
                                                RigidMatch* match, double* gain) {
@@ -246,6 +246,23 @@ bool LandmarkAssociation::JointGainOfBestPairs(const StateEvaluation& at,
     return merges >= options_.joint_screen_min_inliers &&
            evaluator_->JointMergeDelta(at.state, groups, g);
   };
+  // Individual compatibility first: a pair whose own merge loses more than
+  // kIndividualGate nats (about 5 sigmas of the pair's relative
+  // uncertainty) cannot be right whatever the others do; a shifted
+  // alignment's pairs mostly go here, before any joint score.
+  constexpr double kIndividualGate = 12.5;
+  std::vector<std::pair<int, int>> compatible;
+  for (const auto& pair : match->pairs) {
+    RigidMatch one;
+    one.pairs = {pair};
+    const std::vector<std::vector<int>> groups = MergedGroups(at.state, units, one, n, &scans);
+    double g = 0;
+    if (groups.empty() || !evaluator_->JointMergeDelta(at.state, groups, &g) ||
+        g > -kIndividualGate)
+      compatible.push_back(pair);
+  }
+  if (static_cast<int>(compatible.size()) < options_.joint_screen_min_inliers) return false;
+  match->pairs = std::move(compatible);
   if (!gain_of(*match, gain)) return false;
   while (static_cast<int>(match->pairs.size()) > options_.joint_screen_min_inliers) {
     double best = *gain;
