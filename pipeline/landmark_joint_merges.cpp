@@ -157,8 +157,18 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
   // would merge at least joint_screen_min_inliers recent landmarks not
   // merged with an old one yet (where the recent tracks re-seen are merged
   // already, the targeted merges have closed the re-entry).
+  // Only those are aligned (a re-seen landmark merged already would only
+  // repeat its merge).
+  std::vector<int> unmerged;  // indices into units.recent
   std::vector<Eigen::Vector2d> from, to;
-  for (const Unit& u : units.recent) from.push_back(u.position_m);
+  for (size_t r = 0; r < units.recent.size(); ++r) {
+    const Unit& u = units.recent[r];
+    if (u.tracks.size() != before.state.blocks[before.state.BlockOf(u.tracks.front())].size())
+      continue;
+    unmerged.push_back(static_cast<int>(r));
+    from.push_back(u.position_m);
+  }
+  if (static_cast<int>(from.size()) < options_.joint_screen_min_inliers) return std::nullopt;
   for (const Unit& u : units.old) to.push_back(u.position_m);
   RigidRansacOptions ransac = JointRansacOptions(options_);
   ransac.min_inliers = options_.joint_screen_min_inliers;
@@ -166,6 +176,7 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
   for (RigidMatch& match :
        MatchRigidlyTop(from, to, ransac, options_.joint_screen_candidates, rng_)) {
     if (match.score < options_.joint_screen_min_score) break;  // best first
+    for (auto& pair : match.pairs) pair.first = unmerged[pair.first];
     int new_merges = 0;  // of recent landmarks not merged with an old one yet
     for (const auto& [r, o] : match.pairs) {
       const int jr = before.state.BlockOf(units.recent[r].tracks.front());
