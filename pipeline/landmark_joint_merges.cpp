@@ -257,11 +257,13 @@ bool LandmarkAssociation::JointGainOfBestPairs(const StateEvaluation& at,
     return merges >= options_.joint_screen_min_inliers &&
            evaluator_->JointMergeDelta(at.state, groups, g);
   };
-  // Individual compatibility first: a pair whose own merge loses more than
-  // kIndividualGate nats (about 5 sigmas of the pair's relative
-  // uncertainty) cannot be right whatever the others do; a shifted
-  // alignment's pairs mostly go here, before any joint score.
-  constexpr double kIndividualGate = 12.5;
+  // Grossly incompatible pairs first: a pair whose own merge loses more
+  // than kIndividualGate nats (14 sigmas of the pair's relative
+  // uncertainty) cannot be right whatever the others do; a block-shifted
+  // alignment's pairs lose thousands and go here, before any joint score.
+  // (Not a 5-sigma gate: alone, the first true pair of a re-entry after
+  // drift pays for bending the whole stretch, which its partners share.)
+  constexpr double kIndividualGate = 100;
   std::vector<std::pair<int, int>> compatible;
   for (const auto& pair : match->pairs) {
     RigidMatch one;
