@@ -363,6 +363,12 @@ class LandmarkAssociation {
   // The first pose within `metres` driven (by the dead reckoning) of pose
   // n - 1: the start of the stretch that long ending at pose n.
   int StretchStart(int n, double metres) const;
+  // Warm-start places of `state`'s landmarks after the tracks first seen
+  // after `anchor` were released from `before`'s.
+  std::vector<Eigen::Vector3d> SeedLocations(const StateEvaluation& before,
+                                             const AssociationState& state,
+                                             const std::vector<Pose2>& trajectory, int anchor,
+                                             int n) const;
   // Where the sightings of `tracks` before pose n put their landmark.
   Eigen::Vector2d PlacedBy(const std::vector<int>& tracks, const std::vector<Pose2>& poses,
                            int n) const;

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iterator>
 #include <limits>
 #include <map>
 #include <utility>
@@ -196,13 +195,7 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
   StateEvaluation seed;
   seed.state = ReleasedAndMerged(before.state, JointAlignment(), anchor);
   const bool release = !(seed.state == before.state);
-  for (const auto& block : seed.state.blocks) {
-    seed.locations.push_back(Eigen::Vector3d::Zero());
-    seed.locations.back().head<2>() =
-        first_pose_[block.front()] <= anchor
-            ? Eigen::Vector2d(before.locations[before.state.BlockOf(block.front())].head<2>())
-            : PlacedBy(block, before.solution->trajectory, n);
-  }
+  seed.locations = SeedLocations(before, seed.state, before.solution->trajectory, anchor, n);
   seed.solution = before.solution;
   const EvaluationPtr released = release ? Refine(seed.state, &seed) : current_;
   // A try must promise more than the state before holds (its merges since
@@ -244,8 +237,8 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
 // recent tracks are landmarks of their own), after leaving out the pairs
 // individually incompatible and then, one at a time, the pair whose removal
 // raises it most while that helps and at least joint_screen_min_inliers
-// pairs remain: the largest jointly compatible set found greedily (a pair 2 m off among right ones
-// is a wrong tree). False when not computable.
+// pairs remain: the largest jointly compatible set found greedily (a pair
+// 2 m off among right ones is a wrong tree). False when not computable.
 bool LandmarkAssociation::JointGainOfBestPairs(const StateEvaluation& at,
                                                const JointAlignment& units, int n,
                                                RigidMatch* match, double* gain) {
@@ -396,15 +389,7 @@ EvaluationPtr LandmarkAssociation::TryAnchor(const StateEvaluation& before,
     const Eigen::Vector2d q = part(Eigen::Vector2d(p.x, p.y));
     p = {q.x(), q.y(), WrapAngle(p.theta + part.angle)};
   }
-  for (const auto& block : seed.state.blocks) {
-    // Where the block's earliest track was, when it is from before the
-    // anchor; else where the moved trajectory puts its sightings.
-    seed.locations.push_back(Eigen::Vector3d::Zero());
-    seed.locations.back().head<2>() =
-        first_pose_[block.front()] <= anchor
-            ? Eigen::Vector2d(before.locations[before.state.BlockOf(block.front())].head<2>())
-            : PlacedBy(block, moved->trajectory, n);
-  }
+  seed.locations = SeedLocations(before, seed.state, moved->trajectory, anchor, n);
   seed.solution = std::move(moved);
   const EvaluationPtr e = evaluator_->Trial(seed.state, &seed);
   ++result_.joint_tries;
@@ -548,6 +533,22 @@ int LandmarkAssociation::StretchStart(int n, double metres) const {
   const double from = driven_m_[n - 1] - metres;
   return static_cast<int>(std::lower_bound(driven_m_.begin(), driven_m_.begin() + n, from) -
                           driven_m_.begin());
+}
+
+std::vector<Eigen::Vector3d> LandmarkAssociation::SeedLocations(
+    const StateEvaluation& before, const AssociationState& state,
+    const std::vector<Pose2>& trajectory, int anchor, int n) const {
+  // Where the block's earliest track was, when it is from before the
+  // anchor; else where `trajectory` puts its sightings.
+  std::vector<Eigen::Vector3d> locations;
+  for (const auto& block : state.blocks) {
+    locations.push_back(Eigen::Vector3d::Zero());
+    locations.back().head<2>() =
+        first_pose_[block.front()] <= anchor
+            ? Eigen::Vector2d(before.locations[before.state.BlockOf(block.front())].head<2>())
+            : PlacedBy(block, trajectory, n);
+  }
+  return locations;
 }
 
 Eigen::Vector2d LandmarkAssociation::PlacedBy(const std::vector<int>& tracks,

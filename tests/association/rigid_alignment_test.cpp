@@ -129,23 +129,35 @@ TEST(RigidAlignmentTest, RansacFindsTheDriftAmongOutliers) {
 }
 
 // A layout that repeats itself: the recent points are 6 old ones seen again
-// (5 cm noise) and 12 more that look like another old group 40 m away (1.2 m
-// off each). The plain count takes the 40 m shift; the pairs weighted by fit
-// take the 6 close ones.
-TEST(RigidAlignmentTest, TheScoreWeightedByFitPrefersFewCloseInliersToManyLooseOnes) {
+// (5 cm noise) and 12 more that look like another old group a block (40 m)
+// away (1.2 m off each).
+struct RepeatingLayout {
+  std::vector<Eigen::Vector2d> old, recent;
+  Eigen::Vector2d block = Eigen::Vector2d(40.0, 0.0);
+};
+
+RepeatingLayout MakeRepeatingLayout() {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> close(0.0, 0.05), loose(0.0, 1.2);
   const std::vector<Eigen::Vector2d> points = Scatter(18, 8.0, rng);
-  const Eigen::Vector2d block(40.0, 0.0);
-  std::vector<Eigen::Vector2d> old, recent;
+  RepeatingLayout layout;
   for (int i = 0; i < 6; ++i) {
-    old.push_back(points[i]);
-    recent.push_back(points[i] + Eigen::Vector2d(close(rng), close(rng)));
+    layout.old.push_back(points[i]);
+    layout.recent.push_back(points[i] + Eigen::Vector2d(close(rng), close(rng)));
   }
   for (int i = 6; i < 18; ++i) {
-    old.push_back(points[i] + block);
-    recent.push_back(points[i] + Eigen::Vector2d(loose(rng), loose(rng)));
+    layout.old.push_back(points[i] + layout.block);
+    layout.recent.push_back(points[i] + Eigen::Vector2d(loose(rng), loose(rng)));
   }
+  return layout;
+}
+
+// The plain count takes the 40 m shift; the pairs weighted by fit take the
+// 6 close ones.
+TEST(RigidAlignmentTest, TheScoreWeightedByFitPrefersFewCloseInliersToManyLooseOnes) {
+  const RepeatingLayout layout = MakeRepeatingLayout();
+  const std::vector<Eigen::Vector2d>&old = layout.old, &recent = layout.recent;
+  const Eigen::Vector2d& block = layout.block;
   RigidRansacOptions options;
   options.search_m = 60;
   options.inlier_m = 2.5;
@@ -174,22 +186,12 @@ TEST(RigidAlignmentTest, TheScoreWeightedByFitPrefersFewCloseInliersToManyLooseO
 }
 
 // The best few transforms of one run, for a judge that knows the drift: in
-// the repeating layout above both the close alignment and the block-shifted
+// the repeating layout both the close alignment and the block-shifted
 // one are among them, each once (distinct pairs), best score first.
 TEST(RigidAlignmentTest, TheTopTransformsHoldEachCandidateOnceBestFirst) {
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> close(0.0, 0.05), loose(0.0, 1.2);
-  const std::vector<Eigen::Vector2d> points = Scatter(18, 8.0, rng);
-  const Eigen::Vector2d block(40.0, 0.0);
-  std::vector<Eigen::Vector2d> old, recent;
-  for (int i = 0; i < 6; ++i) {
-    old.push_back(points[i]);
-    recent.push_back(points[i] + Eigen::Vector2d(close(rng), close(rng)));
-  }
-  for (int i = 6; i < 18; ++i) {
-    old.push_back(points[i] + block);
-    recent.push_back(points[i] + Eigen::Vector2d(loose(rng), loose(rng)));
-  }
+  const RepeatingLayout layout = MakeRepeatingLayout();
+  const std::vector<Eigen::Vector2d>&old = layout.old, &recent = layout.recent;
+  const Eigen::Vector2d& block = layout.block;
   RigidRansacOptions options;
   options.search_m = 60;
   options.inlier_m = 2.5;
