@@ -153,7 +153,9 @@ const std::vector<LandmarkPreset>& LandmarkPresets() {
   static const std::vector<LandmarkPreset> presets = {
       {"victoria-raw",
        "Victoria Park's raw laser scans (measurements.dat): ids unknown, most short tracks "
-       "clutter, a trunk diameter per track, 50-pose windows with few candidates per landmark",
+       "clutter, a trunk diameter per track, 50-pose windows with few candidates per landmark, "
+       "re-entries closed by the joint merges within 30 m (no screen of 4-pair alignments among "
+       "the clutter)",
        {{"format", "victoria-raw"},
         {"unknown-association", "1"},
         {"min-track", "3"},
@@ -164,7 +166,8 @@ const std::vector<LandmarkPreset>& LandmarkPresets() {
         {"targeted-radius", "20"},
         {"targeted-candidates", "10"},
         {"sweep-radius", "1.5"},
-        {"joint-max-shift", "30"}}},
+        {"joint-max-shift", "30"},
+        {"joint-screen", "0"}}},
   };
   return presets;
 }
