@@ -399,7 +399,7 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   for (int i = 0; i < 2; ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
   *delta = -0.5 * log_det_sigma + std::log(s2) - 0.5 * log_det_p + 0.5 * b.dot(l) -
            0.5 * mu.dot(lambda * mu) + 0.5 * m.squaredNorm() / s2;
-  *delta += DiameterMergeDelta(ja, jb);
+  *delta += DiameterMergeDelta({ja, jb});
   *mean = l;
   return std::isfinite(*delta);
 }
@@ -482,7 +482,7 @@ bool LandmarkEvaluator::JointMergeDelta(const AssociationState& state,
   for (int i = 0; i < p.rows(); ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
   *delta = -0.5 * log_det_sigma - 0.5 * log_det_p + 0.5 * b.dot(p_llt.solve(b)) -
            0.5 * mu.dot(lambda_mu) + prior_terms;
-  for (const auto& group : groups) *delta += DiameterGroupMergeDelta(group);
+  for (const auto& group : groups) *delta += DiameterMergeDelta(group);
   ++marginal_merges_;
   return std::isfinite(*delta);
 }
@@ -536,10 +536,13 @@ bool LandmarkEvaluator::JointCovariance(int ka, int kb, Eigen::Matrix4d* sigma) 
   return true;
 }
 
-double LandmarkEvaluator::DiameterGroupMergeDelta(const std::vector<int>& group) const {
-  // DiameterMergeDelta for k blocks with measurements (counts n_i, means
-  // d_i, N = sum n_i, D = sum n_i d_i / N):
-  //   -1/(2 sigma^2) sum n_i (d_i - D)^2 + 1/2 log(prod n_i / N) - (k - 1)/2 log(2 pi sigma^2).
+double LandmarkEvaluator::DiameterMergeDelta(const std::vector<int>& group) const {
+  // The trunk diameters: a variable per landmark (flat prior) tied only to
+  // its own measurements, so its part of the evidence is separate and exact:
+  // merging k blocks with measurements (counts n_i, means d_i, N = sum n_i,
+  // D = sum n_i d_i / N) adds
+  //   -1/(2 sigma^2) sum n_i (d_i - D)^2 + 1/2 log(prod n_i / N) - (k - 1)/2 log(2 pi sigma^2),
+  // for two blocks -n_a n_b / (2 N sigma^2) (d_a - d_b)^2 + 1/2 log(n_a n_b / (2 pi sigma^2 N)).
   double total = 0, weighted = 0, log_counts = 0;
   std::vector<std::pair<int, double>> measured;  // (count, mean)
   for (int j : group) {
@@ -565,32 +568,6 @@ double LandmarkEvaluator::DiameterGroupMergeDelta(const std::vector<int>& group)
   for (const auto& [count, d] : measured) spread += count * (d - mean) * (d - mean);
   return -spread / (2 * var) + 0.5 * (log_counts - std::log(total)) -
          0.5 * double(measured.size() - 1) * std::log(2 * kPi * var);
-}
-
-double LandmarkEvaluator::DiameterMergeDelta(int ja, int jb) const {
-  // The trunk diameters: a variable per landmark (flat prior) tied only to
-  // its own measurements, so its part of the evidence is separate and exact:
-  // merging blocks with n_a, n_b measurements of means d_a, d_b adds
-  //   -n_a n_b / (2 n sigma^2) (d_a - d_b)^2 + 1/2 log(n_a n_b / (2 pi sigma^2 n)).
-  auto diameters = [&](int j, double* sum) {
-    int count = 0;
-    *sum = 0;
-    for (int t : reference_->state.blocks[j])
-      for (int k : data_.tracks[t]) {
-        const double d = data_.data->sightings[k].diameter_m;
-        if (!std::isfinite(d)) continue;
-        *sum += d;
-        ++count;
-      }
-    return count;
-  };
-  double sum_a = 0, sum_b = 0;
-  const int na = diameters(ja, &sum_a), nb = diameters(jb, &sum_b);
-  if (na == 0 || nb == 0) return 0;
-  const double var = options_.slam.diameter_std_m * options_.slam.diameter_std_m;
-  const double n = na + nb, gap = sum_a / na - sum_b / nb;
-  return -double(na) * nb / (2 * n * var) * gap * gap +
-         0.5 * std::log(double(na) * nb / (2 * kPi * var * n));
 }
 
 void LandmarkEvaluator::SetReference(const EvaluationPtr& evaluation) {

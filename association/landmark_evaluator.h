@@ -32,6 +32,7 @@
 
 #include "association/association_state.h"
 #include "association/sampler.h"
+#include "core/pair_key.h"
 #include "slam/landmark_slam.h"
 
 namespace oslam {
@@ -147,10 +148,9 @@ class LandmarkEvaluator : public StateEvaluator {
   // The 4 x 4 joint covariance of the landmark positions at solver keys ka
   // and kb at the reference: from kept roots when both are, else solved.
   bool JointCovariance(int ka, int kb, Eigen::Matrix4d* sigma);
-  // The trunk diameters' part of MergeDelta (0 unless both blocks have one).
-  double DiameterMergeDelta(int ja, int jb) const;
-  // The same for merging a group of the reference's blocks into one.
-  double DiameterGroupMergeDelta(const std::vector<int>& group) const;
+  // The trunk diameters' part of merging the reference's blocks `group`
+  // into one (MergeDelta, JointMergeDelta; 0 unless two have one).
+  double DiameterMergeDelta(const std::vector<int>& group) const;
   size_t solves_ = 0, hits_ = 0, marginal_merges_ = 0;
   // Covariance roots (SparseSolver::CovarianceRoots) of landmark positions
   // at the reference's factor, by solver key; at most kMaxRootBytes kept.
@@ -161,7 +161,7 @@ class LandmarkEvaluator : public StateEvaluator {
   // first) at the reference's factor.
   struct KeyPairHash {
     size_t operator()(const std::pair<int, int>& keys) const {
-      return std::hash<long long>()((static_cast<long long>(keys.first) << 32) ^ keys.second);
+      return std::hash<long long>()(PairKey(keys.first, keys.second));
     }
   };
   std::unordered_map<std::pair<int, int>, Eigen::Matrix4d, KeyPairHash> cross_covariances_;

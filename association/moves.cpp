@@ -4,6 +4,8 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "core/pair_key.h"
+
 namespace oslam {
 namespace {
 
@@ -49,16 +51,12 @@ bool MergeFirstWeights(const StateEvaluation& s, const MoveOptions& options,
   const double d = options.merge_distance_m;
   log_d->assign(n, kNegInf);
   const auto cell_of = [d](double v) { return static_cast<long long>(std::floor(v / d)); };
-  const auto key = [](long long x, long long y) {
-    return static_cast<long long>((static_cast<unsigned long long>(x) << 32) ^
-                                  (static_cast<unsigned long long>(y) & 0xffffffffULL));
-  };
   std::unordered_map<long long, std::vector<int>> cells;
   bool finite = std::isfinite(d);
   for (size_t k = 0; k < n && finite; ++k) {
     finite = std::isfinite(s.locations[k].x()) && std::isfinite(s.locations[k].y());
     if (finite)
-      cells[key(cell_of(s.locations[k].x()), cell_of(s.locations[k].y()))].push_back(
+      cells[PairKey(cell_of(s.locations[k].x()), cell_of(s.locations[k].y()))].push_back(
           static_cast<int>(k));
   }
   for (size_t j = 0; j < n; ++j) {
@@ -73,7 +71,7 @@ bool MergeFirstWeights(const StateEvaluation& s, const MoveOptions& options,
       const long long cx = cell_of(s.locations[j].x()), cy = cell_of(s.locations[j].y());
       for (long long x = cx - 1; x <= cx + 1; ++x)
         for (long long y = cy - 1; y <= cy + 1; ++y) {
-          const auto cell = cells.find(key(x, y));
+          const auto cell = cells.find(PairKey(x, y));
           if (cell == cells.end()) continue;
           for (int k : cell->second) count += near(static_cast<size_t>(k)) ? 1.0 : 0.0;
         }

@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "core/angles.h"
+#include "core/pair_key.h"
 
 namespace oslam {
 
@@ -97,7 +98,7 @@ class InlierCounter {
     height_ = max_y - min_y + 1;
     for (size_t o = 0; o < to_.size(); ++o) {
       const auto [x, y] = CellOf(to_[o]);
-      keyed.push_back({dense_ ? (x - min_x) * height_ + (y - min_y) : Key(x, y), int(o)});
+      keyed.push_back({dense_ ? (x - min_x) * height_ + (y - min_y) : PairKey(x, y), int(o)});
     }
     std::sort(keyed.begin(), keyed.end());
     cell_points_.clear();
@@ -175,13 +176,8 @@ class InlierCounter {
       const size_t c = static_cast<size_t>(dx * height_ + dy);
       return {cell_begin_[c], cell_begin_[c + 1]};
     }
-    const auto cell = cells_.find(Key(x, y));
+    const auto cell = cells_.find(PairKey(x, y));
     return cell == cells_.end() ? std::pair<int, int>{0, 0} : cell->second;
-  }
-
-  static long long Key(long x, long y) {
-    return static_cast<long long>((static_cast<unsigned long long>(x) << 32) ^
-                                  (static_cast<unsigned long long>(y) & 0xffffffffULL));
   }
 
   std::pair<long, long> CellOf(const Eigen::Vector2d& p) const {
