@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -49,6 +50,29 @@ AssociationState AssociationState::WithTrackMoved(int track, int target_block,
   }
   moved.Canonicalize();
   return moved;
+}
+
+AssociationState AssociationState::WithBlocksMerged(int a, int b) const {
+  if (a == b) throw Error("AssociationState::WithBlocksMerged: an object with itself");
+  const int first = std::min(a, b), second = std::max(a, b);
+  AssociationState merged;
+  merged.blocks.reserve(blocks.size() - 1);
+  merged.classes.reserve(blocks.size() - 1);
+  for (size_t j = 0; j < blocks.size(); ++j) {
+    if (static_cast<int>(j) == second) continue;
+    if (static_cast<int>(j) != first) {
+      merged.blocks.push_back(blocks[j]);
+      merged.classes.push_back(classes[j]);
+      continue;
+    }
+    std::vector<int> both;
+    both.reserve(blocks[first].size() + blocks[second].size());
+    std::merge(blocks[first].begin(), blocks[first].end(), blocks[second].begin(),
+               blocks[second].end(), std::back_inserter(both));
+    merged.blocks.push_back(std::move(both));
+    merged.classes.push_back(classes[first]);
+  }
+  return merged;
 }
 
 size_t AssociationState::num_tracks() const {

@@ -28,6 +28,10 @@ struct AssociationState {
   // class, or goes when empty) into object `target_block` (an index of this
   // state) or, for -1, alone; the object it ends in takes `joined_class`.
   AssociationState WithTrackMoved(int track, int target_block, int joined_class) const;
+  // The canonical state with objects a and b (indices, a != b) merged into
+  // one, which takes the class of the earlier; built without re-sorting the
+  // objects, since the merged one keeps the earlier's first track.
+  AssociationState WithBlocksMerged(int a, int b) const;
   size_t num_tracks() const;
   bool operator==(const AssociationState& other) const {
     return blocks == other.blocks && classes == other.classes;

@@ -404,6 +404,20 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   return std::isfinite(*delta);
 }
 
+bool LandmarkEvaluator::MergeGain(const StateEvaluation& at, int ja, int jb, double* gain) {
+  if (options_.mode != LandmarkEvaluationMode::kMarginal || reference_.get() != &at || ja == jb)
+    return false;
+  const auto& blocks = reference_->state.blocks;
+  std::vector<int> both(blocks[ja]);
+  both.insert(both.end(), blocks[jb].begin(), blocks[jb].end());
+  if (SharesAScan(both)) {  // as LocalEvaluation: invalid
+    *gain = -std::numeric_limits<double>::infinity();
+    return true;
+  }
+  Eigen::Vector2d mean;
+  return MergeDelta(std::min(ja, jb), std::max(ja, jb), gain, &mean);
+}
+
 bool LandmarkEvaluator::JointMergeDelta(const AssociationState& state,
                                         const std::vector<std::vector<int>>& groups,
                                         double* delta) {

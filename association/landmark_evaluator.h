@@ -94,6 +94,12 @@ class LandmarkEvaluator : public StateEvaluator {
   // batch (a forward solve per 64 columns) so that each pair's joint
   // covariance is a product of kept columns instead of a solve of its own.
   void PrepareMerges(const std::vector<int>& blocks);
+  // Marginal mode, `at` the reference: what Evaluate gives for `at` with its
+  // blocks ja and jb merged, minus at's log target, without building that
+  // state (the targeted merges score thousands of pairs per window);
+  // -infinity when the merged landmark would have two sightings of one scan.
+  // False when the closed form does not apply: Evaluate the state then.
+  bool MergeGain(const StateEvaluation& at, int ja, int jb, double* gain);
   // Marginal mode, `state` the reference: log_target(merged) -
   // log_target(reference) in closed form, linearised at the reference, for
   // merging each group of the reference's blocks `groups` (indices into

@@ -210,12 +210,8 @@ Proposal ProposeMerge(const StateEvaluation& s, const ClassConfusionModel& model
   p.old_class_b = s.state.classes[j2];
   const std::vector<int> merged = Union(p.part_a, p.part_b);
   const int c = SampleLog(LogClassProposal(model, merged, options), rng);
-  p.state = s.state;
-  p.state.blocks[j1] = merged;
-  p.state.classes[j1] = c;
-  p.state.blocks.erase(p.state.blocks.begin() + j2);
-  p.state.classes.erase(p.state.classes.begin() + j2);
-  p.state.Canonicalize();
+  p.state = s.state.WithBlocksMerged(j1, j2);
+  p.state.classes[std::min(j1, j2)] = c;
   p.log_q_forward = LogMergeProbability(s, j1, j2, c, model, options, probabilities);
   p.self_transition = false;
   return p;

@@ -42,12 +42,7 @@ void BM_VictoriaParkProposal(benchmark::State& state) {
   for (size_t a = 0; a < separate.blocks.size() && proposals.size() < kProposals; ++a)
     for (size_t b = a + 1; b < separate.blocks.size() && proposals.size() < kProposals; ++b)
       if ((reference->locations[a] - reference->locations[b]).norm() < 5.0) {
-        AssociationState merged = separate;
-        merged.blocks[a].push_back(static_cast<int>(b));
-        merged.blocks.erase(merged.blocks.begin() + b);
-        merged.classes.pop_back();
-        merged.Canonicalize();
-        proposals.push_back(merged);
+        proposals.push_back(separate.WithBlocksMerged(static_cast<int>(a), static_cast<int>(b)));
       }
   size_t i = 0;
   for (auto _ : state) {

@@ -309,9 +309,9 @@ class LandmarkAssociation {
     Eigen::Vector2d pivot = Eigen::Vector2d::Zero();  // mean of the matched recent units
   };
   struct MergeCandidate {
-    double delta;  // linearised gain in log target
-    int a, b;      // blocks of the current state
-    EvaluationPtr evaluation;
+    double delta;              // linearised gain in log target
+    int a, b;                  // blocks of the current state
+    EvaluationPtr evaluation;  // the merged state's; BestMerges fills the best one's
   };
 
   // Tracks on the dead reckoning, clutter left out, the location prior's

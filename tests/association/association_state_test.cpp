@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <unordered_set>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -44,6 +46,21 @@ TEST(AssociationStateTest, CanonicalizeSortsTracksAndDropsEmptyObjects) {
   empty.Canonicalize();
   EXPECT_EQ(empty.ToString(), "");
   EXPECT_EQ(empty.num_tracks(), 0u);
+}
+
+// Merging two objects in place gives the canonical state, the earlier's class kept.
+TEST(AssociationStateTest, MergingObjectsKeepsTheStateCanonical) {
+  const AssociationState s{{{0, 4}, {1}, {2, 5}, {3}}, {1, 0, 2, 0}};
+  for (const auto& [a, b] : std::vector<std::pair<int, int>>{{0, 2}, {2, 0}, {1, 3}, {3, 0}}) {
+    AssociationState expected = s;
+    expected.blocks[a].insert(expected.blocks[a].end(), s.blocks[b].begin(), s.blocks[b].end());
+    expected.classes[a] = s.classes[std::min(a, b)];
+    expected.blocks[b].clear();
+    expected.Canonicalize();
+    EXPECT_EQ(s.WithBlocksMerged(a, b), expected) << a << " " << b;
+  }
+  EXPECT_EQ(s.WithBlocksMerged(0, 2).ToString(), "{0,2,4,5}:1 {1}:0 {3}:0");
+  EXPECT_THROW(s.WithBlocksMerged(1, 1), Error);
 }
 
 // Equal states hash equal (above); here the 94 different ones of the test

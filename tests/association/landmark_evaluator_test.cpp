@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -34,15 +35,7 @@ AssociationState Separate(size_t num_tracks) {
 }
 
 AssociationState Merged(const AssociationState& state, int a, int b) {
-  AssociationState merged = state;
-  const int ja = merged.BlockOf(a), jb = merged.BlockOf(b);
-  merged.blocks[ja].insert(merged.blocks[ja].end(), merged.blocks[jb].begin(),
-                           merged.blocks[jb].end());
-  std::sort(merged.blocks[ja].begin(), merged.blocks[ja].end());
-  merged.blocks.erase(merged.blocks.begin() + jb);
-  merged.classes.pop_back();
-  merged.Canonicalize();
-  return merged;
+  return state.WithBlocksMerged(state.BlockOf(a), state.BlockOf(b));
 }
 
 // From the all-separate state, every merge of two tracks of one tree and of
@@ -136,6 +129,9 @@ TEST(LandmarkEvaluatorTest, MarginalMergeScoresDiametersLikeExact) {
       double joint = 0;  // the same merge as a group of two
       ASSERT_TRUE(marginal.JointMergeDelta(separate, {{int(a), int(b)}}, &joint));
       EXPECT_NEAR(joint, dg, 1e-6);
+      double gain = 0;  // the same merge without building the state
+      ASSERT_TRUE(marginal.MergeGain(*marginal_start, int(a), int(b), &gain));
+      EXPECT_NEAR(gain, dg, 1e-9);
       ++compared;
       agree += (de > 0) == (dg > 0);
       if (data.sightings[target.tracks[a][0]].landmark ==
@@ -240,6 +236,13 @@ TEST(LandmarkEvaluatorTest, ASharedScanMakesAMergeInvalid) {
     ASSERT_TRUE(start->valid);
     EXPECT_FALSE(evaluator.Evaluate(merged, start.get())->valid) << static_cast<int>(mode);
     EXPECT_FALSE(evaluator.Trial(merged, start.get())->valid) << static_cast<int>(mode);
+    double gain = 0;  // only the marginal mode scores merges in closed form
+    const bool closed_form =
+        evaluator.MergeGain(*start, separate.BlockOf(a), separate.BlockOf(b), &gain);
+    EXPECT_EQ(closed_form, mode == LandmarkEvaluationMode::kMarginal);
+    if (closed_form) {
+      EXPECT_EQ(gain, -std::numeric_limits<double>::infinity());
+    }
   }
   // Without the rule the merge is merely unlikely, not impossible.
   LandmarkTargetOptions options = DriveTargetOptions(LandmarkEvaluationMode::kExact);
