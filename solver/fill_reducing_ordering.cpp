@@ -124,9 +124,11 @@ bool FillReducingOrdering::Choose(const BlockPattern& pattern, OrderingType requ
   if (!blocks) return false;
   const int num_free = pattern.num_blocks();
   OrderingType wanted = requested;
-  const bool compare = wanted == OrderingType::kAutomatic &&
-                       (independent_of_history || compared_num_blocks_ < 0 ||
-                        std::abs(num_free - compared_num_blocks_) > kSimilarProblemBlocks);
+  const double similar = std::max<double>(
+      kSimilarProblemBlocks, kSimilarProblemFraction * std::max(num_free, compared_num_blocks_));
+  const bool compare =
+      wanted == OrderingType::kAutomatic && (independent_of_history || compared_num_blocks_ < 0 ||
+                                             std::abs(num_free - compared_num_blocks_) > similar);
   if (wanted == OrderingType::kAutomatic && !compare) wanted = compared_choice_;
   const std::vector<Candidate> candidates = Candidates(blocks, degree, wanted, cc);
   *block_order = Cheapest(blocks, pattern, candidates, cc, &used_);

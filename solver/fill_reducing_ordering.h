@@ -23,9 +23,12 @@ class FillReducingOrdering {
   // METIS is tried from this many variables on (below, it costs more than
   // it saves).
   static constexpr int kMetisMinBlocks = 2000;
-  // Problems whose variable counts differ by at most this many are
-  // "similar" for the choice of ordering kind.
+  // Problems whose variable counts differ by at most this many, or by this
+  // fraction of the larger count, are "similar" for the choice of ordering
+  // kind: a growing problem (landmark SLAM's windows add ~30 poses to
+  // 10,000) is not compared afresh at every step.
   static constexpr int kSimilarProblemBlocks = 8;
+  static constexpr double kSimilarProblemFraction = 0.02;
 
   // The order in which to eliminate `pattern`'s variables (block_order[k]:
   // the k-th variable eliminated). A small association change (an O-SLAM

@@ -106,6 +106,10 @@ TEST(FillReducingOrderingTest, ASimilarProblemReusesTheLastComparisonsWinner) {
   // ... or the comparison was forgotten.
   ordering.Forget();
   EXPECT_EQ(ComparedCandidates(&ordering, ObjectSeenFromAChain(31), false, &cholmod.cc), 2);
+  // A big problem is similar within 2 % of its size (AMD, CAMD and METIS compared).
+  EXPECT_EQ(ComparedCandidates(&ordering, ObjectSeenFromAChain(5000), false, &cholmod.cc), 3);
+  EXPECT_EQ(ComparedCandidates(&ordering, ObjectSeenFromAChain(5090), false, &cholmod.cc), 1);
+  EXPECT_EQ(ComparedCandidates(&ordering, ObjectSeenFromAChain(5200), false, &cholmod.cc), 3);
 }
 
 }  // namespace
