@@ -81,6 +81,11 @@ class LandmarkEvaluator : public StateEvaluator {
   size_t num_solves() const override { return solves_; }
   size_t num_cache_hits() const override { return hits_; }
   size_t num_marginal_merges() const { return marginal_merges_; }  // marginal: closed-form merges
+  // Whether `evaluation` is the reference: the last full optimisation
+  // (Refine), so solving its state again would change nothing.
+  bool IsReference(const StateEvaluation& evaluation) const {
+    return reference_.get() == &evaluation;
+  }
 
   // The landmark id of every sighting under `state` (a block's id is its
   // earliest track), -1 for sightings in no track.

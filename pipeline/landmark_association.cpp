@@ -343,7 +343,12 @@ long LandmarkAssociation::HillClimb(long steps) {
     if (current_ != before) ++accepted;
     const bool resolve =
         current_ != before && options_.target.mode == LandmarkEvaluationMode::kMarginal;
-    if (resolve || step % options_.refine_every == 0 || step == steps) {
+    // The periodic re-solve is for states the moves evaluated locally; the
+    // last full solve's state needs none (on the 10k world 351 of 779 window
+    // solves were of such states, at the end of climbs that changed nothing).
+    const bool periodic =
+        (step % options_.refine_every == 0 || step == steps) && !evaluator_->IsReference(*current_);
+    if (resolve || periodic) {
       const EvaluationPtr refined = Refine(current_->state, current_.get());
       if (refined->valid) current_ = refined;
     }

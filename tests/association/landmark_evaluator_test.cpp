@@ -316,6 +316,8 @@ TEST(LandmarkEvaluatorTest, TrialLeavesTheReferenceAlone) {
       Merged(Merged(separate, pairs[0].first, pairs[0].second), pairs[1].first, pairs[1].second);
   const EvaluationPtr trial = with_trial.Trial(tried, reference.get());
   ASSERT_TRUE(trial->valid);
+  EXPECT_TRUE(with_trial.IsReference(*reference));
+  EXPECT_FALSE(with_trial.IsReference(*trial));
   EXPECT_EQ(trial->state, tried);
   EXPECT_EQ(trial->locations.size(), tried.blocks.size());
   const AssociationState merge = Merged(separate, pairs[2].first, pairs[2].second);
