@@ -323,6 +323,10 @@ class LandmarkAssociation {
   void RunWindow(size_t w);
   void StartWindow(size_t w);
   void OpenWindowProblem(int n, int previous_end);
+  // The fill-reducing ordering kind of window solves of n poses, and the
+  // kind a window's first solve used (WindowOrdering, NoteOrdering).
+  OrderingType WindowOrdering(int n) const;
+  void NoteOrdering(int n, const StateEvaluation& solved);
   void SplitSharedScans(int previous_end, int n);
   // Random greedy moves, re-solved after each accepted one (marginal mode)
   // and every refine_every steps; returns the moves accepted.
@@ -429,6 +433,10 @@ class LandmarkAssociation {
   std::unique_ptr<LandmarkTargetData> window_data_;
   std::unique_ptr<LandmarkEvaluator> evaluator_;
   int held_poses_ = 0;  // the current window's (free_poses)
+  // The ordering kind the last comparison chose and its window's poses
+  // (-1: none yet).
+  OrderingType compared_ordering_ = OrderingType::kAutomatic;
+  int ordering_compared_poses_ = -1;
 
   int last_ransac_;                // window end of the last RANSAC
   double joint_needed_score_ = 0;  // RANSAC score the next joint merge needs
