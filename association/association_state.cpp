@@ -35,20 +35,43 @@ int AssociationState::BlockOf(int track) const {
 
 AssociationState AssociationState::WithTrackMoved(int track, int target_block,
                                                   int joined_class) const {
+  // This state is canonical: only the objects the track leaves and joins
+  // change, so they alone are taken out and put back in order (the objects
+  // are disjoint, so their order is that of their first tracks).
   AssociationState moved = *this;
   const int from = BlockOf(track);
+  std::vector<std::pair<std::vector<int>, int>> changed;  // (object, class)
+  std::vector<int> out;                                   // their indices, to erase
   if (from >= 0) {
-    std::vector<int>& block = moved.blocks[from];
-    block.erase(std::find(block.begin(), block.end(), track));
+    std::vector<int> left = std::move(moved.blocks[from]);
+    left.erase(std::find(left.begin(), left.end(), track));
+    if (from != target_block && !left.empty()) changed.push_back({std::move(left), classes[from]});
+    out.push_back(from);
   }
   if (target_block >= 0) {
-    moved.blocks[target_block].push_back(track);
-    moved.classes[target_block] = joined_class;
+    std::vector<int> joined =
+        target_block == from ? std::vector<int>{} : std::move(moved.blocks[target_block]);
+    if (target_block == from)
+      for (int t : blocks[from])
+        if (t != track) joined.push_back(t);
+    joined.insert(std::lower_bound(joined.begin(), joined.end(), track), track);
+    changed.push_back({std::move(joined), joined_class});
+    if (target_block != from) out.push_back(target_block);
   } else {
-    moved.blocks.push_back({track});
-    moved.classes.push_back(joined_class);
+    changed.push_back({{track}, joined_class});
   }
-  moved.Canonicalize();
+  std::sort(out.rbegin(), out.rend());
+  for (int j : out) {
+    moved.blocks.erase(moved.blocks.begin() + j);
+    moved.classes.erase(moved.classes.begin() + j);
+  }
+  for (auto& [block, c] : changed) {
+    const auto at =
+        std::lower_bound(moved.blocks.begin(), moved.blocks.end(), block.front(),
+                         [](const std::vector<int>& b, int first) { return b.front() < first; });
+    moved.classes.insert(moved.classes.begin() + (at - moved.blocks.begin()), c);
+    moved.blocks.insert(at, std::move(block));
+  }
   return moved;
 }
 

@@ -27,6 +27,7 @@ struct AssociationState {
   // The canonical state with `track` moved out of its object (which keeps its
   // class, or goes when empty) into object `target_block` (an index of this
   // state) or, for -1, alone; the object it ends in takes `joined_class`.
+  // This state must be canonical (only the two objects are re-placed).
   AssociationState WithTrackMoved(int track, int target_block, int joined_class) const;
   // The canonical state with objects a and b (indices, a != b) merged into
   // one, which takes the class of the earlier; built without re-sorting the

@@ -2,6 +2,7 @@
 // the evaluation cache with its roll-back journal (association_state.h).
 #include "association/association_state.h"
 
+#include <algorithm>
 #include <cmath>
 #include <unordered_set>
 #include <utility>
@@ -46,6 +47,33 @@ TEST(AssociationStateTest, CanonicalizeSortsTracksAndDropsEmptyObjects) {
   empty.Canonicalize();
   EXPECT_EQ(empty.ToString(), "");
   EXPECT_EQ(empty.num_tracks(), 0u);
+}
+
+// Moving a track re-places only the objects it leaves and joins: the same
+// state as moving it and canonicalising everything, for every move of every
+// state of the test problem.
+TEST(AssociationStateTest, MovingATrackKeepsTheStateCanonical) {
+  int moves = 0;
+  for (const AssociationState& s : EnumerateStates(4, 2))
+    for (int track = 0; track < 4; ++track)
+      for (int target = -1; target < static_cast<int>(s.blocks.size()); ++target)
+        for (int c = 0; c < 2; ++c) {
+          AssociationState expected = s;
+          const int from = s.BlockOf(track);
+          auto& block = expected.blocks[from];
+          block.erase(std::find(block.begin(), block.end(), track));
+          if (target >= 0) {
+            expected.blocks[target].push_back(track);
+            expected.classes[target] = c;
+          } else {
+            expected.blocks.push_back({track});
+            expected.classes.push_back(c);
+          }
+          expected.Canonicalize();
+          EXPECT_EQ(s.WithTrackMoved(track, target, c), expected) << s.ToString() << " " << track;
+          ++moves;
+        }
+  EXPECT_GT(moves, 1000);
 }
 
 // Merging two objects in place gives the canonical state, the earlier's class kept.
