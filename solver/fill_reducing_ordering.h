@@ -25,8 +25,8 @@ class FillReducingOrdering {
   static constexpr int kMetisMinBlocks = 2000;
   // Problems whose variable counts differ by at most this many, or by this
   // fraction of the larger count, are "similar" for the choice of ordering
-  // kind: a growing problem (landmark SLAM's windows add ~30 poses to
-  // 10,000) is not compared afresh at every step.
+  // kind: a problem growing in small steps is not compared afresh at every
+  // step.
   static constexpr int kSimilarProblemBlocks = 8;
   static constexpr double kSimilarProblemFraction = 0.02;
 
