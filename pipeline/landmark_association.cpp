@@ -563,8 +563,9 @@ void LandmarkAssociation::CalibrateOnTracks() {
     for (int k : result_.tracks[t]) association[k] = t;
   LandmarkSlamOptions slam = options_.target.slam;
   slam.held_poses = 0;
-  const NoiseCalibrationResult c =
-      CalibrateNoise(*stated_, association, slam, options_.calibration);
+  NoiseCalibrationOptions calibration = options_.calibration;
+  calibration.final_solve = false;  // only the scales are used
+  const NoiseCalibrationResult c = CalibrateNoise(*stated_, association, slam, calibration);
   result_.noise_scales = c.scales;
   calibrated_ = WithNoiseScales(*stated_, c.scales);
   data_ = &calibrated_;

@@ -187,7 +187,8 @@ NoiseCalibrationResult CalibrateNoise(const LandmarkDataset& data,
   // Sightings gated out leave the solves too (they would bend the solution
   // the other groups' residuals are measured at); odometry edges cannot.
   std::vector<int> used = association;
-  for (int it = 0; it <= options.iterations; ++it) {
+  const int solves = options.final_solve ? options.iterations + 1 : options.iterations;
+  for (int it = 0; it < solves; ++it) {
     const LandmarkDataset scaled = WithNoiseScales(data, out.scales);
     // The last solve, under the final scales, is the result: with the
     // covariances the caller asked for.

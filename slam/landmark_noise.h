@@ -38,6 +38,10 @@ struct NoiseCalibrationOptions {
   // so its redundancy is far more precise than one row's.
   int redundancy_samples = 200;
   unsigned long seed = 1;
+  // The solve under the final scales (NoiseCalibrationResult::solution);
+  // off when only the scales are wanted (the solution is then the last
+  // iteration's, under the scales before).
+  bool final_solve = true;
 
   bool Validate(std::string* why) const;
 };

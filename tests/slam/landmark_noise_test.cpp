@@ -108,6 +108,26 @@ TEST(LandmarkNoiseTest, TheResultCarriesTheCovariancesAskedFor) {
   EXPECT_TRUE(bare.solution.pose_covariances.empty());
 }
 
+// Without the final solve: the same scales and outliers, and the solution
+// of the last iteration (under the scales before the last estimate).
+TEST(LandmarkNoiseTest, WithoutTheFinalSolveTheScalesAreTheSame) {
+  const LandmarkWorld world = CityDrive();
+  NoiseCalibrationOptions options;
+  options.iterations = 2;
+  const NoiseCalibrationResult full =
+      CalibrateNoise(world.data, world.true_association, LandmarkSlamOptions(), options);
+  options.final_solve = false;
+  const NoiseCalibrationResult scales_only =
+      CalibrateNoise(world.data, world.true_association, LandmarkSlamOptions(), options);
+  EXPECT_EQ(scales_only.scales.range, full.scales.range);
+  EXPECT_EQ(scales_only.scales.bearing, full.scales.bearing);
+  EXPECT_EQ(scales_only.scales.odometry_translation, full.scales.odometry_translation);
+  EXPECT_EQ(scales_only.scales.odometry_heading, full.scales.odometry_heading);
+  EXPECT_EQ(scales_only.outliers, full.outliers);
+  ASSERT_EQ(scales_only.solution.trajectory.size(), full.solution.trajectory.size());
+  EXPECT_NE(scales_only.solution.evidence.log_evidence, full.solution.evidence.log_evidence);
+}
+
 TEST(LandmarkNoiseTest, WithNoiseScalesScalesEveryCovariance) {
   const LandmarkWorld world = CityDrive();
   NoiseScales s;
