@@ -40,26 +40,25 @@ AssociationState AssociationState::WithTrackMoved(int track, int target_block,
   // are disjoint, so their order is that of their first tracks).
   AssociationState moved = *this;
   const int from = BlockOf(track);
-  std::vector<std::pair<std::vector<int>, int>> changed;  // (object, class)
-  std::vector<int> out;                                   // their indices, to erase
+  std::vector<int> out;   // the indices of the objects taken out
+  std::vector<int> left;  // the object the track leaves, without it
   if (from >= 0) {
-    std::vector<int> left = std::move(moved.blocks[from]);
+    left = std::move(moved.blocks[from]);
     left.erase(std::find(left.begin(), left.end(), track));
-    if (from != target_block && !left.empty()) changed.push_back({std::move(left), classes[from]});
     out.push_back(from);
   }
-  if (target_block >= 0) {
-    std::vector<int> joined =
-        target_block == from ? std::vector<int>{} : std::move(moved.blocks[target_block]);
-    if (target_block == from)
-      for (int t : blocks[from])
-        if (t != track) joined.push_back(t);
-    joined.insert(std::lower_bound(joined.begin(), joined.end(), track), track);
-    changed.push_back({std::move(joined), joined_class});
-    if (target_block != from) out.push_back(target_block);
-  } else {
-    changed.push_back({{track}, joined_class});
+  std::vector<int> joined;  // the object it ends in
+  if (target_block >= 0 && target_block == from) {
+    joined = std::move(left);
+    left.clear();
+  } else if (target_block >= 0) {
+    joined = std::move(moved.blocks[target_block]);
+    out.push_back(target_block);
   }
+  joined.insert(std::lower_bound(joined.begin(), joined.end(), track), track);
+  std::vector<std::pair<std::vector<int>, int>> changed;  // (object, class) to put back
+  if (!left.empty()) changed.push_back({std::move(left), classes[from]});
+  changed.push_back({std::move(joined), joined_class});
   std::sort(out.rbegin(), out.rend());
   for (int j : out) {
     moved.blocks.erase(moved.blocks.begin() + j);
