@@ -594,6 +594,8 @@ EvaluationPtr LandmarkAssociation::CalibrateAndRefine(EvaluationPtr best) {
               [](const MappedLandmark& a, const MappedLandmark& b) { return a.id < b.id; });
     LandmarkSlamOptions slam = options_.target.slam;
     slam.held_poses = 0;
+    // Only the calibration's solution itself seeds the re-solve below.
+    slam.compute_landmark_covariances = slam.compute_pose_covariances = false;
     const NoiseCalibrationResult c = CalibrateNoise(
         *data_, evaluator_->Association(current_->state), slam, options_.calibration, &warm);
     NoiseScales& total = result_.noise_scales;
