@@ -208,10 +208,10 @@ Proposal ProposeMerge(const StateEvaluation& s, const ClassConfusionModel& model
   p.part_b = s.state.blocks[j2];
   p.old_class_a = s.state.classes[j1];
   p.old_class_b = s.state.classes[j2];
-  const std::vector<int> merged = Union(p.part_a, p.part_b);
-  const int c = SampleLog(LogClassProposal(model, merged, options), rng);
   p.state = s.state.WithBlocksMerged(j1, j2);
-  p.state.classes[std::min(j1, j2)] = c;
+  const int merged = std::min(j1, j2);  // the merged object's index
+  const int c = SampleLog(LogClassProposal(model, p.state.blocks[merged], options), rng);
+  p.state.classes[merged] = c;
   p.log_q_forward = LogMergeProbability(s, j1, j2, c, model, options, probabilities);
   p.self_transition = false;
   return p;
