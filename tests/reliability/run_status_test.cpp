@@ -172,7 +172,11 @@ TEST(RunStatus, AKilledRunLooksUnfinishedAndResumeReusesItsStages) {
   const nlohmann::json status = Status(out);
   EXPECT_EQ(status["status"], "complete");
   EXPECT_EQ(status["stages"]["detect"], "reused");
-  EXPECT_EQ(status["stages"]["o-slam"], "complete");
+  // The kill races the next stage: a fast O-SLAM stage (or a test process
+  // polling late under load) may have completed it too, and then it is
+  // reused as well; a stage unfinished at the kill is run again.
+  const bool slam_done_when_killed = killed["stages"].value("o-slam", "") == "complete";
+  EXPECT_EQ(status["stages"]["o-slam"], slam_done_when_killed ? "reused" : "complete");
   // The same map as a run from scratch (into another folder: the paths in
   // the map differ by that folder only).
   const std::string fresh = dir.Path("fresh");
