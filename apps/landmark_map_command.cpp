@@ -239,8 +239,14 @@ void LandmarkMode::Declare(Arguments* arguments) {
         "none; both 0: start from dead reckoning)")
       .Check([this] { return options_.slam.initialisation_window_poses >= 0; }, "must be >= 0");
   b.Add(&o.slam.landmark_prior_std_m, "landmark-prior-std", "M",
-        "std of a zero-mean location prior on every landmark (0: none; makes the evidence "
-        "comparable across associations)");
+        "std of a Gaussian location prior on every landmark (0: none; makes the evidence "
+        "comparable across associations, but pulls the landmarks toward its mean)")
+      .Check([this] { return options_.slam.landmark_prior_std_m >= 0; }, "must be >= 0");
+  b.Add(&o.slam.landmark_density_per_m2, "landmark-density", "PER_M2",
+        "location prior of constant density on every landmark, landmarks per square metre "
+        "(0: none; makes the evidence comparable across associations without moving "
+        "anything; the default with --unknown-association: 1.59e-5)")
+      .Check([this] { return options_.slam.landmark_density_per_m2 >= 0; }, "must be >= 0");
   b.Add(&o.slam.diameter_std_m, "diameter-std", "M",
         "std of one trunk-diameter measurement (where the data set has them)");
   b.AddFlag(&o.slam.compute_pose_covariances, "pose-covariances",
@@ -471,9 +477,17 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
   options.target.slam.initialisation_gate = options_.slam.initialisation_gate;
   options.target.slam.diameter_std_m = options_.slam.diameter_std_m;
   // A location prior is required to compare landmark counts: the target's
-  // default unless given.
-  if (arguments.Has("landmark-prior-std"))
+  // default (a density) unless one is given.
+  if (arguments.Has("landmark-prior-std") && arguments.Has("landmark-density"))
+    throw UsageError("give either --landmark-prior-std or --landmark-density, not both");
+  if (arguments.Has("landmark-prior-std")) {
     options.target.slam.landmark_prior_std_m = options_.slam.landmark_prior_std_m;
+    options.target.slam.landmark_density_per_m2 = 0;
+  }
+  if (arguments.Has("landmark-density")) {
+    options.target.slam.landmark_density_per_m2 = options_.slam.landmark_density_per_m2;
+    options.target.slam.landmark_prior_std_m = 0;
+  }
   std::string why;
   if (!options.Validate(&why)) throw UsageError(why);
 

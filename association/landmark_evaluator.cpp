@@ -43,11 +43,11 @@ LandmarkSlamOptions StepOptions(const LandmarkTargetOptions& options) {
 }  // namespace
 
 bool LandmarkTargetOptions::Validate(std::string* why) const {
-  if (!(slam.landmark_prior_std_m > 0)) {
+  if (!(slam.landmark_prior_std_m > 0) && !(slam.landmark_density_per_m2 > 0)) {
     if (why)
       *why =
-          "the landmark location prior std must be > 0 (a flat prior makes the evidence "
-          "improper across landmark counts)";
+          "the landmarks need a location prior, a density or a Gaussian std > 0 (a flat prior "
+          "makes the evidence improper across landmark counts)";
     return false;
   }
   if (proposal_iterations < 1 || local_iterations < 1) {
@@ -212,9 +212,10 @@ const LandmarkEvaluator::BlockValue& LandmarkEvaluator::LocalBlock(const std::ve
   const int diameter =
       diameters > 0 ? graph.AddVariable(Eigen::Matrix<double, 1, 1>(diameter_sum / diameters)) : -1;
   const double prior_var = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
-  graph.Emplace<PriorFactor>(landmark, Eigen::VectorXd(options_.slam.landmark_prior_mean_m),
-                             Eigen::MatrixXd(Eigen::Matrix2d::Identity() * prior_var),
-                             "landmark prior");
+  if (prior_var > 0)
+    graph.Emplace<PriorFactor>(landmark, Eigen::VectorXd(options_.slam.landmark_prior_mean_m),
+                               Eigen::MatrixXd(Eigen::Matrix2d::Identity() * prior_var),
+                               "landmark prior");
   const Eigen::Matrix<double, 1, 1> diameter_var(options_.slam.diameter_std_m *
                                                  options_.slam.diameter_std_m);
   std::map<int, int> pose_keys;
@@ -234,7 +235,7 @@ const LandmarkEvaluator::BlockValue& LandmarkEvaluator::LocalBlock(const std::ve
   ++solves_;
   BlockValue value;
   value.log_evidence = solved.summary.IsUsable() && solved.evidence.valid
-                           ? solved.evidence.log_evidence
+                           ? solved.evidence.log_evidence + options_.slam.LogLandmarkDensity()
                            : -std::numeric_limits<double>::infinity();
   value.position_m = graph.values().Get(landmark);
   value.residual2 = SightingResidual2(data, trajectory, sightings, value.position_m);
@@ -367,6 +368,25 @@ EvaluationPtr LandmarkEvaluator::Trial(const AssociationState& state, const Stat
   return FullEvaluation(state, from, Solver::kTrial);
 }
 
+// The location priors' part of merging extra + 1 landmarks into one (extra
+// priors fewer): their information and information times mean taken out of
+// the merged position's, and their log normalisers with the 2 pi of the
+// integral: extra (log s^2 + |m|^2 / (2 s^2)) under a Gaussian prior,
+// -extra log(2 pi lambda) under a density.
+LandmarkEvaluator::PriorTerms LandmarkEvaluator::PriorTermsOf(int extra) const {
+  PriorTerms terms;
+  const LandmarkSlamOptions& slam = options_.slam;
+  if (slam.landmark_prior_std_m > 0) {
+    const double s2 = slam.landmark_prior_std_m * slam.landmark_prior_std_m;
+    terms.information = extra / s2;
+    terms.information_mean = extra * slam.landmark_prior_mean_m / s2;
+    terms.log_term = extra * (std::log(s2) + 0.5 * slam.landmark_prior_mean_m.squaredNorm() / s2);
+  } else {
+    terms.log_term = -extra * (std::log(2 * kPi) + slam.LogLandmarkDensity());
+  }
+  return terms;
+}
+
 bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2d* mean) {
   if (!reference_factorised_) return false;
   const int ka = reference_position_keys_[ja], kb = reference_position_keys_[jb];
@@ -374,12 +394,15 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   Eigen::Matrix4d sigma;
   if (!JointCovariance(ka, kb, &sigma)) return false;
   ++marginal_merges_;
-  // Laplace evidence ratio of "l_a = l_b = l" (one location prior N(m, s^2 I)
-  // instead of two): with the reference's Gaussian N(mu, Sigma) over
-  // (l_a, l_b) and H = [I; I],
+  // Laplace evidence ratio of "l_a = l_b = l" (one location prior instead of
+  // two): with the reference's Gaussian N(mu, Sigma) over (l_a, l_b) and
+  // H = [I; I], under a Gaussian prior N(m, s^2 I)
   //   log int N(H l; mu, Sigma) / N(l; m, s^2 I) dl
   //   = -1/2 log|Sigma| + 2 log s - 1/2 log|P| + 1/2 b'P^-1 b - 1/2 mu'Lambda mu + |m|^2 / (2 s^2)
-  // with Lambda = Sigma^-1, P = H'Lambda H - I / s^2, b = H'Lambda mu - m / s^2.
+  // with Lambda = Sigma^-1, P = H'Lambda H - I / s^2, b = H'Lambda mu - m / s^2;
+  // under a density lambda the same with 1/s^2 = 0 and 2 log s replaced by
+  // -log(2 pi lambda): log N(mu_a - mu_b; 0, S) - log lambda, S the
+  // covariance of the difference.
   Eigen::Vector4d mu;
   mu << reference_->locations[ja].head<2>(), reference_->locations[jb].head<2>();
   const Eigen::LLT<Eigen::Matrix4d> sigma_llt(sigma);
@@ -387,18 +410,18 @@ bool LandmarkEvaluator::MergeDelta(int ja, int jb, double* delta, Eigen::Vector2
   const Eigen::Matrix4d lambda = sigma_llt.solve(Eigen::Matrix4d::Identity());
   Eigen::Matrix<double, 4, 2> h;
   h << Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity();
-  const double s2 = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
-  const Eigen::Vector2d m = options_.slam.landmark_prior_mean_m;
-  const Eigen::Matrix2d p = h.transpose() * lambda * h - Eigen::Matrix2d::Identity() / s2;
-  const Eigen::Vector2d b = h.transpose() * lambda * mu - m / s2;
+  const PriorTerms prior = PriorTermsOf(1);
+  const Eigen::Matrix2d p =
+      h.transpose() * lambda * h - Eigen::Matrix2d::Identity() * prior.information;
+  const Eigen::Vector2d b = h.transpose() * lambda * mu - prior.information_mean;
   const Eigen::LLT<Eigen::Matrix2d> p_llt(p);
   if (p_llt.info() != Eigen::Success) return false;
   const Eigen::Vector2d l = p_llt.solve(b);
   double log_det_sigma = 0, log_det_p = 0;
   for (int i = 0; i < 4; ++i) log_det_sigma += 2 * std::log(sigma_llt.matrixL()(i, i));
   for (int i = 0; i < 2; ++i) log_det_p += 2 * std::log(p_llt.matrixL()(i, i));
-  *delta = -0.5 * log_det_sigma + std::log(s2) - 0.5 * log_det_p + 0.5 * b.dot(l) -
-           0.5 * mu.dot(lambda * mu) + 0.5 * m.squaredNorm() / s2;
+  *delta = -0.5 * log_det_sigma - 0.5 * log_det_p + 0.5 * b.dot(l) - 0.5 * mu.dot(lambda * mu) +
+           prior.log_term;
   *delta += DiameterMergeDelta({ja, jb});
   *mean = l;
   return std::isfinite(*delta);
@@ -478,16 +501,14 @@ bool LandmarkEvaluator::JointMergeDelta(const AssociationState& state,
   if (sigma_llt.info() != Eigen::Success) return false;
   const Eigen::MatrixXd lambda_h = sigma_llt.solve(h);
   const Eigen::VectorXd lambda_mu = sigma_llt.solve(mu);
-  const double s2 = options_.slam.landmark_prior_std_m * options_.slam.landmark_prior_std_m;
-  const Eigen::Vector2d m = options_.slam.landmark_prior_mean_m;
   Eigen::MatrixXd p = h.transpose() * lambda_h;
   Eigen::VectorXd b = h.transpose() * lambda_mu;
   double prior_terms = 0;
   for (int g = 0; g < g_count; ++g) {
-    const double extra = double(groups[g].size()) - 1;
-    p.block<2, 2>(2 * g, 2 * g) -= Eigen::Matrix2d::Identity() * extra / s2;
-    b.segment<2>(2 * g) -= extra * m / s2;
-    prior_terms += extra * (std::log(s2) + 0.5 * m.squaredNorm() / s2);
+    const PriorTerms prior = PriorTermsOf(static_cast<int>(groups[g].size()) - 1);
+    p.block<2, 2>(2 * g, 2 * g) -= Eigen::Matrix2d::Identity() * prior.information;
+    b.segment<2>(2 * g) -= prior.information_mean;
+    prior_terms += prior.log_term;
   }
   const Eigen::LLT<Eigen::MatrixXd> p_llt(p);
   if (p_llt.info() != Eigen::Success) return false;

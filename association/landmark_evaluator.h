@@ -46,9 +46,16 @@ namespace oslam {
 enum class LandmarkEvaluationMode { kExact, kLocal, kMarginal };
 
 struct LandmarkTargetOptions {
-  LandmarkTargetOptions() { slam.landmark_prior_std_m = 100.0; }
+  // The density of a 100 m Gaussian prior at its centre, 1 / (2 pi 100^2):
+  // a landmark per 6.3 hectares. Every merge pays log(1 / density) for the
+  // landmark it saves, less what it costs in fit; a higher density makes
+  // merges dearer (Victoria Park with ids hidden: 161 landmarks for 151 at
+  // this density, 171 at one landmark per 410 m^2, docs/benchmarks.md).
+  static constexpr double kDefaultLandmarkDensityPerM2 = 1.5915494309189535e-05;
+  LandmarkTargetOptions() { slam.landmark_density_per_m2 = kDefaultLandmarkDensityPerM2; }
   // The full solves (Refine, and exact proposals with fewer iterations).
-  // landmark_prior_std_m must be > 0.
+  // A location prior is required: landmark_density_per_m2 or
+  // landmark_prior_std_m > 0.
   LandmarkSlamOptions slam;
   LandmarkEvaluationMode mode = LandmarkEvaluationMode::kMarginal;
   int proposal_iterations = 5;  // exact: LM iterations of a proposal's warm re-solve
@@ -162,6 +169,12 @@ class LandmarkEvaluator : public StateEvaluator {
   // The trunk diameters' part of merging the reference's blocks `group`
   // into one (MergeDelta, JointMergeDelta; 0 unless two have one).
   double DiameterMergeDelta(const std::vector<int>& group) const;
+  struct PriorTerms {
+    double information = 0;  // taken off the merged position's information (times I)
+    Eigen::Vector2d information_mean = Eigen::Vector2d::Zero();
+    double log_term = 0;
+  };
+  PriorTerms PriorTermsOf(int extra) const;
   size_t solves_ = 0, hits_ = 0, marginal_merges_ = 0;
   // Covariance roots (SparseSolver::CovarianceRoots) of landmark positions
   // at the reference's factor, by solver key; at most kMaxRootBytes kept.

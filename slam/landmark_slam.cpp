@@ -27,6 +27,10 @@ std::vector<Pose2> ExtendByOdometry(const std::vector<Pose2>& solved,
   return poses;
 }
 
+double LandmarkSlamOptions::LogLandmarkDensity() const {
+  return landmark_density_per_m2 > 0 ? std::log(landmark_density_per_m2) : 0.0;
+}
+
 bool LandmarkSlamOptions::Validate(std::string* why) const {
   if (!(diameter_std_m > 0) || !std::isfinite(diameter_std_m)) {
     if (why) *why = "the diameter noise must be > 0 and finite";
@@ -35,6 +39,14 @@ bool LandmarkSlamOptions::Validate(std::string* why) const {
   if (!(landmark_prior_std_m >= 0) || !std::isfinite(landmark_prior_std_m) ||
       !landmark_prior_mean_m.allFinite()) {
     if (why) *why = "the landmark prior std must be >= 0 and the mean finite";
+    return false;
+  }
+  if (!(landmark_density_per_m2 >= 0) || !std::isfinite(landmark_density_per_m2)) {
+    if (why) *why = "the landmark density must be >= 0 and finite";
+    return false;
+  }
+  if (landmark_density_per_m2 > 0 && landmark_prior_std_m > 0) {
+    if (why) *why = "give either a Gaussian landmark prior (std) or a landmark density, not both";
     return false;
   }
   if (held_poses < 0) {
@@ -221,6 +233,7 @@ LandmarkSlamResult LandmarkSlam::Solve(const LandmarkDataset& data,
   LandmarkSlamResult result;
   result.summary = solved.summary;
   result.evidence = solved.evidence;
+  result.evidence.log_evidence += double(landmarks.size()) * options_.LogLandmarkDensity();
   result.num_sightings_used = used;
   result.initialisation_time_s = initialisation_time_s;
   result.initialisation_stages = staged.initialisation_stages;

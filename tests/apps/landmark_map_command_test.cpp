@@ -157,6 +157,9 @@ TEST(LandmarkMapCommand, UnknownAssociationComparesWithTheIds) {
   EXPECT_EQ(RunOslam(common + " --evaluation fast").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --track-gate 0").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --landmark-prior-std 0").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --landmark-density 0").exit_code, 2);  // no location prior
+  EXPECT_EQ(RunOslam(common + " --landmark-density 1e-4 --landmark-prior-std 50").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --landmark-prior-std 50").exit_code, 0);  // the Gaussian instead
   EXPECT_EQ(RunOslam(common + " --min-track 0").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --joint-screen -1").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --joint-screen 0").exit_code, 0);
@@ -184,6 +187,10 @@ TEST(LandmarkMapCommand, BadInputAndUsage) {
   EXPECT_EQ(RunOslam("map --landmarks " + kData + "gtsam_small.txt --format csv -o x").exit_code,
             2);
   EXPECT_EQ(RunOslam("map --landmarks " + kData + "gtsam_small.txt --landmark-prior-std -1 -o " +
+                     dir.Path("o.json"))
+                .exit_code,
+            2);
+  EXPECT_EQ(RunOslam("map --landmarks " + kData + "gtsam_small.txt --landmark-density -1 -o " +
                      dir.Path("o.json"))
                 .exit_code,
             2);

@@ -155,13 +155,19 @@ inline LandmarkDataset SimulateExcursion(unsigned seed, double heading_bias_rad,
   return data;
 }
 
-// Target options for these drives: a location prior centred on the block,
-// and converged re-solves for the exact evaluation.
-inline LandmarkTargetOptions DriveTargetOptions(LandmarkEvaluationMode mode) {
+// Target options for these drives: the default location prior (a density)
+// or a Gaussian one centred on the block, and converged re-solves for the
+// exact evaluation.
+enum class DrivePrior { kDensity, kGaussian };
+inline LandmarkTargetOptions DriveTargetOptions(LandmarkEvaluationMode mode,
+                                                DrivePrior prior = DrivePrior::kDensity) {
   LandmarkTargetOptions options;
   options.mode = mode;
-  options.slam.landmark_prior_std_m = 50.0;
-  options.slam.landmark_prior_mean_m = Eigen::Vector2d(18, 12);
+  if (prior == DrivePrior::kGaussian) {
+    options.slam.landmark_density_per_m2 = 0;
+    options.slam.landmark_prior_std_m = 50.0;
+    options.slam.landmark_prior_mean_m = Eigen::Vector2d(18, 12);
+  }
   options.proposal_iterations = 50;  // "exact": converged re-solves
   return options;
 }

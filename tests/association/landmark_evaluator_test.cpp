@@ -22,6 +22,7 @@
 namespace oslam {
 namespace {
 
+using testing::DrivePrior;
 using testing::DriveTargetOptions;
 using testing::SimulateDrive;
 
@@ -101,15 +102,16 @@ TEST(LandmarkEvaluatorTest, LocalEvaluationRanksMergesLikeExact) {
 // With trunk diameters measured, the closed-form merge score carries their
 // part of the evidence: it matches the converged re-solve on every nearby
 // pair (true merges within a fraction of a nat), as without diameters.
-TEST(LandmarkEvaluatorTest, MarginalMergeScoresDiametersLikeExact) {
+// Under either location prior (the closed form has a term for each).
+void CheckMarginalMergeScoresDiametersLikeExact(DrivePrior prior) {
   LandmarkDataset data = SimulateDrive(4, nullptr);
   std::mt19937 rng(2);
   std::normal_distribution<double> normal(0.0, 1.0);
   for (LandmarkSighting& s : data.sightings)
     s.diameter_m = 0.2 + 0.04 * (s.landmark % 7) + 0.05 * normal(rng);
   LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};
-  LandmarkEvaluator exact(target, DriveTargetOptions(LandmarkEvaluationMode::kExact));
-  LandmarkEvaluator marginal(target, DriveTargetOptions(LandmarkEvaluationMode::kMarginal));
+  LandmarkEvaluator exact(target, DriveTargetOptions(LandmarkEvaluationMode::kExact, prior));
+  LandmarkEvaluator marginal(target, DriveTargetOptions(LandmarkEvaluationMode::kMarginal, prior));
   const AssociationState separate = Separate(target.tracks.size());
   const EvaluationPtr exact_start = exact.Refine(separate, nullptr);
   const EvaluationPtr marginal_start = marginal.Refine(separate, nullptr);
@@ -147,16 +149,24 @@ TEST(LandmarkEvaluatorTest, MarginalMergeScoresDiametersLikeExact) {
   EXPECT_LT(worst_true, 0.5);
 }
 
+TEST(LandmarkEvaluatorTest, MarginalMergeScoresDiametersLikeExact) {
+  CheckMarginalMergeScoresDiametersLikeExact(DrivePrior::kDensity);
+}
+
+TEST(LandmarkEvaluatorTest, MarginalMergeScoresLikeExactUnderAGaussianPrior) {
+  CheckMarginalMergeScoresDiametersLikeExact(DrivePrior::kGaussian);
+}
+
 // Several merges scored at once in closed form (JointMergeDelta): one pair
 // as the single closed-form merge; every true merge of the drive at once
 // (two laps, so loop closures that bend the trajectory) close to the
 // converged exact re-solve of that state, and far above any state that
 // also joins two different trees.
-TEST(LandmarkEvaluatorTest, JointMergeDeltaScoresSeveralMergesAtOnce) {
+void CheckJointMergeDeltaScoresSeveralMergesAtOnce(DrivePrior prior) {
   const LandmarkDataset data = SimulateDrive(4, nullptr);
   LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};
-  LandmarkEvaluator exact(target, DriveTargetOptions(LandmarkEvaluationMode::kExact));
-  LandmarkEvaluator marginal(target, DriveTargetOptions(LandmarkEvaluationMode::kMarginal));
+  LandmarkEvaluator exact(target, DriveTargetOptions(LandmarkEvaluationMode::kExact, prior));
+  LandmarkEvaluator marginal(target, DriveTargetOptions(LandmarkEvaluationMode::kMarginal, prior));
   const AssociationState separate = Separate(target.tracks.size());
   const EvaluationPtr start = marginal.Refine(separate, nullptr);
   const EvaluationPtr exact_start = exact.Refine(separate, nullptr);
@@ -207,6 +217,14 @@ TEST(LandmarkEvaluatorTest, JointMergeDeltaScoresSeveralMergesAtOnce) {
   // Only at the reference, and only for groups of two or more.
   EXPECT_FALSE(marginal.JointMergeDelta(truth, {{0, 1}}, &all));
   EXPECT_FALSE(marginal.JointMergeDelta(separate, {{first[0]}}, &all));
+}
+
+TEST(LandmarkEvaluatorTest, JointMergeDeltaScoresSeveralMergesAtOnce) {
+  CheckJointMergeDeltaScoresSeveralMergesAtOnce(DrivePrior::kDensity);
+}
+
+TEST(LandmarkEvaluatorTest, JointMergeDeltaScoresSeveralMergesAtOnceUnderAGaussianPrior) {
+  CheckJointMergeDeltaScoresSeveralMergesAtOnce(DrivePrior::kGaussian);
 }
 
 // Two tracks seen from one pose (two trees in one scan).
@@ -371,7 +389,10 @@ TEST(LandmarkEvaluatorTest, RejectsInvalidOptions) {
   const LandmarkDataset data = SimulateDrive(3, nullptr);
   LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};
   LandmarkTargetOptions options = DriveTargetOptions(LandmarkEvaluationMode::kLocal);
-  options.slam.landmark_prior_std_m = 0;  // a flat prior: counts of landmarks do not compare
+  options.slam.landmark_density_per_m2 = 0;  // a flat prior: counts of landmarks do not compare
+  EXPECT_THROW(LandmarkEvaluator(target, options), Error);
+  options.slam.landmark_density_per_m2 = 1e-3;
+  options.slam.landmark_prior_std_m = 50;  // two location priors
   EXPECT_THROW(LandmarkEvaluator(target, options), Error);
   std::string why;
   options = DriveTargetOptions(LandmarkEvaluationMode::kLocal);

@@ -231,6 +231,38 @@ TEST(LandmarkSlamTest, EvidencePrefersTheTrueAssociation) {
   EXPECT_EQ(wrong_split.landmarks.size(), right.landmarks.size() + 1);
 }
 
+// A location prior of constant density moves nothing: the solution is the
+// flat prior's, and each landmark adds log(density) to the evidence. A
+// Gaussian prior pulls the landmarks toward its mean, the more the farther
+// they are (here centred 300 m off, as a map's far side is from its centre).
+TEST(LandmarkSlamTest, ALandmarkDensityAddsToTheEvidenceAndMovesNothing) {
+  const World world = SimulateWorld(7);
+  const std::vector<int> truth = GivenAssociation(world.data);
+  const LandmarkSlamResult flat = LandmarkSlam().Solve(world.data, truth);
+  LandmarkSlamOptions with_density;
+  with_density.landmark_density_per_m2 = 1e-3;
+  const LandmarkSlamResult dense = LandmarkSlam(with_density).Solve(world.data, truth);
+  ASSERT_TRUE(flat.evidence.valid && dense.evidence.valid);
+  EXPECT_NEAR(dense.evidence.log_evidence,
+              flat.evidence.log_evidence + double(flat.landmarks.size()) * std::log(1e-3), 1e-6);
+  EXPECT_LT(PositionRmse(dense.trajectory, flat.trajectory), 1e-9);
+  for (size_t j = 0; j < flat.landmarks.size(); ++j)
+    EXPECT_LT((dense.landmarks[j].position_m - flat.landmarks[j].position_m).norm(), 1e-9);
+
+  LandmarkSlamOptions gaussian;
+  gaussian.landmark_prior_std_m = 30.0;
+  gaussian.landmark_prior_mean_m = Eigen::Vector2d(300, 0);
+  const LandmarkSlamResult pulled = LandmarkSlam(gaussian).Solve(world.data, truth);
+  EXPECT_GT(PositionRmse(pulled.trajectory, flat.trajectory), 0.1);
+
+  std::string why;
+  with_density.landmark_prior_std_m = 30.0;  // two location priors
+  EXPECT_FALSE(with_density.Validate(&why));
+  with_density.landmark_prior_std_m = 0;
+  with_density.landmark_density_per_m2 = std::nan("");
+  EXPECT_FALSE(with_density.Validate(&why));
+}
+
 TEST(LandmarkSlamTest, WarmStartLeftOutSightingsAndPrefix) {
   const World world = SimulateWorld(7);
   LandmarkSlam slam;
