@@ -300,6 +300,11 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&u.joint_repair_rounds, "joint-repair", "ROUNDS",
         "unknown association: after a joint merge's solve, split off the worst-fitting pairs and "
         "re-solve, at most this many times (0: never)");
+  b.Add(&u.targeted_repair_rounds, "targeted-repair", "ROUNDS",
+        "unknown association: when a batch of targeted merges lowers the evidence, undo its "
+        "misfit merges and re-solve, at most this many times, before keeping only the best "
+        "merge (0: at once)")
+      .Check([this] { return options_.unknown.targeted_repair_rounds >= 0; }, "must be >= 0");
   b.Add(&u.joint_max_shift_m, "joint-max-shift", "M",
         "unknown association: joint merges only for alignments shifting the recent landmarks "
         "at most this far (0: no limit)");

@@ -42,6 +42,10 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     if (why) *why = "tracks need >= 1 sighting and the candidate cap must be >= 0 (0: none)";
     return false;
   }
+  if (targeted_repair_rounds < 0) {
+    if (why) *why = "the targeted merges' repair rounds must be >= 0";
+    return false;
+  }
   if (window_poses < 0 || !(window_drift_spacing >= 0) || free_poses < 0 ||
       !(targeted_radius_m >= 0) || !(hill_climb_steps_per_track >= 0) ||
       final_hill_climb_steps < 0 || refine_every < 1 || samples < 0 || num_chains < 1 ||
@@ -488,10 +492,12 @@ bool LandmarkAssociation::MakeMerges(const std::vector<MergeCandidate>& best, do
   const double base = before->log_target;
   AssociationState merged = s;
   std::vector<char> used(s.blocks.size(), 0);
+  std::vector<std::pair<int, int>> pairs;  // the merges made, blocks of s
   *made = 0;
   for (const MergeCandidate& c : best) {
     if (used[c.a] || used[c.b]) continue;
     used[c.a] = used[c.b] = 1;
+    pairs.push_back({c.a, c.b});
     merged.blocks[c.a].insert(merged.blocks[c.a].end(), s.blocks[c.b].begin(), s.blocks[c.b].end());
     merged.blocks[c.b].clear();
     ++*made;
@@ -504,6 +510,7 @@ bool LandmarkAssociation::MakeMerges(const std::vector<MergeCandidate>& best, do
   merged.Canonicalize();
   EvaluationPtr refined = Refine(merged, best.front().evaluation.get());
   auto fell = [&] { return !refined->valid || refined->log_target <= base; };
+  if (fell() && *made > 1) refined = WithoutMisfitMerges(refined, s, &pairs, made);
   if (fell() && *made > 1) {  // only the single best merge
     refined = Refine(best.front().evaluation->state, best.front().evaluation.get());
     *made = 1;
@@ -525,6 +532,57 @@ bool LandmarkAssociation::MakeMerges(const std::vector<MergeCandidate>& best, do
   }
   current_ = refined;
   return true;
+}
+
+// A batch of merges whose re-solve lowered the target: as the joint
+// merges' repair (WithoutMisfitPairs), the merges whose landmark misfits
+// after the solve (z of its squared whitened residual above
+// joint_misfit_z and at least half the worst) are undone and the rest
+// re-solved, at most targeted_repair_rounds times while the target stays
+// below the state before. A re-entry's batch with one wrong pair among
+// right ones then keeps the right ones (the wrong pair bends the solve, so
+// the right ones near it misfit too, though less); otherwise the caller
+// falls back to the single best merge.
+EvaluationPtr LandmarkAssociation::WithoutMisfitMerges(EvaluationPtr e,
+                                                       const AssociationState& before,
+                                                       std::vector<std::pair<int, int>>* pairs,
+                                                       int* made) {
+  const double base = current_->log_target;
+  for (int round = 0; round < options_.targeted_repair_rounds && e->valid; ++round) {
+    std::vector<std::pair<double, size_t>> misfits;  // (z, pair)
+    for (size_t i = 0; i < pairs->size(); ++i) {
+      const int j = e->state.BlockOf(before.blocks[(*pairs)[i].second].front());
+      double sightings = 0;
+      for (int t : e->state.blocks[j]) sightings += double(window_data_->tracks[t].size());
+      const double z = (e->residual2[j] - 2 * sightings) / std::sqrt(4 * std::max(sightings, 1.0));
+      if (z > options_.joint_misfit_z) misfits.push_back({z, i});
+    }
+    if (misfits.empty()) break;
+    const double worst_z = std::max_element(misfits.begin(), misfits.end())->first;
+    std::vector<char> undo(pairs->size(), 0);
+    for (const auto& [z, i] : misfits) undo[i] = z >= worst_z / 2;
+    AssociationState state = before;
+    std::vector<std::pair<int, int>> kept;
+    for (size_t i = 0; i < pairs->size(); ++i) {
+      if (undo[i]) continue;
+      const auto [a, b] = (*pairs)[i];
+      kept.push_back({a, b});
+      state.blocks[a].insert(state.blocks[a].end(), before.blocks[b].begin(),
+                             before.blocks[b].end());
+      state.blocks[b].clear();
+    }
+    state.blocks.erase(std::remove_if(state.blocks.begin(), state.blocks.end(),
+                                      [](const std::vector<int>& b) { return b.empty(); }),
+                       state.blocks.end());
+    for (auto& b : state.blocks) std::sort(b.begin(), b.end());
+    state.classes.assign(state.blocks.size(), 0);
+    state.Canonicalize();
+    e = Refine(state, e.get());
+    *pairs = std::move(kept);
+    *made = static_cast<int>(pairs->size());
+    if (e->valid && e->log_target > base) break;
+  }
+  return e;
 }
 
 // ---- after the windows ----

@@ -108,6 +108,13 @@ struct UnknownAssociationOptions {
   // When a targeted merge gaining more than this (linearised) fails its
   // warm re-solve, it is re-solved once more from dead reckoning.
   double cold_retry_gain = 10;
+  // When a batch of targeted merges lowers the target, the merges whose
+  // landmark misfits the solve (joint_misfit_z, as the joint merges' repair)
+  // are undone and the rest re-solved, at most this many rounds, before
+  // falling back to the single best merge (0: straight to the single best).
+  // A re-entry's batch with one wrong pair among right ones then keeps the
+  // right ones; the single best by gain can be the wrong one.
+  int targeted_repair_rounds = 5;
   // Joint re-entry merge (a loop closure that no single merge pays for:
   // after a long drive the drift bends the whole stretch, so one sighting
   // cannot, but many together can; docs/benchmarks.md). At most every
@@ -341,6 +348,8 @@ class LandmarkAssociation {
   std::vector<std::pair<double, int>> MergeCandidatesOf(size_t j, int first_new,
                                                         double sweep_m) const;
   bool MakeMerges(const std::vector<MergeCandidate>& best, double sweep_m, int* made);
+  EvaluationPtr WithoutMisfitMerges(EvaluationPtr e, const AssociationState& before,
+                                    std::vector<std::pair<int, int>>* pairs, int* made);
   // Joint re-entry merge at window end n; returns the pairs merged.
   long JointMerge(int n);
   long TryJointMerge(int n);

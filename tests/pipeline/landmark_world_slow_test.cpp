@@ -21,8 +21,11 @@ namespace {
 // 2,360 poses the robot re-enters streets last seen 1.3 km before, with a
 // 0.32 rad heading correction. RANSAC pairs every re-seen tree rightly, but
 // the correction spread over the last 170 or 340 m only ends below the state
-// before; spread along the whole loop it closes the loop.
-TEST(LandmarkWorldSlowTest, TheLoopAnchorClosesAKilometreLoop) {
+// before; spread along the whole loop it closes the loop. (So it was under
+// the Gaussian location prior, whose pull bent the stretch: without the loop
+// anchor P 0.992 R 0.875. Under the density prior the loop closes either
+// way: P 0.9994 R 0.9991 both.)
+TEST(LandmarkWorldSlowTest, AKilometreLoopCloses) {
   LandmarkWorldOptions world_options;
   world_options.num_poses = 5000;
   world_options.num_landmarks = 800;
@@ -41,15 +44,15 @@ TEST(LandmarkWorldSlowTest, TheLoopAnchorClosesAKilometreLoop) {
   std::printf("without the loop anchor: P %.4f R %.4f, %zu landmarks; with: P %.4f R %.4f, %zu\n",
               pa.precision, pa.recall, a.solution.landmarks.size(), pb.precision, pb.recall,
               b.solution.landmarks.size());
-  // Measured: without P 0.992 R 0.875, 532 landmarks; with P 0.9994
-  // R 0.9991, 474 (the file's ids: 475, clutter sightings one each).
-  EXPECT_LT(pa.recall, 0.95);
+  // Measured: P 0.9994 R 0.9991 with and without, 474 landmarks (the
+  // file's ids: 475, clutter sightings one each).
+  EXPECT_GT(pa.recall, 0.99);
   EXPECT_GT(pb.recall, 0.99);
   EXPECT_GT(pb.precision, 0.99);
   const std::set<int> file_landmarks(truth.begin(), truth.end());
   EXPECT_NEAR(static_cast<double>(b.solution.landmarks.size()),
               static_cast<double>(file_landmarks.size()), 0.02 * file_landmarks.size());
-  EXPECT_GT(b.log_target, a.log_target);
+  EXPECT_GE(b.log_target, a.log_target - 1e-3);
 }
 
 // The first 1,500 poses of the 10,000-pose world of docs/benchmarks.md: at
@@ -84,12 +87,53 @@ TEST(LandmarkWorldSlowTest, AFewTreesSeenAgainAfterDriftAreMergedTogether) {
       "ATE without the screen %.2f m, with it %.2f m (the file's association %.2f m); "
       "with: P %.4f R %.4f\n",
       ate_a, ate_b, ate_file, pb.precision, pb.recall);
-  // Measured: 9.97 m without, 1.26 m with (the file's association 1.26 m).
-  EXPECT_GT(ate_a, 5.0);
+  // Measured under the Gaussian location prior: 9.97 m without, 1.26 m with
+  // (the file's association 1.26 m). Under the density prior 2.33 m both,
+  // the file's association's (the screen's value is not shown here any more).
   EXPECT_LT(ate_b, 1.2 * ate_file);
   EXPECT_GT(pb.precision, 0.99);
   EXPECT_GT(pb.recall, 0.99);
-  EXPECT_GT(b.log_target, a.log_target);
+  EXPECT_GE(b.log_target, a.log_target - 1e-3);
+}
+
+// The 20,000-pose world's first re-entry (poses 935-970 onto trees seen at
+// 692-730): a window's batch of merges holds one pair of two different trees,
+// which sinks the batch's re-solve; the single best merge by gain is that
+// wrong pair, and the map stays folded from there. Undoing the batch's
+// misfit merges (targeted_repair_rounds) keeps the right ones.
+TEST(LandmarkWorldSlowTest, ABatchOfMergesKeepsItsRightPairsWhenOneIsWrong) {
+  LandmarkWorldOptions world_options;
+  world_options.num_poses = 20000;
+  world_options.num_landmarks = 2000;
+  world_options.blocks = 14;
+  const LandmarkWorld world = SimulateLandmarkWorld(world_options);
+  const int num_poses = 1300;
+  const LandmarkDataset data = PosePrefix(world.data, num_poses);
+  const std::vector<Pose2> truth(world.true_trajectory.begin(),
+                                 world.true_trajectory.begin() + num_poses);
+  std::vector<int> ids;
+  for (const LandmarkSighting& z : data.sightings) ids.push_back(z.landmark);
+  UnknownAssociationOptions unrepaired;
+  unrepaired.targeted_repair_rounds = 0;
+  const UnknownAssociationResult a = SolveUnknownAssociation(data, unrepaired);
+  const UnknownAssociationResult b = SolveUnknownAssociation(data, {});
+  const LandmarkSlamResult file =
+      LandmarkSlam(b.slam_options).Solve(WithNoiseScales(data, b.noise_scales), ids);
+  const double ate_a = TrajectoryRmse(a.solution.trajectory, truth);
+  const double ate_b = TrajectoryRmse(b.solution.trajectory, truth);
+  const double ate_file = TrajectoryRmse(file.trajectory, truth);
+  const PairwiseAgreement pa = ComparePairwise(a.association, ids);
+  const PairwiseAgreement pb = ComparePairwise(b.association, ids);
+  std::printf(
+      "unrepaired: P %.4f R %.4f, ATE %.2f m; repaired: P %.4f R %.4f, ATE %.2f m (the file's "
+      "association %.2f m)\n",
+      pa.precision, pa.recall, ate_a, pb.precision, pb.recall, ate_b, ate_file);
+  // Measured: unrepaired P 0.995 R 0.888, 5.26 m; repaired the true
+  // association, 4.32 m (the file's association 4.36 m).
+  EXPECT_LT(pa.recall, 0.99);
+  EXPECT_GT(pb.precision, 0.999);
+  EXPECT_GT(pb.recall, 0.999);
+  EXPECT_LT(ate_b, 1.05 * ate_file);
 }
 
 }  // namespace
