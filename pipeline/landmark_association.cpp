@@ -490,25 +490,15 @@ bool LandmarkAssociation::MakeMerges(const std::vector<MergeCandidate>& best, do
   const EvaluationPtr before = current_;
   const AssociationState& s = before->state;
   const double base = before->log_target;
-  AssociationState merged = s;
   std::vector<char> used(s.blocks.size(), 0);
   std::vector<std::pair<int, int>> pairs;  // the merges made, blocks of s
-  *made = 0;
   for (const MergeCandidate& c : best) {
     if (used[c.a] || used[c.b]) continue;
     used[c.a] = used[c.b] = 1;
     pairs.push_back({c.a, c.b});
-    merged.blocks[c.a].insert(merged.blocks[c.a].end(), s.blocks[c.b].begin(), s.blocks[c.b].end());
-    merged.blocks[c.b].clear();
-    ++*made;
   }
-  merged.blocks.erase(std::remove_if(merged.blocks.begin(), merged.blocks.end(),
-                                     [](const std::vector<int>& b) { return b.empty(); }),
-                      merged.blocks.end());
-  merged.classes.assign(merged.blocks.size(), 0);
-  for (auto& b : merged.blocks) std::sort(b.begin(), b.end());
-  merged.Canonicalize();
-  EvaluationPtr refined = Refine(merged, best.front().evaluation.get());
+  *made = static_cast<int>(pairs.size());
+  EvaluationPtr refined = Refine(WithBlockPairsMerged(s, pairs), best.front().evaluation.get());
   auto fell = [&] { return !refined->valid || refined->log_target <= base; };
   if (fell() && *made > 1) refined = WithoutMisfitMerges(refined, s, &pairs, made);
   if (fell() && *made > 1) {  // only the single best merge
@@ -534,6 +524,32 @@ bool LandmarkAssociation::MakeMerges(const std::vector<MergeCandidate>& best, do
   return true;
 }
 
+// `s` with block b of each pair (a, b) moved into block a, canonical.
+AssociationState LandmarkAssociation::WithBlockPairsMerged(
+    const AssociationState& s, const std::vector<std::pair<int, int>>& pairs) {
+  AssociationState merged = s;
+  for (const auto& [a, b] : pairs) {
+    merged.blocks[a].insert(merged.blocks[a].end(), s.blocks[b].begin(), s.blocks[b].end());
+    merged.blocks[b].clear();
+  }
+  merged.blocks.erase(std::remove_if(merged.blocks.begin(), merged.blocks.end(),
+                                     [](const std::vector<int>& b) { return b.empty(); }),
+                      merged.blocks.end());
+  for (auto& b : merged.blocks) std::sort(b.begin(), b.end());
+  merged.classes.assign(merged.blocks.size(), 0);
+  merged.Canonicalize();
+  return merged;
+}
+
+// How badly landmark j of `e` fits its sightings in the window: the squared
+// whitened residual r2 of its n sightings standardised as
+// (r2 - 2n) / sqrt(4n), the chi-square's mean and spread.
+double LandmarkAssociation::MisfitZ(const StateEvaluation& e, int j) const {
+  double sightings = 0;
+  for (int t : e.state.blocks[j]) sightings += double(window_data_->tracks[t].size());
+  return (e.residual2[j] - 2 * sightings) / std::sqrt(4 * std::max(sightings, 1.0));
+}
+
 // A batch of merges whose re-solve lowered the target: as the joint
 // merges' repair (WithoutMisfitPairs), the merges whose landmark misfits
 // after the solve (z of its squared whitened residual above
@@ -551,33 +567,17 @@ EvaluationPtr LandmarkAssociation::WithoutMisfitMerges(EvaluationPtr e,
   for (int round = 0; round < options_.targeted_repair_rounds && e->valid; ++round) {
     std::vector<std::pair<double, size_t>> misfits;  // (z, pair)
     for (size_t i = 0; i < pairs->size(); ++i) {
-      const int j = e->state.BlockOf(before.blocks[(*pairs)[i].second].front());
-      double sightings = 0;
-      for (int t : e->state.blocks[j]) sightings += double(window_data_->tracks[t].size());
-      const double z = (e->residual2[j] - 2 * sightings) / std::sqrt(4 * std::max(sightings, 1.0));
+      const double z = MisfitZ(*e, e->state.BlockOf(before.blocks[(*pairs)[i].second].front()));
       if (z > options_.joint_misfit_z) misfits.push_back({z, i});
     }
     if (misfits.empty()) break;
     const double worst_z = std::max_element(misfits.begin(), misfits.end())->first;
     std::vector<char> undo(pairs->size(), 0);
     for (const auto& [z, i] : misfits) undo[i] = z >= worst_z / 2;
-    AssociationState state = before;
     std::vector<std::pair<int, int>> kept;
-    for (size_t i = 0; i < pairs->size(); ++i) {
-      if (undo[i]) continue;
-      const auto [a, b] = (*pairs)[i];
-      kept.push_back({a, b});
-      state.blocks[a].insert(state.blocks[a].end(), before.blocks[b].begin(),
-                             before.blocks[b].end());
-      state.blocks[b].clear();
-    }
-    state.blocks.erase(std::remove_if(state.blocks.begin(), state.blocks.end(),
-                                      [](const std::vector<int>& b) { return b.empty(); }),
-                       state.blocks.end());
-    for (auto& b : state.blocks) std::sort(b.begin(), b.end());
-    state.classes.assign(state.blocks.size(), 0);
-    state.Canonicalize();
-    e = Refine(state, e.get());
+    for (size_t i = 0; i < pairs->size(); ++i)
+      if (!undo[i]) kept.push_back((*pairs)[i]);
+    e = Refine(WithBlockPairsMerged(before, kept), e.get());
     *pairs = std::move(kept);
     *made = static_cast<int>(pairs->size());
     if (e->valid && e->log_target > base) break;

@@ -350,6 +350,9 @@ class LandmarkAssociation {
   bool MakeMerges(const std::vector<MergeCandidate>& best, double sweep_m, int* made);
   EvaluationPtr WithoutMisfitMerges(EvaluationPtr e, const AssociationState& before,
                                     std::vector<std::pair<int, int>>* pairs, int* made);
+  static AssociationState WithBlockPairsMerged(const AssociationState& s,
+                                               const std::vector<std::pair<int, int>>& pairs);
+  double MisfitZ(const StateEvaluation& e, int j) const;
   // Joint re-entry merge at window end n; returns the pairs merged.
   long JointMerge(int n);
   long TryJointMerge(int n);
@@ -367,7 +370,7 @@ class LandmarkAssociation {
   bool WorthATry(const AssociationState& s, JointAlignment* alignment) const;
   EvaluationPtr TryAnchor(const StateEvaluation& before, const JointAlignment& alignment,
                           const std::vector<double>& driven, int anchor, int n);
-  EvaluationPtr WithoutMisfitPairs(EvaluationPtr e, const JointAlignment& alignment, int n);
+  EvaluationPtr WithoutMisfitPairs(EvaluationPtr e, const JointAlignment& alignment);
   AssociationState ReleasedAndMerged(const AssociationState& s, const JointAlignment& alignment,
                                      int anchor) const;
   int LoopStart(const JointAlignment& alignment) const;

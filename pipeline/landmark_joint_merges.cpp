@@ -393,7 +393,7 @@ EvaluationPtr LandmarkAssociation::TryAnchor(const StateEvaluation& before,
   seed.solution = std::move(moved);
   const EvaluationPtr e = evaluator_->Trial(seed.state, &seed);
   ++result_.joint_tries;
-  const EvaluationPtr repaired = e->valid ? WithoutMisfitPairs(e, alignment, n) : e;
+  const EvaluationPtr repaired = e->valid ? WithoutMisfitPairs(e, alignment) : e;
   const Rigid2& rigid = alignment.match.rigid;
   Say(Format("joint merge at %.0f poses: %.0f of %.0f recent landmarks onto old ones "
              "(score %.1f, rotation %.3f rad, shift %.1f m),",
@@ -421,7 +421,7 @@ EvaluationPtr LandmarkAssociation::TryAnchor(const StateEvaluation& before,
 // and the problem re-solved, for at most joint_repair_rounds rounds. When more than a quarter of
 // the pairs misfit, the alignment itself is wrong and the try is left as it is.
 EvaluationPtr LandmarkAssociation::WithoutMisfitPairs(EvaluationPtr e,
-                                                      const JointAlignment& alignment, int n) {
+                                                      const JointAlignment& alignment) {
   split_pairs_ = 0;
   std::vector<bool> split(alignment.match.pairs.size(), false);
   for (int round = 0; round < options_.joint_repair_rounds && e->valid; ++round) {
@@ -429,11 +429,7 @@ EvaluationPtr LandmarkAssociation::WithoutMisfitPairs(EvaluationPtr e,
     for (size_t i = 0; i < alignment.match.pairs.size(); ++i) {
       if (split[i]) continue;
       const int t = alignment.recent[alignment.match.pairs[i].first].tracks.front();
-      const int j = e->state.BlockOf(t);
-      double sightings = 0;
-      for (int u : e->state.blocks[j])
-        for (int k : result_.tracks[u]) sightings += data_->sightings[k].pose < n;
-      const double z = (e->residual2[j] - 2 * sightings) / std::sqrt(4 * std::max(sightings, 1.0));
+      const double z = MisfitZ(*e, e->state.BlockOf(t));
       if (z > options_.joint_misfit_z) misfits.push_back({z, static_cast<int>(i)});
     }
     if (misfits.empty() || 4 * misfits.size() > alignment.match.pairs.size()) break;
