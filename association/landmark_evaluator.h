@@ -49,8 +49,8 @@ struct LandmarkTargetOptions {
   // The density of a 100 m Gaussian prior at its centre, 1 / (2 pi 100^2):
   // a landmark per 6.3 hectares. Every merge pays log(1 / density) for the
   // landmark it saves, less what it costs in fit; a higher density makes
-  // merges dearer (Victoria Park with ids hidden: 161 landmarks for 151 at
-  // this density, 171 at one landmark per 410 m^2, docs/benchmarks.md).
+  // merges dearer (Victoria Park with ids hidden: 160 landmarks for 151 at
+  // this density, 164 and recall 0.984 at 1e-3, docs/benchmarks.md).
   static constexpr double kDefaultLandmarkDensityPerM2 = 1.5915494309189535e-05;
   LandmarkTargetOptions() { slam.landmark_density_per_m2 = kDefaultLandmarkDensityPerM2; }
   // The full solves (Refine, and exact proposals with fewer iterations).
