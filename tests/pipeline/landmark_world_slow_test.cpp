@@ -55,18 +55,20 @@ TEST(LandmarkWorldSlowTest, AKilometreLoopCloses) {
   EXPECT_GE(b.log_target, a.log_target - 1e-3);
 }
 
-// The first 1,500 poses of the 10,000-pose world of docs/benchmarks.md: at
-// about 1,300 poses the robot crosses streets last seen 1 km before, 15 m
-// off, and sees five trees again. Too few for the RANSAC floors, and each
-// single merge has rivals of nearly equal gain; judged together by their
+// The first 3,000 poses of the 10,000-pose world of docs/benchmarks.md: a
+// few trees seen again after drift, too few for the RANSAC floors, and each
+// single merge with rivals of nearly equal gain; judged together by their
 // joint compatibility (the screen of small re-entries) they close the loop.
+// (Under the Gaussian location prior the first such re-entry came at about
+// 1,300 poses; under the density prior the first 1,500 poses need no screen,
+// the first 3,000 do.)
 TEST(LandmarkWorldSlowTest, AFewTreesSeenAgainAfterDriftAreMergedTogether) {
   LandmarkWorldOptions world_options;
   world_options.num_poses = 10000;
   world_options.num_landmarks = 1200;
   world_options.blocks = 10;
   const LandmarkWorld world = SimulateLandmarkWorld(world_options);
-  const int num_poses = 1500;
+  const int num_poses = 3000;
   const LandmarkDataset data = PosePrefix(world.data, num_poses);
   const std::vector<Pose2> truth(world.true_trajectory.begin(),
                                  world.true_trajectory.begin() + num_poses);
@@ -87,13 +89,17 @@ TEST(LandmarkWorldSlowTest, AFewTreesSeenAgainAfterDriftAreMergedTogether) {
       "ATE without the screen %.2f m, with it %.2f m (the file's association %.2f m); "
       "with: P %.4f R %.4f\n",
       ate_a, ate_b, ate_file, pb.precision, pb.recall);
-  // Measured under the Gaussian location prior: 9.97 m without, 1.26 m with
-  // (the file's association 1.26 m). Under the density prior 2.33 m both,
-  // the file's association's (the screen's value is not shown here any more).
+  const PairwiseAgreement pa = ComparePairwise(a.association, ids);
+  std::printf("without the screen: P %.4f R %.4f, %.2f m from the file's association's solve\n",
+              pa.precision, pa.recall, TrajectoryRmse(a.solution.trajectory, file.trajectory));
+  // Measured: without the screen P 0.9984 R 0.9937, ATE 9.25 m (9.3 m from
+  // the file's association's solve); with it the file's association, 1.35 m.
+  EXPECT_LT(pa.recall, 0.999);
+  EXPECT_GT(TrajectoryRmse(a.solution.trajectory, file.trajectory), 2.0);
   EXPECT_LT(ate_b, 1.2 * ate_file);
-  EXPECT_GT(pb.precision, 0.99);
-  EXPECT_GT(pb.recall, 0.99);
-  EXPECT_GE(b.log_target, a.log_target - 1e-3);
+  EXPECT_GT(pb.precision, 0.999);
+  EXPECT_GT(pb.recall, 0.999);
+  EXPECT_GT(b.log_target, a.log_target);
 }
 
 // The 20,000-pose world's first re-entry (poses 935-970 onto trees seen at
