@@ -177,9 +177,7 @@ TEST(LandmarkAssociationTest, JointMergeSplitsItsMisfitPairs) {
 // re-entry's true alignment has 6 to 11 pairs, all within 0.2 m, while
 // alignments shifted by a block collect 12 to 13 pairs at random distances
 // within the inlier radius. The alignment weighted by fit closes the loop;
-// so does the plain count under the density prior (under the Gaussian
-// prior, whose pull bent the recent stretch, RANSAC took a shifted one by
-// the count: recall 0.837), and so do the drift-bounded windows and the
+// on this drive so do the plain count, the drift-bounded windows and the
 // screen.
 TEST(LandmarkAssociationTest, ALoopInARepeatingGridClosesUnderEitherAlignmentRule) {
   LandmarkWorldOptions world_options;

@@ -21,10 +21,9 @@ namespace {
 // 2,360 poses the robot re-enters streets last seen 1.3 km before, with a
 // 0.32 rad heading correction. RANSAC pairs every re-seen tree rightly, but
 // the correction spread over the last 170 or 340 m only ends below the state
-// before; spread along the whole loop it closes the loop. (So it was under
-// the Gaussian location prior, whose pull bent the stretch: without the loop
-// anchor P 0.992 R 0.875. Under the density prior the loop closes either
-// way: P 0.9994 R 0.9991 both.)
+// before; spread along the whole loop it closes the loop. Under the default
+// density prior it closes without the loop anchor too (P 0.9994 R 0.9991
+// both), so this test checks the defaults only.
 TEST(LandmarkWorldSlowTest, AKilometreLoopCloses) {
   LandmarkWorldOptions world_options;
   world_options.num_poses = 5000;
@@ -59,9 +58,7 @@ TEST(LandmarkWorldSlowTest, AKilometreLoopCloses) {
 // few trees seen again after drift, too few for the RANSAC floors, and each
 // single merge with rivals of nearly equal gain; judged together by their
 // joint compatibility (the screen of small re-entries) they close the loop.
-// (Under the Gaussian location prior the first such re-entry came at about
-// 1,300 poses; under the density prior the first 1,500 poses need no screen,
-// the first 3,000 do.)
+// (The first 1,500 poses need no screen: 2.33 m from the truth either way.)
 TEST(LandmarkWorldSlowTest, AFewTreesSeenAgainAfterDriftAreMergedTogether) {
   LandmarkWorldOptions world_options;
   world_options.num_poses = 10000;
