@@ -297,6 +297,10 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&u.joint_recent_m, "joint-recent", "M",
         "unknown association: joint merges align the landmarks first seen in the last M metres "
         "driven onto older ones");
+  b.Add(&u.joint_ransac_threads, "threads", "N",
+        "unknown association: threads measuring the joint merges' RANSAC samples (0: one per "
+        "core; the same result for any N)")
+      .Check([this] { return options_.unknown.joint_ransac_threads >= 0; }, "must be >= 0");
   b.Add(&u.joint_repair_rounds, "joint-repair", "ROUNDS",
         "unknown association: after a joint merge's solve, split off the worst-fitting pairs and "
         "re-solve, at most this many times (0: never)");

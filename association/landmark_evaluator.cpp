@@ -71,7 +71,7 @@ LandmarkEvaluator::LandmarkEvaluator(const LandmarkTargetData& data,
                                      const LandmarkTargetOptions& options)
     : data_(data),
       options_(options),
-      full_(FullOptions(options)),
+      full_(std::make_unique<LandmarkSlam>(FullOptions(options))),
       step_(StepOptions(options)),
       trial_(FullOptions(options)) {
   std::string why;
@@ -146,7 +146,7 @@ EvaluationPtr LandmarkEvaluator::FullEvaluation(const AssociationState& state,
   LandmarkSlamResult warm;
   const bool use_warm = from != nullptr;
   if (use_warm) warm = WarmStart(*from);
-  LandmarkSlam& slam = refine ? full_ : solver == Solver::kStep ? step_ : trial_;
+  LandmarkSlam& slam = refine ? *full_ : solver == Solver::kStep ? step_ : trial_;
   const LandmarkSlamResult result =
       slam.Solve(data, Association(state), use_warm ? &warm : nullptr);
   ++solves_;
@@ -540,7 +540,7 @@ void LandmarkEvaluator::PrepareMerges(const std::vector<int>& blocks) {
     const std::vector<std::vector<int>> chunk(
         missing.begin() + first, missing.begin() + std::min(missing.size(), first + kChunk));
     std::vector<CovarianceRoot> roots;
-    if (!full_.solver().CovarianceRoots(chunk, &roots)) return;  // LDL': pairwise blocks
+    if (!full_->solver().CovarianceRoots(chunk, &roots)) return;  // LDL': pairwise blocks
     double bytes = 0;
     for (const CovarianceRoot& root : roots) bytes += double(root.bytes());
     if (root_bytes_ + bytes > kMaxRootBytes) {
@@ -564,7 +564,7 @@ bool LandmarkEvaluator::JointCovariance(int ka, int kb, Eigen::Matrix4d* sigma) 
     return true;
   }
   std::vector<Eigen::MatrixXd> blocks;
-  if (!full_.solver().MarginalCovariances({{ka, kb}}, &blocks) || blocks.size() != 1 ||
+  if (!full_->solver().MarginalCovariances({{ka, kb}}, &blocks) || blocks.size() != 1 ||
       blocks[0].rows() != 4)
     return false;
   *sigma = blocks[0];
@@ -614,6 +614,52 @@ void LandmarkEvaluator::SetReference(const EvaluationPtr& evaluation) {
     reference_blocks_[evaluation->state.blocks[j]] = static_cast<int>(j);
   block_cache_.clear();
   cache_.clear();
+}
+
+void LandmarkEvaluator::SwapWithStash() {
+  std::swap(full_, stash_.full);
+  std::swap(reference_, stash_.reference);
+  std::swap(reference_factorised_, stash_.factorised);
+  std::swap(reference_position_keys_, stash_.position_keys);
+  std::swap(last_refine_keys_, stash_.last_refine_keys);
+  std::swap(reference_blocks_, stash_.blocks);
+  std::swap(block_cache_, stash_.block_cache);
+  std::swap(cache_, stash_.cache);
+  std::swap(roots_, stash_.roots);
+  std::swap(root_bytes_, stash_.root_bytes);
+  std::swap(cross_covariances_, stash_.cross_covariances);
+}
+
+void LandmarkEvaluator::ForgetReference() {
+  reference_.reset();
+  reference_factorised_ = false;
+  reference_position_keys_.clear();
+  last_refine_keys_.clear();
+  reference_blocks_.clear();
+  block_cache_.clear();
+  cache_.clear();
+  roots_.clear();
+  root_bytes_ = 0;
+  cross_covariances_.clear();
+}
+
+void LandmarkEvaluator::StashReference() {
+  if (stash_.held) throw Error("landmark O-SLAM target: a reference is set aside already");
+  if (!stash_.full) stash_.full = std::make_unique<LandmarkSlam>(FullOptions(options_));
+  SwapWithStash();
+  ForgetReference();
+  stash_.held = true;
+}
+
+EvaluationPtr LandmarkEvaluator::RestoreReference() {
+  if (!stash_.held) throw Error("landmark O-SLAM target: no reference set aside");
+  SwapWithStash();
+  stash_.held = false;
+  // The dropped reference's values go; its solver stays for the next stash.
+  std::unique_ptr<LandmarkSlam> spare = std::move(stash_.full);
+  stash_ = StashedReference();
+  stash_.full = std::move(spare);
+  return reference_;
 }
 
 void LandmarkEvaluator::Remember(const EvaluationPtr& evaluation) {

@@ -125,6 +125,17 @@ class LandmarkEvaluator : public StateEvaluator {
   // from `from` when given (for the output map).
   LandmarkSlamResult Solve(const AssociationState& state, const StateEvaluation* from);
 
+  // Sets the reference aside with its factor and everything computed at it
+  // (marginal mode's covariances, the caches): the next Refine makes a new
+  // reference in a second solver, and RestoreReference brings this one
+  // back without a solve. For judging a state far from the current one in
+  // closed form and returning to the current one (a joint re-entry
+  // screen). One reference at a time is set aside.
+  void StashReference();
+  // The reference set aside becomes the reference again (the one made
+  // since is dropped); returns its evaluation. Only after StashReference.
+  EvaluationPtr RestoreReference();
+
  private:
   struct BlockValue {
     double log_evidence = 0, residual2 = 0;
@@ -147,7 +158,8 @@ class LandmarkEvaluator : public StateEvaluator {
 
   const LandmarkTargetData& data_;
   LandmarkTargetOptions options_;
-  LandmarkSlam full_, step_, trial_;
+  std::unique_ptr<LandmarkSlam> full_;  // Refine's solver: its factor is the reference's
+  LandmarkSlam step_, trial_;
   SparseSolver local_solver_;
   std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache_;
   // Local mode: the reference (last full solve) and L(b) at its trajectory.
@@ -190,6 +202,25 @@ class LandmarkEvaluator : public StateEvaluator {
   };
   std::unordered_map<std::pair<int, int>, Eigen::Matrix4d, KeyPairHash> cross_covariances_;
   static constexpr size_t kMaxCrossCovariances = 1 << 20;
+
+  // The members above that belong to a reference, set aside by
+  // StashReference (full: the second solver while none is).
+  struct StashedReference {
+    std::unique_ptr<LandmarkSlam> full;
+    EvaluationPtr reference;
+    bool factorised = false, held = false;
+    std::vector<int> position_keys, last_refine_keys;
+    std::unordered_map<std::vector<int>, int, BlockHash> blocks;
+    std::unordered_map<std::vector<int>, BlockValue, BlockHash> block_cache;
+    std::unordered_map<AssociationState, EvaluationPtr, AssociationStateHash> cache;
+    std::unordered_map<int, CovarianceRoot> roots;
+    double root_bytes = 0;
+    std::unordered_map<std::pair<int, int>, Eigen::Matrix4d, KeyPairHash> cross_covariances;
+  };
+  StashedReference stash_;
+  void SwapWithStash();
+  // Empties the live reference's members, keeping its solver.
+  void ForgetReference();
 };
 
 // Squared whitened range-bearing residuals of the sightings `sightings` of a

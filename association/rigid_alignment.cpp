@@ -7,6 +7,7 @@
 
 #include "core/angles.h"
 #include "core/pair_key.h"
+#include "core/parallel.h"
 
 namespace oslam {
 
@@ -45,14 +46,21 @@ struct Support {
   double score = 0;  // weighted by fit
 };
 
+// Measure's per-call work: the `to` points reached, and per `to` point its
+// nearest moved `from` point (distance², index). One per thread.
+struct MeasureBuffers {
+  std::vector<std::pair<double, int>> best_of_to;
+  std::vector<int> touched;
+};
+
 // The candidates of each `from` point and the inliers of a transform. The
 // `to` points sit on a grid of inlier_m cells: a transform's inliers are then
 // found in the 3 x 3 cells around each moved point instead of among all its
 // candidates (thousands with clutter); the same pairs as a scan of the
 // candidates (ties to the higher index, as that scan). Measure runs for every
 // candidate transform of every sample, so the cells are an array over the
-// `to` points' bounding box (a hash beyond kMaxDenseCells), and its per-call
-// buffers are kept (a counter serves one thread).
+// `to` points' bounding box (a hash beyond kMaxDenseCells), and each thread
+// keeps its own buffers.
 class InlierCounter {
  public:
   InlierCounter(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
@@ -78,7 +86,6 @@ class InlierCounter {
   // Builds the grid; needed before Measure(). Each cell lists its points by
   // ascending index.
   void Index() {
-    best_of_to_.assign(to_.size(), {0.0, -1});
     if (to_.empty()) return;
     long min_x = CellOf(to_[0]).first, max_x = min_x, min_y = CellOf(to_[0]).second, max_y = min_y;
     for (const Eigen::Vector2d& p : to_) {
@@ -116,10 +123,19 @@ class InlierCounter {
     }
   }
 
+  MeasureBuffers NewBuffers() const {
+    MeasureBuffers buffers;
+    buffers.best_of_to.assign(to_.size(), {0.0, -1});
+    return buffers;
+  }
+
   // The inliers of `rigid` and their score (RigidRansacOptions::score_std_m),
-  // with `pairs` the pairs.
-  Support Measure(const Rigid2& rigid, std::vector<std::pair<int, int>>* pairs) const {
-    touched_.clear();  // the to points reached; best_of_to_ holds (distance², from point)
+  // with `pairs` the pairs; `buffers` from NewBuffers().
+  Support Measure(const Rigid2& rigid, MeasureBuffers* buffers,
+                  std::vector<std::pair<int, int>>* pairs) const {
+    std::vector<std::pair<double, int>>& best_of_to = buffers->best_of_to;
+    std::vector<int>& touched = buffers->touched;
+    touched.clear();
     const Eigen::Matrix2d rotation = Eigen::Rotation2Dd(rigid.angle).toRotationMatrix();
     for (size_t i = 0; i < from_.size(); ++i) {
       if (near_[i].empty()) continue;
@@ -141,21 +157,21 @@ class InlierCounter {
           }
         }
       if (nearest < 0) continue;
-      std::pair<double, int>& at = best_of_to_[nearest];
+      std::pair<double, int>& at = best_of_to[nearest];
       if (at.second < 0) {
-        touched_.push_back(nearest);
+        touched.push_back(nearest);
         at = {best, static_cast<int>(i)};
       } else if (best < at.first) {
         at = {best, static_cast<int>(i)};
       }
     }
     // By ascending to point, as the pairs are reported and the score summed.
-    std::sort(touched_.begin(), touched_.end());
+    std::sort(touched.begin(), touched.end());
     if (pairs) pairs->clear();
     Support support;
-    support.count = static_cast<int>(touched_.size());
-    for (int o : touched_) {
-      std::pair<double, int>& at = best_of_to_[o];
+    support.count = static_cast<int>(touched.size());
+    for (int o : touched) {
+      std::pair<double, int>& at = best_of_to[o];
       if (pairs) pairs->push_back({at.second, o});
       support.score += score_std2_ > 0 ? std::exp(-0.5 * at.first / score_std2_) : 1.0;
       at = {0.0, -1};
@@ -198,8 +214,6 @@ class InlierCounter {
   std::vector<int> cell_begin_;  // dense: cell c's points are cell_points_[begin[c], begin[c+1])
   std::unordered_map<long long, std::pair<int, int>> cells_;  // hashed: cell -> its range
   std::vector<int> cell_points_;                              // to points, cell by cell
-  mutable std::vector<std::pair<double, int>> best_of_to_;    // Measure's buffers
-  mutable std::vector<int> touched_;
 };
 
 // The sampled transforms with at least min_inliers inliers and the most of
@@ -251,46 +265,86 @@ class TopTransforms {
   std::vector<RigidMatch> kept_;
 };
 
+// A sample's transform with at least min_inliers inliers.
+struct Hypothesis {
+  Rigid2 rigid;
+  Support support;
+};
+
+void MeasureSample(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
+                   const InlierCounter& counter, const RigidRansacOptions& options, size_t a,
+                   size_t b, MeasureBuffers* buffers, std::vector<Hypothesis>* out) {
+  const double inlier_m = options.inlier_m;
+  if (a == b || counter.near(a).empty() || counter.near(b).empty()) return;
+  const Eigen::Vector2d ra = from[a], rb = from[b];
+  const double d = (rb - ra).norm();
+  if (d < 2 * inlier_m) return;
+  const double heading = std::atan2(rb.y() - ra.y(), rb.x() - ra.x());
+  Hypothesis h;
+  for (int oa : counter.near(a))
+    for (int ob : counter.near(b)) {
+      if (oa == ob) continue;
+      const Eigen::Vector2d v = to[ob] - to[oa];
+      if (std::abs(v.norm() - d) > inlier_m) continue;
+      const double angle = WrapAngle(std::atan2(v.y(), v.x()) - heading);
+      if (std::abs(angle) > options.max_rotation_rad) continue;
+      if (options.max_shift_m > 0 &&
+          (0.5 * (to[oa] + to[ob] - ra - rb)).norm() > options.max_shift_m)
+        continue;
+      h.rigid.angle = angle;
+      h.rigid.t = 0.5 * (to[oa] + to[ob]) - Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
+      h.support = counter.Measure(h.rigid, buffers, nullptr);
+      if (h.support.count >= options.min_inliers) out->push_back(h);
+    }
+}
+
+// The samples are drawn first, in order, then measured (on threads, a block
+// of samples at a time) and their transforms taken in sample order: the
+// same outcome on any number of threads.
 Sampled Sample(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
                const InlierCounter& counter, const RigidRansacOptions& options,
                std::mt19937_64& rng, TopTransforms* top = nullptr) {
-  const double inlier_m = options.inlier_m;
   std::uniform_int_distribution<size_t> pick(0, from.size() - 1);
-  Sampled best;
-  std::vector<std::pair<int, int>> pairs;  // a transform's inliers, when `top` keeps them
-  for (int sample = 0; sample < options.iterations; ++sample) {
-    const size_t a = pick(rng), b = pick(rng);
-    if (a == b || counter.near(a).empty() || counter.near(b).empty()) continue;
-    const Eigen::Vector2d ra = from[a], rb = from[b];
-    const double d = (rb - ra).norm();
-    if (d < 2 * inlier_m) continue;
-    const double heading = std::atan2(rb.y() - ra.y(), rb.x() - ra.x());
-    for (int oa : counter.near(a))
-      for (int ob : counter.near(b)) {
-        if (oa == ob) continue;
-        const Eigen::Vector2d v = to[ob] - to[oa];
-        if (std::abs(v.norm() - d) > inlier_m) continue;
-        const double angle = WrapAngle(std::atan2(v.y(), v.x()) - heading);
-        if (std::abs(angle) > options.max_rotation_rad) continue;
-        if (options.max_shift_m > 0 &&
-            (0.5 * (to[oa] + to[ob] - ra - rb)).norm() > options.max_shift_m)
-          continue;
-        Rigid2 rigid;
-        rigid.angle = angle;
-        rigid.t = 0.5 * (to[oa] + to[ob]) - Eigen::Rotation2Dd(angle) * (0.5 * (ra + rb));
-        const Support support = counter.Measure(rigid, top ? &pairs : nullptr);
-        if (support.count < options.min_inliers) continue;
-        if (top) top->Offer(rigid, support, pairs);
-        if (support.count > best.most.count) {
-          best.most = support;
-          best.most_rigid = rigid;
-        }
-        if (support.score > best.best_fit.score) {
-          best.best_fit = support;
-          best.best_fit_rigid = rigid;
-        }
-      }
+  const size_t samples = static_cast<size_t>(std::max(options.iterations, 0));
+  std::vector<std::pair<size_t, size_t>> drawn(samples);
+  for (auto& [a, b] : drawn) {
+    a = pick(rng);
+    b = pick(rng);
   }
+  // Blocks of samples: few enough that a thread's start costs little,
+  // enough that the threads finish together.
+  constexpr size_t kSamplesPerBlock = 16;
+  const size_t blocks = (samples + kSamplesPerBlock - 1) / kSamplesPerBlock;
+  const int threads = ThreadCount(options.threads, blocks);
+  std::vector<MeasureBuffers> buffers(static_cast<size_t>(threads));
+  for (MeasureBuffers& b : buffers) b = counter.NewBuffers();
+  std::vector<std::vector<Hypothesis>> found(samples);
+  ParallelFor(0, static_cast<size_t>(threads), threads, [&](size_t worker) {
+    MeasureBuffers* mine = &buffers[worker];
+    for (size_t block = worker; block < blocks; block += static_cast<size_t>(threads))
+      for (size_t i = block * kSamplesPerBlock;
+           i < std::min(samples, (block + 1) * kSamplesPerBlock); ++i)
+        MeasureSample(from, to, counter, options, drawn[i].first, drawn[i].second, mine, &found[i]);
+  });
+  // In sample order; the pairs only of the transforms `top` would keep (a
+  // grid offers thousands of transforms of a few inliers each).
+  Sampled best;
+  std::vector<std::pair<int, int>> pairs;
+  for (const std::vector<Hypothesis>& sample : found)
+    for (const Hypothesis& h : sample) {
+      if (top && top->Wants(h.support.score)) {
+        counter.Measure(h.rigid, &buffers.front(), &pairs);
+        top->Offer(h.rigid, h.support, pairs);
+      }
+      if (h.support.count > best.most.count) {
+        best.most = h.support;
+        best.most_rigid = h.rigid;
+      }
+      if (h.support.score > best.best_fit.score) {
+        best.best_fit = h.support;
+        best.best_fit_rigid = h.rigid;
+      }
+    }
   return best;
 }
 
@@ -304,18 +358,20 @@ std::optional<RigidMatch> Refitted(const std::vector<Eigen::Vector2d>& from,
                                    const Rigid2& rigid) {
   RigidMatch match;
   match.rigid = rigid;
+  MeasureBuffers buffers = counter.NewBuffers();
   for (int refit = 0; refit < 2; ++refit) {
-    counter.Measure(match.rigid, &match.pairs);
+    counter.Measure(match.rigid, &buffers, &match.pairs);
     std::vector<Eigen::Vector2d> matched_from, matched_to;
     for (const auto& [r, o] : match.pairs) {
       matched_from.push_back(from[r]);
       matched_to.push_back(to[o]);
     }
     const Rigid2 fitted = FitRigid(matched_from, matched_to);
-    if (counter.Measure(fitted, nullptr).count < static_cast<int>(match.pairs.size())) break;
+    if (counter.Measure(fitted, &buffers, nullptr).count < static_cast<int>(match.pairs.size()))
+      break;
     match.rigid = fitted;
   }
-  match.score = counter.Measure(match.rigid, &match.pairs).score;
+  match.score = counter.Measure(match.rigid, &buffers, &match.pairs).score;
   if (static_cast<int>(match.pairs.size()) < options.min_inliers ||
       std::abs(match.rigid.angle) > options.max_rotation_rad)
     return std::nullopt;

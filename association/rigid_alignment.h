@@ -51,6 +51,10 @@ struct RigidRansacOptions {
   // collects inliers at random distances within inlier_m; the true one may
   // collect fewer, but close.
   double score_std_m = 0;
+  // Samples measured at once (0: one thread per core). The result is the
+  // same for any count: the samples are drawn in order from the caller's
+  // generator and their transforms are taken in that order.
+  int threads = 1;
 };
 
 struct RigidMatch {

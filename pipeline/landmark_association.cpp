@@ -29,6 +29,10 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     if (why) *why = "the duplicate sweep needs the marginal evaluation";
     return false;
   }
+  if (joint_ransac_threads < 0) {
+    if (why) *why = "the RANSAC thread count must be >= 0";
+    return false;
+  }
   if (calibration_rounds < 0 || !(refine_radius_m >= 0) || refine_sweeps < 0) {
     if (why) *why = "calibration rounds, the refine radius and sweeps must be >= 0";
     return false;

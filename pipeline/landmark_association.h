@@ -180,6 +180,9 @@ struct UnknownAssociationOptions {
   // (docs/benchmarks.md); each try costs two or three solves.
   double joint_min_score = 7;
   int joint_every_poses = 50;  // RANSAC at most once per this many poses
+  // Threads measuring the RANSAC samples (0: one per core); the result does
+  // not depend on it (RigidRansacOptions::threads).
+  int joint_ransac_threads = 0;
   // Small re-entries: when no alignment reaches the floors above, the
   // joint_screen_candidates best-scoring alignments with at least
   // joint_screen_min_inliers pairs are each judged by the joint merge of

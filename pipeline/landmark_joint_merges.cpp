@@ -26,6 +26,7 @@ RigidRansacOptions JointRansacOptions(const UnknownAssociationOptions& options) 
   ransac.iterations = options.joint_ransac_iterations;
   ransac.min_inliers = options.joint_min_inliers;
   ransac.score_std_m = options.joint_score_std_m;
+  ransac.threads = options.joint_ransac_threads;
   return ransac;
 }
 
@@ -197,6 +198,10 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
   const bool release = !(seed.state == before.state);
   seed.locations = SeedLocations(before, seed.state, before.solution->trajectory, anchor, n);
   seed.solution = before.solution;
+  // The reference (before) is set aside for the released one's solve and
+  // brought back after, instead of being solved again.
+  const bool stash = release && evaluator_->IsReference(before);
+  if (stash) evaluator_->StashReference();
   const EvaluationPtr released = release ? Refine(seed.state, &seed) : current_;
   // A try must promise more than the state before holds (its merges since
   // the anchor included).
@@ -221,7 +226,10 @@ std::optional<LandmarkAssociation::JointAlignment> LandmarkAssociation::Screened
     best_gain = gain;
     best = std::move(match);
   }
-  if (release) current_ = Refine(before.state, &before);  // the reference back at before
+  if (stash)
+    current_ = evaluator_->RestoreReference();
+  else if (release)
+    current_ = Refine(before.state, &before);  // the reference back at before
   if (!best) return std::nullopt;
   Say(
       Format("joint merge at %.0f poses: of %.0f alignments screened, %.0f pairs gain %.1f in "

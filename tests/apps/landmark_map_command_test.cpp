@@ -163,6 +163,10 @@ TEST(LandmarkMapCommand, UnknownAssociationComparesWithTheIds) {
   EXPECT_EQ(RunOslam(common + " --min-track 0").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --joint-screen -1").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --joint-screen 0").exit_code, 0);
+  EXPECT_EQ(RunOslam(common + " --threads -1").exit_code, 2);
+  const testing::CommandResult one_thread = RunOslam(common + " --threads 1");
+  ASSERT_EQ(one_thread.exit_code, 0) << one_thread.err;
+  EXPECT_EQ(ReadOMap(dir.Path("omap.json")).objects.size(), map.objects.size());
   EXPECT_EQ(RunOslam(common + " --poses -1").exit_code, 2);
   // --poses: a prefix; --association-out: one id per sighting of it.
   const testing::CommandResult prefix =

@@ -350,6 +350,55 @@ TEST(LandmarkEvaluatorTest, TrialLeavesTheReferenceAlone) {
   EXPECT_EQ(with_trial.num_marginal_merges(), 1u);
 }
 
+// A reference set aside (StashReference) comes back without a solve: after
+// a refine of another state, scored in closed form there, the same merge of
+// the first reference scores exactly as on an evaluator that never left it.
+TEST(LandmarkEvaluatorTest, AStashedReferenceComesBackWithoutASolve) {
+  const LandmarkDataset data = SimulateDrive(4, nullptr);
+  LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};
+  const std::vector<std::pair<int, int>> pairs = SameTreePairs(target);
+  ASSERT_GE(pairs.size(), 3u);
+  const LandmarkTargetOptions options = DriveTargetOptions(LandmarkEvaluationMode::kMarginal);
+  LandmarkEvaluator stashing(target, options), without(target, options);
+  const AssociationState separate = Separate(target.tracks.size());
+  const EvaluationPtr reference = stashing.Refine(separate, nullptr);
+  const EvaluationPtr same_reference = without.Refine(separate, nullptr);
+  ASSERT_TRUE(reference->valid);
+
+  stashing.StashReference();
+  EXPECT_FALSE(stashing.IsReference(*reference));
+  EXPECT_THROW(stashing.StashReference(), Error);  // one at a time
+  const AssociationState other = Merged(separate, pairs[0].first, pairs[0].second);
+  const EvaluationPtr refined = stashing.Refine(other, reference.get());
+  ASSERT_TRUE(refined->valid);
+  EXPECT_TRUE(stashing.IsReference(*refined));
+  double gain_there = 0;
+  ASSERT_TRUE(stashing.MergeGain(*refined, refined->state.BlockOf(pairs[1].first),
+                                 refined->state.BlockOf(pairs[1].second), &gain_there));
+
+  const size_t solves = stashing.num_solves();
+  EXPECT_EQ(stashing.RestoreReference(), reference);
+  EXPECT_EQ(stashing.num_solves(), solves);
+  EXPECT_TRUE(stashing.IsReference(*reference));
+  EXPECT_FALSE(stashing.IsReference(*refined));
+  EXPECT_THROW(stashing.RestoreReference(), Error);  // nothing set aside now
+  const int a = separate.BlockOf(pairs[1].first), b = separate.BlockOf(pairs[1].second);
+  double gain = 0, same_gain = 0;
+  ASSERT_TRUE(stashing.MergeGain(*reference, a, b, &gain));
+  ASSERT_TRUE(without.MergeGain(*same_reference, a, b, &same_gain));
+  EXPECT_EQ(gain, same_gain);
+  // Scored at the other reference, the merge gained another amount (the
+  // merge of pairs[0] moved the trajectory): the closed form did use it.
+  EXPECT_NE(gain, gain_there);
+
+  // The spare solver serves the next stash as well.
+  stashing.StashReference();
+  ASSERT_TRUE(stashing.Refine(other, reference.get())->valid);
+  EXPECT_EQ(stashing.RestoreReference(), reference);
+  ASSERT_TRUE(stashing.MergeGain(*reference, a, b, &gain));
+  EXPECT_EQ(gain, same_gain);
+}
+
 TEST(LandmarkEvaluatorTest, SolveReportsEveryLandmarkWithItsCovariance) {
   const LandmarkDataset data = SimulateDrive(3, nullptr);
   LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};

@@ -5,6 +5,7 @@
 #include "association/rigid_alignment.h"
 
 #include <cmath>
+#include <optional>
 #include <random>
 #include <set>
 #include <utility>
@@ -216,6 +217,41 @@ TEST(RigidAlignmentTest, TheTopTransformsHoldEachCandidateOnceBestFirst) {
   EXPECT_LT(top.front().rigid.t.norm(), 0.2);  // the close one scores most
   std::mt19937_64 none_rng(4);
   EXPECT_TRUE(MatchRigidlyTop(recent, old, options, 0, none_rng).empty());
+}
+
+// The samples are measured on threads: the same transforms, pairs and
+// scores, and the generator left in the same state, on one thread or four.
+TEST(RigidAlignmentTest, ThreadsLeaveTheResultAsItIs) {
+  const RepeatingLayout layout = MakeRepeatingLayout();
+  RigidRansacOptions options;
+  options.min_inliers = 4;
+  options.score_std_m = 0.8;
+  options.iterations = 200;
+  const auto same = [](const std::optional<RigidMatch>& x, const std::optional<RigidMatch>& y) {
+    ASSERT_EQ(x.has_value(), y.has_value());
+    if (!x) return;
+    EXPECT_EQ(x->pairs, y->pairs);
+    EXPECT_EQ(x->score, y->score);
+    EXPECT_EQ(x->rigid.angle, y->rigid.angle);
+    EXPECT_EQ(x->rigid.t, y->rigid.t);
+  };
+  RigidRansacOptions serial = options, threaded = options;
+  serial.threads = 1;
+  threaded.threads = 4;
+  std::mt19937_64 serial_rng(9), threaded_rng(9);
+  const RigidMatches a = MatchRigidlyBothWays(layout.recent, layout.old, serial, serial_rng);
+  const RigidMatches b = MatchRigidlyBothWays(layout.recent, layout.old, threaded, threaded_rng);
+  ASSERT_TRUE(a.most_pairs.has_value());
+  same(a.most_pairs, b.most_pairs);
+  same(a.best_fit, b.best_fit);
+  EXPECT_EQ(serial_rng(), threaded_rng());
+  const std::vector<RigidMatch> top_a =
+      MatchRigidlyTop(layout.recent, layout.old, serial, 8, serial_rng);
+  const std::vector<RigidMatch> top_b =
+      MatchRigidlyTop(layout.recent, layout.old, threaded, 8, threaded_rng);
+  ASSERT_GE(top_a.size(), 2u);
+  ASSERT_EQ(top_a.size(), top_b.size());
+  for (size_t i = 0; i < top_a.size(); ++i) same(top_a[i], top_b[i]);
 }
 
 TEST(RigidAlignmentTest, RansacDeclinesWithoutEnoughSupport) {
