@@ -441,6 +441,26 @@ bool LandmarkEvaluator::MergeGain(const StateEvaluation& at, int ja, int jb, dou
   return MergeDelta(std::min(ja, jb), std::max(ja, jb), gain, &mean);
 }
 
+bool LandmarkEvaluator::SplitGain(const StateEvaluation& at, int j, int track, double* gain) {
+  if (options_.mode == LandmarkEvaluationMode::kExact || reference_.get() != &at || j < 0 ||
+      j >= static_cast<int>(at.state.blocks.size()))
+    return false;
+  const std::vector<int>& block = at.state.blocks[j];
+  if (block.size() < 2 || std::find(block.begin(), block.end(), track) == block.end()) return false;
+  // As LocalEvaluation: the two new blocks' local values in, the old one's
+  // out (a part of a reference block is never a reference block itself).
+  std::vector<int> rest;
+  for (int t : block)
+    if (t != track) rest.push_back(t);
+  if (SharesAScan(rest)) {
+    *gain = -std::numeric_limits<double>::infinity();
+    return true;
+  }
+  const double parts = LocalBlock(rest, &at).log_evidence + LocalBlock({track}, &at).log_evidence;
+  *gain = parts - LocalBlock(block, reference_.get()).log_evidence;
+  return true;
+}
+
 bool LandmarkEvaluator::JointMergeDelta(const AssociationState& state,
                                         const std::vector<std::vector<int>>& groups,
                                         double* delta) {

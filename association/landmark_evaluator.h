@@ -112,6 +112,14 @@ class LandmarkEvaluator : public StateEvaluator {
   // -infinity when the merged landmark would have two sightings of one scan.
   // False when the closed form does not apply: Evaluate the state then.
   bool MergeGain(const StateEvaluation& at, int ja, int jb, double* gain);
+  // Local or marginal mode, `at` the reference: what Evaluate gives for `at`
+  // with track `track` split off its block j into a landmark of its own,
+  // minus at's log target, without building that state (the refinement
+  // sweep scores a split of every track); -infinity when the rest of the
+  // block would have two sightings of one scan. False when this does not
+  // apply (exact mode, not the reference, the track not in block j or
+  // alone in it): Evaluate the state then.
+  bool SplitGain(const StateEvaluation& at, int j, int track, double* gain);
   // Marginal mode, `state` the reference: log_target(merged) -
   // log_target(reference) in closed form, linearised at the reference, for
   // merging each group of the reference's blocks `groups` (indices into

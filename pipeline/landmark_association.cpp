@@ -545,6 +545,17 @@ AssociationState LandmarkAssociation::WithBlockPairsMerged(
   return merged;
 }
 
+// `s` with track t split off block j into a block of its own, canonical.
+AssociationState LandmarkAssociation::WithTrackSplitOff(const AssociationState& s, int j, int t) {
+  AssociationState split = s;
+  auto& block = split.blocks[j];
+  block.erase(std::find(block.begin(), block.end(), t));
+  split.blocks.push_back({t});
+  split.classes.assign(split.blocks.size(), 0);
+  split.Canonicalize();
+  return split;
+}
+
 // How badly landmark j of `e` fits its sightings in the window: the squared
 // whitened residual r2 of its n sightings standardised as
 // (r2 - 2n) / sqrt(4n), the chi-square's mean and spread.
@@ -727,22 +738,26 @@ long LandmarkAssociation::SplitSweep() {
       if (s.blocks[j].size() < 2) continue;
       Split b{0, -1, -1, nullptr};
       for (int t : s.blocks[j]) {
-        AssociationState split = s;
-        auto& block = split.blocks[j];
-        block.erase(std::find(block.begin(), block.end(), t));
-        split.blocks.push_back({t});
-        split.classes.assign(split.blocks.size(), 0);
-        split.Canonicalize();
-        const EvaluationPtr e = evaluator_->Evaluate(split, before.get());
         ++result_.proposals;
-        if (e->valid && e->log_target - base > b.delta)
-          b = {e->log_target - base, static_cast<int>(j), t, e};
+        // Most splits from the reference's local values; the state itself
+        // only where that does not apply.
+        double gain = 0;
+        EvaluationPtr e;
+        if (!evaluator_->SplitGain(*before, static_cast<int>(j), t, &gain)) {
+          e = evaluator_->Evaluate(WithTrackSplitOff(s, static_cast<int>(j), t), before.get());
+          gain = e->valid ? e->log_target - base : -std::numeric_limits<double>::infinity();
+        }
+        if (gain > b.delta) b = {gain, static_cast<int>(j), t, e};
       }
-      if (b.evaluation) best.push_back(b);
+      if (b.block >= 0) best.push_back(b);
     }
     if (best.empty()) break;
     std::sort(best.begin(), best.end(),
               [](const Split& x, const Split& y) { return x.delta > y.delta; });
+    // The best one's evaluation warm-starts the re-solve.
+    if (!best.front().evaluation)
+      best.front().evaluation = evaluator_->Evaluate(
+          WithTrackSplitOff(s, best.front().block, best.front().track), before.get());
     AssociationState all = s;
     for (const Split& b : best) {
       auto& block = all.blocks[b.block];

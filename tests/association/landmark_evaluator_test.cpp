@@ -350,6 +350,86 @@ TEST(LandmarkEvaluatorTest, TrialLeavesTheReferenceAlone) {
   EXPECT_EQ(with_trial.num_marginal_merges(), 1u);
 }
 
+// A split scored from the reference's local values (SplitGain) is what
+// Evaluate gives for the split state, for every track of every block of a
+// state whose blocks hold several tracks (a true and a wrong merge), in
+// local and marginal mode; it does not apply off the reference, to a track
+// not in the block or alone in it, or in exact mode.
+TEST(LandmarkEvaluatorTest, ASplitScoresAsItsEvaluation) {
+  const LandmarkDataset data = SimulateDrive(4, nullptr);
+  LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};
+  const std::vector<std::pair<int, int>> pairs = SameTreePairs(target);
+  ASSERT_GE(pairs.size(), 3u);
+  AssociationState state = Separate(target.tracks.size());
+  for (const auto& [a, b] : pairs)
+    if (state.BlockOf(a) != state.BlockOf(b)) state = Merged(state, a, b);
+  // A wrong merge too: the first tree with another one seen from other poses.
+  const auto poses_of = [&](int j) {
+    std::set<int> poses;
+    for (int t : state.blocks[j])
+      for (int k : target.tracks[t]) poses.insert(data.sightings[k].pose);
+    return poses;
+  };
+  const int first = state.BlockOf(pairs[0].first);
+  const int tree = data.sightings[target.tracks[pairs[0].first][0]].landmark;
+  bool wrong = false;
+  for (size_t t = 0; t < target.tracks.size() && !wrong; ++t) {
+    const int j = state.BlockOf(static_cast<int>(t));
+    if (j == first || data.sightings[target.tracks[t][0]].landmark == tree) continue;
+    const std::set<int> mine = poses_of(first), its = poses_of(j);
+    if (std::none_of(its.begin(), its.end(), [&](int p) { return mine.count(p) > 0; })) {
+      state = Merged(state, pairs[0].first, static_cast<int>(t));
+      wrong = true;
+    }
+  }
+  ASSERT_TRUE(wrong);
+  for (const LandmarkEvaluationMode mode :
+       {LandmarkEvaluationMode::kLocal, LandmarkEvaluationMode::kMarginal}) {
+    LandmarkEvaluator evaluator(target, DriveTargetOptions(mode));
+    const EvaluationPtr at = evaluator.Refine(state, nullptr);
+    ASSERT_TRUE(at->valid);
+    int scored = 0;
+    for (size_t j = 0; j < state.blocks.size(); ++j) {
+      if (state.blocks[j].size() < 2) continue;
+      for (int t : state.blocks[j]) {
+        AssociationState split = state;
+        auto& block = split.blocks[j];
+        block.erase(std::find(block.begin(), block.end(), t));
+        split.blocks.push_back({t});
+        split.classes.assign(split.blocks.size(), 0);
+        split.Canonicalize();
+        double gain = 0;
+        ASSERT_TRUE(evaluator.SplitGain(*at, static_cast<int>(j), t, &gain));
+        const EvaluationPtr e = evaluator.Evaluate(split, at.get());
+        if (!e->valid) {  // the rest still holds two sightings of one scan
+          EXPECT_EQ(gain, -std::numeric_limits<double>::infinity());
+          continue;
+        }
+        EXPECT_NEAR(gain, e->log_target - at->log_target, 1e-9 * std::abs(at->log_target));
+        ++scored;
+      }
+    }
+    EXPECT_GE(scored, 8);
+    double gain = 0;
+    const int alone = state.BlockOf(static_cast<int>(target.tracks.size()) - 1);
+    EXPECT_FALSE(evaluator.SplitGain(*at, -1, 0, &gain));
+    const int multi = state.BlockOf(pairs[1].first);
+    const int outside = state.blocks[multi].front() == 0 ? 1 : 0;
+    if (state.BlockOf(outside) != multi) {
+      EXPECT_FALSE(evaluator.SplitGain(*at, multi, outside, &gain));
+    }
+    if (state.blocks[alone].size() == 1) {
+      EXPECT_FALSE(evaluator.SplitGain(*at, alone, state.blocks[alone][0], &gain));
+    }
+    StateEvaluation copy = *at;  // not the reference
+    EXPECT_FALSE(evaluator.SplitGain(copy, multi, pairs[1].first, &gain));
+  }
+  LandmarkEvaluator exact(target, DriveTargetOptions(LandmarkEvaluationMode::kExact));
+  const EvaluationPtr at = exact.Refine(state, nullptr);
+  double gain = 0;
+  EXPECT_FALSE(exact.SplitGain(*at, state.BlockOf(pairs[1].first), pairs[1].first, &gain));
+}
+
 // A reference set aside (StashReference) comes back without a solve: after
 // a refine of another state, scored in closed form there, the same merge of
 // the first reference scores exactly as on an evaluator that never left it.
