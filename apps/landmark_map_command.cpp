@@ -297,10 +297,10 @@ void LandmarkMode::Declare(Arguments* arguments) {
   b.Add(&u.joint_recent_m, "joint-recent", "M",
         "unknown association: joint merges align the landmarks first seen in the last M metres "
         "driven onto older ones");
-  b.Add(&u.joint_ransac_threads, "threads", "N",
-        "unknown association: threads measuring the joint merges' RANSAC samples (0: one per "
-        "core; the same result for any N)")
-      .Check([this] { return options_.unknown.joint_ransac_threads >= 0; }, "must be >= 0");
+  b.Add(&u.threads, "threads", "N",
+        "threads linearising large problems and, with unknown association, measuring the joint "
+        "merges' RANSAC samples (0: one per core; the same result for any N)")
+      .Check([this] { return options_.unknown.threads >= 0; }, "must be >= 0");
   b.Add(&u.joint_repair_rounds, "joint-repair", "ROUNDS",
         "unknown association: after a joint merge's solve, split off the worst-fitting pairs and "
         "re-solve, at most this many times (0: never)");
@@ -377,6 +377,7 @@ int LandmarkMode::Run(const Arguments& arguments) {
                         "the sightings have no landmark ids; give them with --association FILE "
                         "or solve with --unknown-association");
   }
+  o.slam.solver.threads = o.unknown.threads;  // --threads
   std::string why;
   if (!o.slam.Validate(&why)) throw UsageError(why);
   LandmarkSlamResult result;

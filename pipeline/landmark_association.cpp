@@ -29,8 +29,8 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     if (why) *why = "the duplicate sweep needs the marginal evaluation";
     return false;
   }
-  if (joint_ransac_threads < 0) {
-    if (why) *why = "the RANSAC thread count must be >= 0";
+  if (threads < 0) {
+    if (why) *why = "the thread count must be >= 0";
     return false;
   }
   if (calibration_rounds < 0 || !(refine_radius_m >= 0) || refine_sweeps < 0) {
@@ -104,6 +104,7 @@ LandmarkAssociation::LandmarkAssociation(const LandmarkDataset& data,
       last_ransac_(std::numeric_limits<int>::min() / 2) {
   std::string why;
   if (!options.Validate(&why)) throw Error("unknown-association landmark SLAM: " + why);
+  options_.target.slam.solver.threads = options.threads;
 }
 
 void LandmarkAssociation::Say(const std::string& line) const {

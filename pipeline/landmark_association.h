@@ -82,6 +82,11 @@ struct UnknownAssociationOptions {
   // The evidence is then conditional on the held poses (an approximation).
   // 0: every pose free. After the windows the whole problem is solved.
   int free_poses = 0;
+  // Threads of the search (0: one per core): they measure the joint merges'
+  // RANSAC samples (RigidRansacOptions::threads) and linearise the large
+  // solves (SolverOptions::threads; it sets target.slam.solver.threads).
+  // The result does not depend on the count.
+  int threads = 0;
   double hill_climb_steps_per_track = 4;  // per window: this times its tracks
   int final_hill_climb_steps = 0;         // global pass after the windows (0: none)
   int refine_every = 50;
@@ -180,9 +185,6 @@ struct UnknownAssociationOptions {
   // (docs/benchmarks.md); each try costs two or three solves.
   double joint_min_score = 7;
   int joint_every_poses = 50;  // RANSAC at most once per this many poses
-  // Threads measuring the RANSAC samples (0: one per core); the result does
-  // not depend on it (RigidRansacOptions::threads).
-  int joint_ransac_threads = 0;
   // Small re-entries: when no alignment reaches the floors above, the
   // joint_screen_candidates best-scoring alignments with at least
   // joint_screen_min_inliers pairs are each judged by the joint merge of

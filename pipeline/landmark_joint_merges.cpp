@@ -26,7 +26,7 @@ RigidRansacOptions JointRansacOptions(const UnknownAssociationOptions& options) 
   ransac.iterations = options.joint_ransac_iterations;
   ransac.min_inliers = options.joint_min_inliers;
   ransac.score_std_m = options.joint_score_std_m;
-  ransac.threads = options.joint_ransac_threads;
+  ransac.threads = options.threads;
   return ransac;
 }
 

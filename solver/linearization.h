@@ -48,6 +48,10 @@ class Linearizer {
   // Whether Evaluate keeps and reuses linearisations (SolverOptions::
   // reuse_linearizations).
   void set_reuse(bool reuse) { reuse_ = reuse; }
+  // Threads for graphs of at least kParallelFactors factors when nothing is
+  // kept (0: one per core); smaller graphs cost less than a thread's start.
+  void set_threads(int threads) { threads_ = threads; }
+  static constexpr std::size_t kParallelFactors = 4096;
 
   // Errors (and, with_jacobians, Jacobians) of every factor at `values`
   // into `out` (its errors, and with_jacobians its Jacobians, shaped for
@@ -84,8 +88,14 @@ class Linearizer {
   void Keep(int slot, const Factor& factor, const Values& values, const Eigen::VectorXd& error,
             const Eigen::MatrixXd& jacobian);
 
-  std::vector<Kept> kept_;  // per slot
+  // Evaluate on threads, a contiguous range of factors each.
+  bool EvaluateOnThreads(const FactorGraph& graph, const Values& values, bool with_jacobians,
+                         Evaluation* out, double* cost);
+
+  std::vector<Kept> kept_;             // per slot
+  std::vector<double> squared_norms_;  // EvaluateOnThreads: per factor
   bool reuse_ = false;
+  int threads_ = 1;
   int reused_ = 0, computed_ = 0;
 };
 

@@ -39,6 +39,7 @@ bool SolverOptions::Validate(std::string* why) const {
     return false;
   };
   if (max_iterations < 0) return fail("max_iterations must be >= 0");
+  if (threads < 0) return fail("threads must be >= 0");
   if (!(step_tolerance >= 0) || !(function_tolerance >= 0) || !(gradient_tolerance >= 0) ||
       !(absolute_function_tolerance >= 0))
     return fail("tolerances must be >= 0");
@@ -107,6 +108,7 @@ void SparseSolver::Impl::Retract(const Values& from, const Eigen::VectorXd& step
 bool SparseSolver::Impl::SetUp(const SolverOptions& options, const FactorGraph& graph,
                                SolverSummary* summary, std::string* why) {
   linearizer.set_reuse(options.reuse_linearizations);
+  linearizer.set_threads(options.threads);
   double analyze_s = 0.0;
   if (!normal.SetUp(graph, options.ordering, options.independent_of_history,
                     options.reuse_symbolic_analysis, &summary->reused_symbolic_analysis, &analyze_s,

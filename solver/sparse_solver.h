@@ -98,6 +98,11 @@ struct SolverOptions {
   // final linear system (the one the evidence comes from), if it does not
   // raise the cost. Off: the values stay at that system's linearisation point.
   bool apply_final_step = true;
+  // Threads linearising the factors of a large problem (at least
+  // Linearizer::kParallelFactors factors, without linearisation reuse;
+  // 0: one per core). Each factor writes its own error and Jacobian and
+  // the cost is summed in factor order: the same results bit for bit.
+  int threads = 1;
 
   bool Validate(std::string* why) const;
 };

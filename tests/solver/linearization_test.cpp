@@ -140,6 +140,58 @@ TEST(LinearizerTest, FailsWhenAFactorCannotBeEvaluatedOrTheCostIsNotFinite) {
   EXPECT_FALSE(linearizer.Evaluate(p.graph, infinite, false, &p.evaluation, &cost));
 }
 
+// A graph large enough for threads (kParallelFactors and more): a chain of
+// scalar variables, a reading of each and of each difference.
+struct Chain {
+  FactorGraph graph;
+  std::vector<CountingFactor*> factors;
+  Evaluation evaluation;
+
+  explicit Chain(int length) {
+    for (int i = 0; i < length; ++i)
+      graph.AddVariable(Eigen::VectorXd::Constant(1, std::sin(0.1 * i)));
+    const Eigen::MatrixXd one = Eigen::MatrixXd::Identity(1, 1);
+    for (int i = 0; i < length; ++i) {
+      factors.push_back(graph.Emplace<CountingFactor>(std::vector<int>{i}, one,
+                                                      Eigen::VectorXd::Constant(1, 0.01 * i), 0.5));
+      if (i > 0)
+        factors.push_back(graph.Emplace<CountingFactor>(std::vector<int>{i - 1, i},
+                                                        Eigen::RowVector2d(-1.0, 1.0).eval(),
+                                                        Eigen::VectorXd::Constant(1, 0.1), 0.3));
+    }
+    evaluation.Resize(factors.size());
+    for (size_t f = 0; f < factors.size(); ++f)
+      evaluation.Shape(f, 1, static_cast<int>(factors[f]->keys().size()));
+  }
+};
+
+// On threads every factor is linearised once, into its own slot, and the
+// cost summed in factor order: the same bits as on one thread; a factor
+// that cannot be evaluated fails the evaluation there too.
+TEST(LinearizerTest, ThreadsGiveTheSameBitsOnALargeGraph) {
+  const int length = static_cast<int>(Linearizer::kParallelFactors);  // 2 length - 1 factors
+  Chain serial_chain(length), threaded_chain(length);
+  Linearizer serial, threaded;
+  threaded.set_threads(3);
+  double serial_cost = 0, threaded_cost = 0;
+  ASSERT_TRUE(serial.Evaluate(serial_chain.graph, serial_chain.graph.values(), true,
+                              &serial_chain.evaluation, &serial_cost));
+  ASSERT_TRUE(threaded.Evaluate(threaded_chain.graph, threaded_chain.graph.values(), true,
+                                &threaded_chain.evaluation, &threaded_cost));
+  EXPECT_EQ(threaded_cost, serial_cost);
+  EXPECT_GT(serial_cost, 0.0);
+  EXPECT_EQ(threaded.computed(), serial.computed());
+  EXPECT_EQ(threaded.computed(), 2 * length - 1);
+  for (size_t f = 0; f < serial_chain.factors.size(); ++f) {
+    ASSERT_EQ(threaded_chain.factors[f]->calls, 1) << f;
+    ASSERT_EQ(threaded_chain.evaluation.errors[f], serial_chain.evaluation.errors[f]) << f;
+    ASSERT_EQ(threaded_chain.evaluation.jacobians[f], serial_chain.evaluation.jacobians[f]) << f;
+  }
+  threaded_chain.factors[length]->fail = true;
+  EXPECT_FALSE(threaded.Evaluate(threaded_chain.graph, threaded_chain.graph.values(), false,
+                                 &threaded_chain.evaluation, &threaded_cost));
+}
+
 TEST(SquaredNormTest, EqualsEigensForEverySize) {
   for (int size = 1; size <= 6; ++size) {
     const Eigen::VectorXd error = Eigen::VectorXd::LinSpaced(size, -0.3, 1.7);

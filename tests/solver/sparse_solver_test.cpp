@@ -445,6 +445,10 @@ TEST(SolverTest, ReportsProblemsInTheSummaryInsteadOfThrowing) {
   const SolveResult invalid = bad_solver.Solve(&one);
   EXPECT_EQ(invalid.summary.termination, TerminationType::kFailure);
   EXPECT_NE(invalid.summary.message.find("initial_damping"), std::string::npos);
+  SolverOptions bad_threads;
+  bad_threads.threads = -1;
+  EXPECT_FALSE(bad_threads.Validate(&why));
+  EXPECT_NE(why.find("threads"), std::string::npos);
 
   // The block bookkeeping holds variables of up to 255 entries.
   FactorGraph wide;
