@@ -317,18 +317,28 @@ std::vector<std::pair<int, int>> SameTreePairs(const LandmarkTargetData& target)
   return pairs;
 }
 
+// Two marginal evaluators of one drive, both refined at the all-separate
+// state: the one a test exercises, and a plain one to compare it with.
+struct TwinReferences {
+  LandmarkDataset data = SimulateDrive(4, nullptr);
+  LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};
+  std::vector<std::pair<int, int>> pairs = SameTreePairs(target);
+  LandmarkTargetOptions options = DriveTargetOptions(LandmarkEvaluationMode::kMarginal);
+  LandmarkEvaluator tested{target, options}, plain{target, options};
+  AssociationState separate = Separate(target.tracks.size());
+  EvaluationPtr reference = tested.Refine(separate, nullptr);
+  EvaluationPtr plain_reference = plain.Refine(separate, nullptr);
+};
+
 // A trial solve leaves the reference alone: a merge of the reference's
 // landmarks is still scored in closed form, exactly as without the trial.
 TEST(LandmarkEvaluatorTest, TrialLeavesTheReferenceAlone) {
-  const LandmarkDataset data = SimulateDrive(4, nullptr);
-  LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};
-  const std::vector<std::pair<int, int>> pairs = SameTreePairs(target);
+  TwinReferences twin;
+  const std::vector<std::pair<int, int>>& pairs = twin.pairs;
   ASSERT_GE(pairs.size(), 3u);
-  const LandmarkTargetOptions options = DriveTargetOptions(LandmarkEvaluationMode::kMarginal);
-  LandmarkEvaluator with_trial(target, options), without(target, options);
-  const AssociationState separate = Separate(target.tracks.size());
-  const EvaluationPtr reference = with_trial.Refine(separate, nullptr);
-  const EvaluationPtr same_reference = without.Refine(separate, nullptr);
+  LandmarkEvaluator &with_trial = twin.tested, &without = twin.plain;
+  const AssociationState& separate = twin.separate;
+  const EvaluationPtr &reference = twin.reference, &same_reference = twin.plain_reference;
   ASSERT_TRUE(reference->valid);
   const AssociationState tried =
       Merged(Merged(separate, pairs[0].first, pairs[0].second), pairs[1].first, pairs[1].second);
@@ -434,15 +444,12 @@ TEST(LandmarkEvaluatorTest, ASplitScoresAsItsEvaluation) {
 // a refine of another state, scored in closed form there, the same merge of
 // the first reference scores exactly as on an evaluator that never left it.
 TEST(LandmarkEvaluatorTest, AStashedReferenceComesBackWithoutASolve) {
-  const LandmarkDataset data = SimulateDrive(4, nullptr);
-  LandmarkTargetData target{&data, BuildLandmarkTracks(data, data.dead_reckoning, {1.0, 2})};
-  const std::vector<std::pair<int, int>> pairs = SameTreePairs(target);
+  TwinReferences twin;
+  const std::vector<std::pair<int, int>>& pairs = twin.pairs;
   ASSERT_GE(pairs.size(), 3u);
-  const LandmarkTargetOptions options = DriveTargetOptions(LandmarkEvaluationMode::kMarginal);
-  LandmarkEvaluator stashing(target, options), without(target, options);
-  const AssociationState separate = Separate(target.tracks.size());
-  const EvaluationPtr reference = stashing.Refine(separate, nullptr);
-  const EvaluationPtr same_reference = without.Refine(separate, nullptr);
+  LandmarkEvaluator &stashing = twin.tested, &without = twin.plain;
+  const AssociationState& separate = twin.separate;
+  const EvaluationPtr &reference = twin.reference, &same_reference = twin.plain_reference;
   ASSERT_TRUE(reference->valid);
 
   stashing.StashReference();
