@@ -650,24 +650,10 @@ void LandmarkEvaluator::SwapWithStash() {
   std::swap(cross_covariances_, stash_.cross_covariances);
 }
 
-void LandmarkEvaluator::ForgetReference() {
-  reference_.reset();
-  reference_factorised_ = false;
-  reference_position_keys_.clear();
-  last_refine_keys_.clear();
-  reference_blocks_.clear();
-  block_cache_.clear();
-  cache_.clear();
-  roots_.clear();
-  root_bytes_ = 0;
-  cross_covariances_.clear();
-}
-
 void LandmarkEvaluator::StashReference() {
   if (stash_.held) throw Error("landmark O-SLAM target: a reference is set aside already");
   if (!stash_.full) stash_.full = std::make_unique<LandmarkSlam>(FullOptions(options_));
-  SwapWithStash();
-  ForgetReference();
+  SwapWithStash();  // the live members now empty: the stash holds nothing else while not held
   stash_.held = true;
 }
 

@@ -225,10 +225,10 @@ class LandmarkEvaluator : public StateEvaluator {
     double root_bytes = 0;
     std::unordered_map<std::pair<int, int>, Eigen::Matrix4d, KeyPairHash> cross_covariances;
   };
+  // Empty but for its solver while no reference is held (RestoreReference
+  // empties it).
   StashedReference stash_;
   void SwapWithStash();
-  // Empties the live reference's members, keeping its solver.
-  void ForgetReference();
 };
 
 // Squared whitened range-bearing residuals of the sightings `sightings` of a

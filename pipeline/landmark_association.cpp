@@ -546,17 +546,6 @@ AssociationState LandmarkAssociation::WithBlockPairsMerged(
   return merged;
 }
 
-// `s` with track t split off block j into a block of its own, canonical.
-AssociationState LandmarkAssociation::WithTrackSplitOff(const AssociationState& s, int j, int t) {
-  AssociationState split = s;
-  auto& block = split.blocks[j];
-  block.erase(std::find(block.begin(), block.end(), t));
-  split.blocks.push_back({t});
-  split.classes.assign(split.blocks.size(), 0);
-  split.Canonicalize();
-  return split;
-}
-
 // How badly landmark j of `e` fits its sightings in the window: the squared
 // whitened residual r2 of its n sightings standardised as
 // (r2 - 2n) / sqrt(4n), the chi-square's mean and spread.
@@ -745,7 +734,7 @@ long LandmarkAssociation::SplitSweep() {
         double gain = 0;
         EvaluationPtr e;
         if (!evaluator_->SplitGain(*before, static_cast<int>(j), t, &gain)) {
-          e = evaluator_->Evaluate(WithTrackSplitOff(s, static_cast<int>(j), t), before.get());
+          e = evaluator_->Evaluate(s.WithTrackMoved(t, -1, 0), before.get());
           gain = e->valid ? e->log_target - base : -std::numeric_limits<double>::infinity();
         }
         if (gain > b.delta) b = {gain, static_cast<int>(j), t, e};
@@ -757,8 +746,8 @@ long LandmarkAssociation::SplitSweep() {
               [](const Split& x, const Split& y) { return x.delta > y.delta; });
     // The best one's evaluation warm-starts the re-solve.
     if (!best.front().evaluation)
-      best.front().evaluation = evaluator_->Evaluate(
-          WithTrackSplitOff(s, best.front().block, best.front().track), before.get());
+      best.front().evaluation =
+          evaluator_->Evaluate(s.WithTrackMoved(best.front().track, -1, 0), before.get());
     AssociationState all = s;
     for (const Split& b : best) {
       auto& block = all.blocks[b.block];

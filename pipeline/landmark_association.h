@@ -355,7 +355,6 @@ class LandmarkAssociation {
   bool MakeMerges(const std::vector<MergeCandidate>& best, double sweep_m, int* made);
   EvaluationPtr WithoutMisfitMerges(EvaluationPtr e, const AssociationState& before,
                                     std::vector<std::pair<int, int>>* pairs, int* made);
-  static AssociationState WithTrackSplitOff(const AssociationState& s, int j, int t);
   static AssociationState WithBlockPairsMerged(const AssociationState& s,
                                                const std::vector<std::pair<int, int>>& pairs);
   double MisfitZ(const StateEvaluation& e, int j) const;

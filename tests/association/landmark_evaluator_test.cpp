@@ -402,12 +402,7 @@ TEST(LandmarkEvaluatorTest, ASplitScoresAsItsEvaluation) {
     for (size_t j = 0; j < state.blocks.size(); ++j) {
       if (state.blocks[j].size() < 2) continue;
       for (int t : state.blocks[j]) {
-        AssociationState split = state;
-        auto& block = split.blocks[j];
-        block.erase(std::find(block.begin(), block.end(), t));
-        split.blocks.push_back({t});
-        split.classes.assign(split.blocks.size(), 0);
-        split.Canonicalize();
+        const AssociationState split = state.WithTrackMoved(t, -1, 0);
         double gain = 0;
         ASSERT_TRUE(evaluator.SplitGain(*at, static_cast<int>(j), t, &gain));
         const EvaluationPtr e = evaluator.Evaluate(split, at.get());
