@@ -309,6 +309,17 @@ void LandmarkMode::Declare(Arguments* arguments) {
         "misfit merges and re-solve, at most this many times, before keeping only the best "
         "merge (0: at once)")
       .Check([this] { return options_.unknown.targeted_repair_rounds >= 0; }, "must be >= 0");
+  b.Add(&u.probation_windows, "probation-windows", "N",
+        "unknown association: a loop closure by targeted merges that gains little but moves a "
+        "pose far is decided N windows later, by running its windows again without it and "
+        "keeping the path with the higher evidence (0: off)")
+      .Check([this] { return options_.unknown.probation_windows >= 0; }, "must be >= 0");
+  b.Add(&u.probation_max_gain, "probation-gain", "NATS",
+        "unknown association: loop closures gaining less than this go on probation")
+      .Check([this] { return options_.unknown.probation_max_gain >= 0; }, "must be >= 0");
+  b.Add(&u.probation_shift_spacing, "probation-shift", "SPACINGS",
+        "unknown association: ... and moving a pose by more than this many landmark spacings")
+      .Check([this] { return options_.unknown.probation_shift_spacing >= 0; }, "must be >= 0");
   b.Add(&u.joint_max_shift_m, "joint-max-shift", "M",
         "unknown association: joint merges only for alignments shifting the recent landmarks "
         "at most this far (0: no limit)");

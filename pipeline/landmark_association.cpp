@@ -46,6 +46,10 @@ bool UnknownAssociationOptions::Validate(std::string* why) const {
     if (why) *why = "tracks need >= 1 sighting and the candidate cap must be >= 0 (0: none)";
     return false;
   }
+  if (probation_windows < 0 || !(probation_max_gain >= 0) || !(probation_shift_spacing >= 0)) {
+    if (why) *why = "the probation's windows, gain and shift must be >= 0";
+    return false;
+  }
   if (targeted_repair_rounds < 0) {
     if (why) *why = "the targeted merges' repair rounds must be >= 0";
     return false;
@@ -119,7 +123,7 @@ UnknownAssociationResult LandmarkAssociation::Run() {
   if (options_.calibrate_on_tracks) CalibrateOnTracks();
   PlanWindows();
   climb_start_ = std::chrono::steady_clock::now();
-  for (size_t w = 0; w < ends_.size(); ++w) RunWindow(w);
+  RunWindows();
   FinalGlobalPass();
   result_.hill_climb_time_s = SecondsSince(climb_start_);
   for (const MoveStatistics& s : stats_) result_.proposal_time_s += s.time_s;
@@ -199,7 +203,9 @@ void LandmarkAssociation::BuildTracks() {
 
 // After the calibration: the drift bound uses the odometry noise searched under.
 void LandmarkAssociation::PlanWindows() {
-  const double spacing_m = options_.window_drift_spacing > 0 ? MedianCoVisibleSpacing(*data_) : 0.0;
+  const bool needs_spacing = options_.window_drift_spacing > 0 || options_.probation_windows > 0;
+  spacing_m_ = needs_spacing ? MedianCoVisibleSpacing(*data_) : 0.0;
+  const double spacing_m = spacing_m_;
   const double max_drift_m = options_.window_drift_spacing * spacing_m;
   ends_ = SearchWindowEnds(*data_, options_.window_poses, max_drift_m);
   if (max_drift_m > 0)
@@ -217,6 +223,120 @@ EvaluationPtr LandmarkAssociation::Refine(const AssociationState& state,
   result_.refine_time_s += SecondsSince(t);
   ++result_.refines;
   return e;
+}
+
+// ---- the windows, weak loop closures on probation ----
+
+void LandmarkAssociation::RunWindows() {
+  for (size_t w = 0; w < ends_.size(); ++w) {
+    std::optional<WindowStart> start;
+    if (options_.probation_windows > 0 && !probation_) start = SaveWindowStart(w);
+    weak_closures_.clear();
+    RunWindow(w);
+    if (start && !weak_closures_.empty())
+      probation_ = Probation{std::move(*start), weak_closures_,
+                             w + static_cast<size_t>(options_.probation_windows)};
+    if (probation_ && (w >= probation_->decide_after || w + 1 == ends_.size())) DecideProbation(w);
+  }
+}
+
+LandmarkAssociation::WindowStart LandmarkAssociation::SaveWindowStart(size_t w) const {
+  return {w,
+          state_,
+          previous_,
+          tracks_before_,
+          rng_,
+          compared_ordering_,
+          ordering_compared_poses_,
+          last_ransac_,
+          joint_needed_score_,
+          last_failure_};
+}
+
+void LandmarkAssociation::RestoreWindowStart(const WindowStart& start) {
+  state_ = start.state;
+  previous_ = start.previous;
+  tracks_before_ = start.tracks_before;
+  rng_ = start.rng;
+  compared_ordering_ = start.compared_ordering;
+  ordering_compared_poses_ = start.ordering_compared_poses;
+  last_ransac_ = start.last_ransac;
+  joint_needed_score_ = start.joint_needed_score;
+  last_failure_ = start.last_failure;
+}
+
+LandmarkAssociation::SearchPath LandmarkAssociation::TakePath() {
+  SearchPath path;
+  path.start = SaveWindowStart(0);
+  path.current = std::move(current_);
+  path.tracks_now = tracks_now_;
+  path.held_poses = held_poses_;
+  path.split_pairs = split_pairs_;
+  path.evaluator = std::move(evaluator_);  // before the data it refers to
+  path.window_data = std::move(window_data_);
+  path.window_dataset = std::move(window_dataset_);
+  return path;
+}
+
+void LandmarkAssociation::PutPath(SearchPath path) {
+  RestoreWindowStart(path.start);
+  current_ = std::move(path.current);
+  tracks_now_ = path.tracks_now;
+  held_poses_ = path.held_poses;
+  split_pairs_ = path.split_pairs;
+  evaluator_ = std::move(path.evaluator);
+  window_data_ = std::move(path.window_data);
+  window_dataset_ = std::move(path.window_dataset);
+}
+
+// After window w: the windows from the probation's own run again with its
+// merges barred; the path with the higher target at window w's end (the
+// same poses, tracks and model: comparable) goes on.
+void LandmarkAssociation::DecideProbation(size_t w) {
+  Probation probation = std::move(*probation_);
+  probation_.reset();
+  const double kept_target = current_->log_target;
+  SearchPath kept = TakePath();
+  const size_t barred_before = barred_.size();
+  barred_.insert(barred_.end(), probation.pairs.begin(), probation.pairs.end());
+  RestoreWindowStart(probation.start);
+  replaying_ = true;
+  for (size_t v = probation.start.window; v <= w; ++v) RunWindow(v);
+  replaying_ = false;
+  ++result_.probations;
+  // A tie (both paths made the same merges another way: a joint merge, a
+  // later window's) keeps the path as it was.
+  constexpr double kTieNats = 0.01;
+  const bool undone = current_->valid && current_->log_target > kept_target + kTieNats;
+  Say(
+      Format("probation of %.0f merges from window %.0f: log target %.1f with them, %.1f without "
+             "-> %s",
+             double(probation.pairs.size()), double(probation.start.window + 1), kept_target,
+             current_->valid ? current_->log_target : -1e300, undone ? "undone" : "kept"));
+  if (undone) {
+    ++result_.probations_undone;
+    return;
+  }
+  barred_.resize(barred_before);
+  PutPath(std::move(kept));
+}
+
+void LandmarkAssociation::NoteWeakClosure(const StateEvaluation& before,
+                                          const StateEvaluation& after,
+                                          const std::vector<std::pair<int, int>>& pairs) {
+  if (options_.probation_windows <= 0 || replaying_ || probation_ || !before.solution ||
+      !after.solution || !(after.log_target - before.log_target < options_.probation_max_gain))
+    return;
+  const auto& from = before.solution->trajectory;
+  const auto& to = after.solution->trajectory;
+  double shift_m = 0;
+  for (size_t i = 0; i < std::min(from.size(), to.size()); ++i)
+    shift_m = std::max(shift_m, std::hypot(to[i].x - from[i].x, to[i].y - from[i].y));
+  if (!(shift_m > options_.probation_shift_spacing * spacing_m_)) return;
+  for (const auto& [a, b] : pairs)
+    weak_closures_.push_back({before.state.blocks[a].front(), before.state.blocks[b].front()});
+  Say(Format("probation: %.0f merges gaining %.2f moved a pose by %.1f m", double(pairs.size()),
+             after.log_target - before.log_target, shift_m));
 }
 
 // ---- a window ----
@@ -241,10 +361,10 @@ void LandmarkAssociation::RunWindow(size_t w) {
   accepted += HillClimb(steps);
   state_ = current_->state;
   previous_ = current_;
-  Say(Format("window %.0f/%.0f: %.0f poses, %.0f tracks, %.0f steps (%.0f accepted) -> "
+  Say(Format("%swindow %.0f/%.0f: %.0f poses, %.0f tracks, %.0f steps (%.0f accepted) -> "
              "%.0f landmarks,",
-             double(w + 1), double(ends_.size()), double(n), double(tracks_now_), double(steps),
-             double(accepted), double(state_.blocks.size())) +
+             replaying_ ? "again: " : "", double(w + 1), double(ends_.size()), double(n),
+             double(tracks_now_), double(steps), double(accepted), double(state_.blocks.size())) +
       Format(" log target %.1f, %.2f s (%.0f full solves so far, %.1f s; targeted merges "
              "scored in %.1f s)",
              current_->log_target, SecondsSince(window_start), double(result_.refines),
@@ -460,11 +580,17 @@ std::vector<LandmarkAssociation::MergeCandidate> LandmarkAssociation::BestMerges
     evaluator_->PrepareMerges(involved);
     result_.targeted_time_s += SecondsSince(t);
   }
+  std::set<std::pair<int, int>> barred;  // pairs of blocks
+  for (const auto& [ta, tb] : barred_) {
+    const int a = ta < tracks_now_ ? s.BlockOf(ta) : -1, b = tb < tracks_now_ ? s.BlockOf(tb) : -1;
+    if (a >= 0 && b >= 0 && a != b) barred.insert(std::minmax(a, b));
+  }
   std::vector<MergeCandidate> best;
   const auto t = std::chrono::steady_clock::now();
   for (size_t j = 0; j < s.blocks.size(); ++j) {
     MergeCandidate c{0, -1, -1, nullptr};
     for (const auto& [distance, k] : candidates[j]) {
+      if (!barred.empty() && barred.count(std::minmax(static_cast<int>(j), k))) continue;
       ++result_.proposals;
       // Most pairs in closed form; the state itself only where that fails.
       double gain = 0;
@@ -509,6 +635,7 @@ bool LandmarkAssociation::MakeMerges(const std::vector<MergeCandidate>& best, do
   if (fell() && *made > 1) {  // only the single best merge
     refined = Refine(best.front().evaluation->state, best.front().evaluation.get());
     *made = 1;
+    pairs = {{best.front().a, best.front().b}};
   }
   if (fell() && best.front().delta > options_.cold_retry_gain) {
     // A strong loop closure the warm re-solve could not pull in: solve
@@ -525,6 +652,7 @@ bool LandmarkAssociation::MakeMerges(const std::vector<MergeCandidate>& best, do
     current_ = Refine(before->state, before.get());
     return false;
   }
+  if (sweep_m <= 0) NoteWeakClosure(*before, *refined, pairs);
   current_ = refined;
   return true;
 }

@@ -113,6 +113,21 @@ struct UnknownAssociationOptions {
   // When a targeted merge gaining more than this (linearised) fails its
   // warm re-solve, it is re-solved once more from dead reckoning.
   double cold_retry_gain = 10;
+  // Delayed decision on a weak loop closure (N-scan-back pruning of a
+  // two-hypothesis tree, as in multiple-hypothesis tracking): a batch of
+  // targeted merges whose re-solve raises the target by less than
+  // probation_max_gain yet moves a pose by more than probation_shift_spacing
+  // landmark spacings (MedianCoVisibleSpacing) re-places the robot on weak
+  // evidence, where a neighbouring landmark's merge would fit nearly as well.
+  // Kept at first, it is on probation: probation_windows windows later, the
+  // windows since its own are run again with its pairs barred from the
+  // targeted merges, and the path with the higher target at that window's
+  // end goes on (bars kept with it). One probation at a time, none inside a
+  // run again (docs/method.md §16.2; measured in docs/benchmarks.md).
+  // probation_windows 0: off.
+  int probation_windows = 0;
+  double probation_max_gain = 5;
+  double probation_shift_spacing = 1;
   // When a batch of targeted merges lowers the target, the merges whose
   // landmark misfits the solve (joint_misfit_z, as the joint merges' repair)
   // are undone and the rest re-solved, at most this many rounds, before
@@ -259,7 +274,8 @@ struct UnknownAssociationResult {
   LandmarkSlamResult solution;  // full solve of `state`, landmark covariances
   double log_target = 0;        // of `state`, full evaluation
   long proposals = 0, accepted = 0, solves = 0, cache_hits = 0, cold_retries = 0;
-  long joint_tries = 0, joint_merges = 0;  // joint re-entry merges: solves tried, pairs kept
+  long joint_tries = 0, joint_merges = 0;      // joint re-entry merges: solves tried, pairs kept
+  long probations = 0, probations_undone = 0;  // weak loop closures decided, and undone
   long clutter_tracks = 0, clutter_sightings = 0;  // left out (min_track_sightings)
   // Landmarks split at a window start because two of their tracks, merged
   // before, both continued into one scan (one sighting per scan).
@@ -330,6 +346,52 @@ class LandmarkAssociation {
   // centre, the windows' ends.
   void BuildTracks();
   void PlanWindows();
+  // The search's state before a window: all that RunWindow reads of the
+  // windows before (its evaluator is built anew), to run it again.
+  struct WindowStart {
+    size_t window = 0;
+    AssociationState state;
+    EvaluationPtr previous;
+    int tracks_before = 0;
+    Rng rng;
+    OrderingType compared_ordering = OrderingType::kAutomatic;
+    int ordering_compared_poses = -1;
+    int last_ransac = 0;
+    double joint_needed_score = 0;
+    int last_failure = 0;
+  };
+  // A weak loop closure kept for now (probation_windows): the windows from
+  // `start` are run again without its merges (pairs of tracks) after window
+  // decide_after.
+  struct Probation {
+    WindowStart start;
+    std::vector<std::pair<int, int>> pairs;
+    size_t decide_after = 0;
+  };
+  // The whole search path after a window, the window's evaluator included,
+  // set aside while the windows are run again.
+  struct SearchPath {
+    WindowStart start;  // the state after the window, as the next one reads it
+    EvaluationPtr current;
+    int tracks_now = 0, held_poses = 0;
+    long split_pairs = 0;
+    std::unique_ptr<LandmarkDataset> window_dataset;
+    std::unique_ptr<LandmarkTargetData> window_data;
+    std::unique_ptr<LandmarkEvaluator> evaluator;
+  };
+
+  // The windows in turn, each weak loop closure decided by running its
+  // windows again without it (Probation).
+  void RunWindows();
+  WindowStart SaveWindowStart(size_t w) const;
+  void RestoreWindowStart(const WindowStart& start);
+  SearchPath TakePath();
+  void PutPath(SearchPath path);
+  void DecideProbation(size_t w);
+  // After a paying batch of targeted merges: notes its pairs as a weak loop
+  // closure when it gained little but moved a pose far.
+  void NoteWeakClosure(const StateEvaluation& before, const StateEvaluation& after,
+                       const std::vector<std::pair<int, int>>& pairs);
   // A window: its start state and first solve, targeted merges, duplicate
   // sweep, joint re-entry merge, random hill climbing.
   void RunWindow(size_t w);
@@ -437,6 +499,7 @@ class LandmarkAssociation {
   std::vector<double> driven_m_;  // per pose: metres driven since pose 0 (dead reckoning)
   std::optional<ClassConfusionModel> model_;
   std::vector<int> ends_;  // of the windows (pose counts)
+  double spacing_m_ = 0;   // MedianCoVisibleSpacing, when an option needs it
 
   Rng rng_;
   AssociationState state_;  // the last window's (or the global pass's) final state
@@ -458,6 +521,14 @@ class LandmarkAssociation {
   int last_ransac_;                // window end of the last RANSAC
   double joint_needed_score_ = 0;  // RANSAC score the next joint merge needs
   int last_failure_ = 0;
+
+  // Probation (probation_windows): the window's weak loop closures (pairs of
+  // tracks), the one on probation, the pairs the targeted merges do not
+  // join, and whether windows are being run again.
+  std::vector<std::pair<int, int>> weak_closures_;
+  std::optional<Probation> probation_;
+  std::vector<std::pair<int, int>> barred_;
+  bool replaying_ = false;
 };
 
 }  // namespace oslam

@@ -164,6 +164,9 @@ TEST(LandmarkMapCommand, UnknownAssociationComparesWithTheIds) {
   EXPECT_EQ(RunOslam(common + " --joint-screen -1").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --joint-screen 0").exit_code, 0);
   EXPECT_EQ(RunOslam(common + " --threads -1").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --probation-windows -1").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --probation-gain nan").exit_code, 2);
+  EXPECT_EQ(RunOslam(common + " --probation-windows 2 --probation-shift 0").exit_code, 0);
   const testing::CommandResult one_thread = RunOslam(common + " --threads 1");
   ASSERT_EQ(one_thread.exit_code, 0) << one_thread.err;
   EXPECT_EQ(ReadOMap(dir.Path("omap.json")).objects.size(), map.objects.size());

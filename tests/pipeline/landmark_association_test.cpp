@@ -139,6 +139,46 @@ TEST(LandmarkAssociationTest, JointMergeClosesALoopNoSingleMergeCloses) {
   EXPECT_GT(with.log_target, without.log_target);
 }
 
+// Every loop-closing batch of targeted merges on probation (any gain, any
+// shift): its windows are run again without it and the better path goes on.
+// Each decision follows the targets it reports, the run ends at the true
+// association, and it is reproducible.
+TEST(LandmarkAssociationTest, WeakLoopClosuresAreDecidedByRunningTheirWindowsAgain) {
+  const LandmarkDataset data = SimulateExcursion(12, 0.0015);
+  UnknownAssociationOptions options = ExcursionOptions();
+  options.probation_windows = 2;
+  options.probation_max_gain = 1e9;
+  options.probation_shift_spacing = 0;
+  std::vector<std::string> lines;
+  const UnknownAssociationResult result = SolveUnknownAssociation(
+      data, options, [&](const std::string& line) { lines.push_back(line); });
+  int decisions = 0, undone = 0, again = 0;
+  for (const std::string& line : lines) {
+    again += line.rfind("again: window", 0) == 0;
+    double with = 0, without = 0;
+    char verdict[16] = {};
+    if (std::sscanf(line.c_str(),
+                    "probation of %*d merges from window %*d: log target %lf with them, "
+                    "%lf without -> %15s",
+                    &with, &without, verdict) != 3)
+      continue;
+    ++decisions;
+    const bool was_undone = std::string(verdict) == "undone";
+    undone += was_undone;
+    EXPECT_EQ(was_undone, without > with + 0.01) << line;
+  }
+  std::printf("%d probations (%d undone), %d windows run again, %zu landmarks\n", decisions, undone,
+              again, result.solution.landmarks.size());
+  EXPECT_EQ(decisions, result.probations);
+  EXPECT_EQ(undone, result.probations_undone);
+  EXPECT_GT(decisions, 0);
+  EXPECT_GE(again, 3 * decisions);  // its own window and the two after it
+  EXPECT_DOUBLE_EQ(ComparePairwise(result.association, GivenAssociation(data)).agreement, 1.0);
+  const UnknownAssociationResult second = SolveUnknownAssociation(data, options);
+  EXPECT_EQ(second.association, result.association);
+  EXPECT_EQ(second.log_target, result.log_target);
+}
+
 // Trees 3-4 m apart and a stronger drift: the re-entry's alignment pairs a
 // few trees wrongly, and those pairs alone sink the joint merge's evidence.
 // Splitting the misfit pairs off again and re-solving keeps the loop closed.
@@ -551,6 +591,16 @@ TEST(LandmarkAssociationTest, RejectsInvalidOptions) {
   EXPECT_FALSE(screen.Validate(&why));
   screen.joint_screen_candidates = 0;  // off: the rest unused
   EXPECT_TRUE(screen.Validate(&why));
+  UnknownAssociationOptions probation;
+  probation.probation_windows = -1;
+  EXPECT_FALSE(probation.Validate(&why));
+  probation.probation_windows = 0;  // off
+  EXPECT_TRUE(probation.Validate(&why));
+  probation.probation_max_gain = std::nan("");
+  EXPECT_FALSE(probation.Validate(&why));
+  probation.probation_max_gain = 5;
+  probation.probation_shift_spacing = -1;
+  EXPECT_FALSE(probation.Validate(&why));
   UnknownAssociationOptions flat;
   flat.target.slam.landmark_density_per_m2 = 0;
   EXPECT_FALSE(flat.Validate(&why));
