@@ -11,9 +11,11 @@
 
 #include "apps/map_modes.h"
 #include "association/association_metrics.h"
+#include "association/landmark_tracks.h"
 #include "core/atomic_file.h"
 #include "core/csv.h"
 #include "core/error.h"
+#include "core/text.h"
 #include "omap/omap_json.h"
 #include "slam/landmark_formats.h"
 #include "slam/landmark_noise.h"
@@ -242,10 +244,22 @@ void LandmarkMode::Declare(Arguments* arguments) {
         "std of a Gaussian location prior on every landmark (0: none; makes the evidence "
         "comparable across associations, but pulls the landmarks toward its mean)")
       .Check([this] { return options_.slam.landmark_prior_std_m >= 0; }, "must be >= 0");
-  b.Add(&o.slam.landmark_density_per_m2, "landmark-density", "PER_M2",
-        "location prior of constant density on every landmark, landmarks per square metre "
-        "(0: none; makes the evidence comparable across associations without moving "
-        "anything; the default with --unknown-association: 1.59e-5)")
+  b.AddCustom(
+       "landmark-density", "PER_M2|auto",
+       "location prior of constant density on every landmark, landmarks per square metre "
+       "(0: none; makes the evidence comparable across associations without moving "
+       "anything; auto: sightings per scan over the area a scan sees, docs/method.md §16.2; "
+       "the default with --unknown-association: 1.59e-5)",
+       [this] {
+         return options_.unknown.landmark_density_from_data
+                    ? std::string("auto")
+                    : Format("%g", options_.slam.landmark_density_per_m2);
+       },
+       [this](const std::string& text) -> std::string {
+         options_.unknown.landmark_density_from_data = text == "auto";
+         if (text == "auto") return "";
+         return ParseNumber(text, false, &options_.slam.landmark_density_per_m2);
+       })
       .Check([this] { return options_.slam.landmark_density_per_m2 >= 0; }, "must be >= 0");
   b.Add(&o.slam.diameter_std_m, "diameter-std", "M",
         "std of one trunk-diameter measurement (where the data set has them)");
@@ -389,6 +403,12 @@ int LandmarkMode::Run(const Arguments& arguments) {
                         "or solve with --unknown-association");
   }
   o.slam.solver.threads = o.unknown.threads;  // --threads
+  if (o.unknown.landmark_density_from_data) {
+    o.slam.landmark_density_per_m2 = SightingDensityPerM2(data);
+    if (!arguments.Flag("quiet"))
+      std::printf("landmark density from the sightings: %.3g per m2\n",
+                  o.slam.landmark_density_per_m2);
+  }
   std::string why;
   if (!o.slam.Validate(&why)) throw UsageError(why);
   LandmarkSlamResult result;
@@ -423,10 +443,12 @@ int LandmarkMode::Run(const Arguments& arguments) {
     if (result.evidence.valid) std::printf("log evidence %.3f\n", result.evidence.log_evidence);
     std::printf("trajectory %.1f m (dead reckoning %.1f m)\n", TrajectoryLength(result.trajectory),
                 TrajectoryLength(data.dead_reckoning));
-    if (!o.truth_trajectory.empty())
-      std::printf("vs the true trajectory: RMSE %.3f m\n",
-                  TrajectoryRmse(result.trajectory,
-                                 ReadTrueTrajectory(o.truth_trajectory, data.num_poses)));
+    if (!o.truth_trajectory.empty()) {
+      const std::vector<Pose2> truth = ReadTrueTrajectory(o.truth_trajectory, data.num_poses);
+      std::printf("vs the true trajectory: RMSE %.3f m; after a rigid alignment (ATE) %.3f m\n",
+                  TrajectoryRmse(result.trajectory, truth),
+                  AlignedTrajectoryRmse(result.trajectory, truth));
+    }
     std::printf("wrote %s and %s\n", output.c_str(), trajectory_path.c_str());
   }
   PrintGpsError(o.gps, o.gps_antenna, data, result.trajectory);
@@ -479,9 +501,13 @@ void PrintAgainstFileIds(const LandmarkDataset& data, const UnknownAssociationOp
       TrajectoryRmse(result.solution.trajectory, clean.trajectory));
   if (!truth_trajectory.empty()) {
     const std::vector<Pose2> truth = ReadTrueTrajectory(truth_trajectory, data.num_poses);
-    std::printf("vs the true trajectory: RMSE %.3f m (the file's association's %.3f m)\n",
-                TrajectoryRmse(result.solution.trajectory, truth),
-                TrajectoryRmse(reference.trajectory, truth));
+    std::printf(
+        "vs the true trajectory: RMSE %.3f m (the file's association's %.3f m); after a rigid "
+        "alignment (ATE) %.3f m (%.3f m)\n",
+        TrajectoryRmse(result.solution.trajectory, truth),
+        TrajectoryRmse(reference.trajectory, truth),
+        AlignedTrajectoryRmse(result.solution.trajectory, truth),
+        AlignedTrajectoryRmse(reference.trajectory, truth));
   }
 }
 
@@ -505,7 +531,7 @@ int LandmarkMode::RunUnknownAssociation(const Arguments& arguments, const Landma
     options.target.slam.landmark_prior_std_m = options_.slam.landmark_prior_std_m;
     options.target.slam.landmark_density_per_m2 = 0;
   }
-  if (arguments.Has("landmark-density")) {
+  if (arguments.Has("landmark-density") && !options.landmark_density_from_data) {
     options.target.slam.landmark_density_per_m2 = options_.slam.landmark_density_per_m2;
     options.target.slam.landmark_prior_std_m = 0;
   }

@@ -5,6 +5,7 @@
 #include <string>
 #include <utility>
 
+#include "association/rigid_alignment.h"
 #include "core/error.h"
 
 namespace oslam {
@@ -45,6 +46,19 @@ double TrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b) 
   for (size_t i = 0; i < a.size(); ++i)
     sum += (a[i].x - b[i].x) * (a[i].x - b[i].x) + (a[i].y - b[i].y) * (a[i].y - b[i].y);
   return std::sqrt(sum / double(a.size()));
+}
+
+double AlignedTrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b) {
+  TrajectoryRmse(a, b);  // the size checks
+  std::vector<Eigen::Vector2d> from, to;
+  for (size_t i = 0; i < a.size(); ++i) {
+    from.emplace_back(a[i].x, a[i].y);
+    to.emplace_back(b[i].x, b[i].y);
+  }
+  const Rigid2 motion = FitRigid(from, to);
+  double sum = 0;
+  for (size_t i = 0; i < from.size(); ++i) sum += (motion(from[i]) - to[i]).squaredNorm();
+  return std::sqrt(sum / double(from.size()));
 }
 
 }  // namespace oslam

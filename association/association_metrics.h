@@ -25,4 +25,9 @@ PairwiseAgreement ComparePairwise(const std::vector<int>& estimate, const std::v
 // empty.
 double TrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b);
 
+// The same after the least-squares rigid motion of `a` onto `b` (the
+// absolute trajectory error of Sturm et al., IROS 2012, in the plane): the
+// map's shape, whatever the frame its first poses pin it to. Throws as above.
+double AlignedTrajectoryRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b);
+
 }  // namespace oslam

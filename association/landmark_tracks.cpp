@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include "core/angles.h"
 #include "core/error.h"
 #include "core/statistics.h"
 #include "slam/landmark_factors.h"
@@ -119,6 +120,26 @@ double MedianCoVisibleSpacing(const LandmarkDataset& data) {
     }
   }
   return UpperMedian(std::move(nearest));
+}
+
+double SightingDensityPerM2(const LandmarkDataset& data) {
+  std::vector<double> ranges, bearings;
+  for (const LandmarkSighting& s : data.sightings) {
+    if (!(s.range_m > 0)) continue;
+    ranges.push_back(s.range_m);
+    bearings.push_back(WrapAngle(s.bearing_rad));
+  }
+  if (ranges.empty() || data.num_poses <= 0) return 0.0;
+  auto quantile = [](std::vector<double>* v, double q) {
+    const size_t at = std::min(v->size() - 1, static_cast<size_t>(q * double(v->size())));
+    std::nth_element(v->begin(), v->begin() + static_cast<std::ptrdiff_t>(at), v->end());
+    return (*v)[at];
+  };
+  const double near_m = quantile(&ranges, 0.01), far_m = quantile(&ranges, 0.99);
+  const double view_rad = std::min(2 * kPi, quantile(&bearings, 0.99) - quantile(&bearings, 0.01));
+  const double area_m2 = 0.5 * view_rad * (far_m * far_m - near_m * near_m);
+  if (!(area_m2 > 0)) return 0.0;
+  return double(ranges.size()) / double(data.num_poses) / area_m2;
 }
 
 std::vector<int> SearchWindowEnds(const LandmarkDataset& data, int max_poses, double max_drift_m) {

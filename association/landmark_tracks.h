@@ -36,6 +36,14 @@ std::vector<std::vector<int>> BuildLandmarkTracks(const LandmarkDataset& data,
 // scan with two or more. 0 when no scan has two.
 double MedianCoVisibleSpacing(const LandmarkDataset& data);
 
+// The landmarks per square metre the sensor's view suggests, for a location
+// prior that matches the data (docs/method.md §16.2): sightings per scan
+// over the area one scan sees, the ring sector between the 1st and 99th
+// percentiles of the range and of the bearing (2 pi at most). Every scan
+// counts, empty ones too. A lower bound where the sensor misses landmarks in
+// view. 0 when no sighting has a range > 0.
+double SightingDensityPerM2(const LandmarkDataset& data);
+
 // The growing windows of the unknown-association search (docs/method.md
 // §16.2), as pose counts (each window ends before its count; the last is
 // num_poses). A window holds at most max_poses poses; with max_drift_m > 0 it

@@ -180,6 +180,13 @@ void LandmarkAssociation::BuildTracks() {
     }
   }
   options_.target.slam.landmark_prior_mean_m = centre / placed;
+  if (options_.landmark_density_from_data) {
+    const double density = SightingDensityPerM2(data);
+    if (!(density > 0)) throw Error::InFile(data.path, "no sighting to estimate the density from");
+    options_.target.slam.landmark_density_per_m2 = density;
+    options_.target.slam.landmark_prior_std_m = 0;
+    Say(Format("landmark density from the sightings: %.3g per m2", density));
+  }
   result_.slam_options = options_.target.slam;
   result_.slam_options.compute_landmark_covariances = false;
   result_.slam_options.compute_pose_covariances = false;

@@ -56,6 +56,12 @@ struct UnknownAssociationOptions {
   // tracks of one tree with 40 sightings each look like different trees.
   bool diameter_per_track = false;
   LandmarkTargetOptions target;
+  // The location prior's density (target.slam.landmark_density_per_m2)
+  // estimated from the data instead (SightingDensityPerM2): the default
+  // density (a landmark per 6.3 hectares) makes every merge 4-6 nats cheaper
+  // than on a world of a landmark per 150 m², where the true association
+  // then loses to wrong loop closures (docs/benchmarks.md).
+  bool landmark_density_from_data = false;
   MoveOptions moves;  // merge_distance_m / merge_sigma_m: how far apart merge candidates are
   MoveProbabilities hill_climb_moves{0.9, 0.1, 0.0};
   // Short windows: each loop closure is made (and the trajectory corrected)

@@ -112,6 +112,11 @@ TEST(LandmarkMapCommand, SimulatedWorldWithItsTruth) {
   // landmarks: well under a metre.
   EXPECT_GT(rmse, 0.0);
   EXPECT_LT(rmse, 1.0);
+  const size_t aligned_at = known.out.find("after a rigid alignment (ATE) ", at);
+  ASSERT_NE(aligned_at, std::string::npos) << known.out;
+  const double ate = std::stod(known.out.substr(aligned_at + 30));
+  EXPECT_GT(ate, 0.0);
+  EXPECT_LE(ate, rmse + 1e-3);  // printed to the millimetre
   EXPECT_EQ(CsvTable::Read(dir.Path("w/true_landmarks.csv")).num_rows(), 40u);
   // A truth of another length: an error naming the file.
   const testing::CommandResult other = RunOslam("simulate-landmarks -o " + dir.Path("v") +

@@ -55,5 +55,24 @@ TEST(AssociationMetricsTest, TrajectoryRmseIgnoresHeadings) {
   EXPECT_THROW(TrajectoryRmse({}, {}), Error);
 }
 
+// A rotated and shifted copy aligns to nothing; noise on top of it leaves
+// the noise's RMS.
+TEST(AssociationMetricsTest, AlignedTrajectoryRmseRemovesARigidMotion) {
+  const std::vector<Pose2> truth{{0, 0, 0}, {10, 0, 0}, {10, 5, 1}, {0, 8, 2}};
+  std::vector<Pose2> moved, noisy;
+  const double c = std::cos(0.3), s = std::sin(0.3);
+  const double offsets[4][2] = {{0.1, 0}, {-0.1, 0}, {0, 0.1}, {0, -0.1}};  // zero mean, RMS 0.1
+  for (size_t i = 0; i < truth.size(); ++i) {
+    const Pose2& p = truth[i];
+    moved.push_back({c * p.x - s * p.y + 4, s * p.x + c * p.y - 7, p.theta + 0.3});
+    noisy.push_back({p.x + offsets[i][0], p.y + offsets[i][1], p.theta});
+  }
+  EXPECT_GT(TrajectoryRmse(moved, truth), 5.0);
+  EXPECT_NEAR(AlignedTrajectoryRmse(moved, truth), 0.0, 1e-9);
+  EXPECT_LE(AlignedTrajectoryRmse(noisy, truth), TrajectoryRmse(noisy, truth) + 1e-12);
+  EXPECT_NEAR(AlignedTrajectoryRmse(noisy, truth), 0.1, 0.02);
+  EXPECT_THROW(AlignedTrajectoryRmse(truth, {truth[0]}), Error);
+}
+
 }  // namespace
 }  // namespace oslam

@@ -141,6 +141,27 @@ TEST(LandmarkTracksTest, SpacingIsTheMedianNearestNeighbourWithinAScan) {
   EXPECT_EQ(MedianCoVisibleSpacing(lonely.data()), 0.0);
 }
 
+// Trees on a 2 m grid (0.25 per m²), each scan seeing those ahead within
+// 10 m: the estimate is the grid's density, within the percentiles' trim and
+// the grid's granularity; a sensor missing every other sighting halves it
+// (a lower bound).
+TEST(LandmarkTracksTest, SightingDensityIsTheLandmarksPerSquareMetreInView) {
+  Scans all(20), half(20);
+  int seen = 0;
+  for (int pose = 0; pose < 20; ++pose)
+    for (int i = -20; i <= 40; ++i)
+      for (int j = -10; j <= 10; ++j) {
+        const double x = 2.0 * i + 1.0, y = 2.0 * j + 1.0;  // off the drive's line
+        if (x < pose || std::hypot(x - pose, y) > 10.0) continue;
+        all.See(pose, x, y);
+        if (++seen % 2 == 0) half.See(pose, x, y);
+      }
+  const double density = SightingDensityPerM2(all.data());
+  EXPECT_NEAR(density, 0.25, 0.04);  // measured 0.276
+  EXPECT_NEAR(SightingDensityPerM2(half.data()), density / 2, 0.01);
+  EXPECT_EQ(SightingDensityPerM2(Scans(3).data()), 0.0);  // no sighting
+}
+
 // A straight drive of unit steps with independent noise per step.
 LandmarkDataset StraightDrive(int num_poses, const Eigen::Vector3d& step_std) {
   Scans scans(num_poses);
