@@ -163,6 +163,17 @@ TEST(LandmarkMapCommand, UnknownAssociationComparesWithTheIds) {
   EXPECT_EQ(RunOslam(common + " --track-gate 0").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --landmark-prior-std 0").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --landmark-density 0").exit_code, 2);  // no location prior
+  EXPECT_EQ(RunOslam(common + " --landmark-density dense").exit_code, 2);
+  const testing::CommandResult estimated = RunOslam(common + " --landmark-density auto");
+  ASSERT_EQ(estimated.exit_code, 0) << estimated.err;
+  EXPECT_NE(estimated.out.find("landmark density from the sightings: "), std::string::npos)
+      << estimated.out;
+  const testing::CommandResult known_estimated =
+      RunOslam("map --landmarks " + kData + "gtsam_small.txt --landmark-density auto -o " +
+               dir.Path("known.json"));
+  ASSERT_EQ(known_estimated.exit_code, 0) << known_estimated.err;
+  EXPECT_NE(known_estimated.out.find("landmark density from the sightings: "), std::string::npos)
+      << known_estimated.out;
   EXPECT_EQ(RunOslam(common + " --landmark-density 1e-4 --landmark-prior-std 50").exit_code, 2);
   EXPECT_EQ(RunOslam(common + " --landmark-prior-std 50").exit_code, 0);  // the Gaussian instead
   EXPECT_EQ(RunOslam(common + " --min-track 0").exit_code, 2);
