@@ -966,6 +966,42 @@ void LandmarkAssociation::FinalSolve(const EvaluationPtr& best) {
              double(result_.solution.landmarks.size()), result_.log_target, result_.total_time_s));
 }
 
+// A sighting that alone ties a landmark to a stretch of the drive has high
+// leverage: a wrong one (a clutter return) turns the whole map to fit it, so
+// its own residual stays small and only its deleted residual shows it
+// (DeletedSightingErrors; docs/method.md §16.2).
+std::vector<int> LandmarkAssociation::HighLeverageSightings(LandmarkSlam* slam) {
+  const LandmarkDataset& data = *data_;
+  const LandmarkSlamResult solved = slam->Solve(data, result_.association, &result_.solution);
+  if (!solved.summary.IsUsable()) return {};
+  std::map<int, int> count;
+  for (int id : result_.association)
+    if (id >= 0) ++count[id];
+  std::vector<int> candidates;  // tracks of one sighting in a landmark with others
+  for (const auto& track : result_.tracks)
+    if (track.size() == 1 && result_.association[track.front()] >= 0 &&
+        count[result_.association[track.front()]] >= 2)
+      candidates.push_back(track.front());
+  const std::vector<double> deleted = DeletedSightingErrors(
+      data, result_.association, solved, slam, candidates, result_.slam_options.held_poses);
+  std::vector<std::pair<double, int>> leveraged;  // (deleted error, sighting)
+  for (size_t c = 0; c < candidates.size(); ++c) {
+    const LandmarkSighting& s = data.sightings[candidates[c]];
+    const auto it = std::lower_bound(solved.landmarks.begin(), solved.landmarks.end(),
+                                     result_.association[candidates[c]],
+                                     [](const MappedLandmark& l, int v) { return l.id < v; });
+    const double error =
+        SightingSquaredError(s, solved.trajectory[s.pose], it->position_m, data.sensor_offset_m);
+    // Above the gate only once deleted: the residual rounds judge the rest.
+    if (error <= options_.sighting_split_gate && deleted[c] > options_.sighting_split_gate)
+      leveraged.push_back({deleted[c], candidates[c]});
+  }
+  std::sort(leveraged.rbegin(), leveraged.rend());
+  std::vector<int> sightings;
+  for (const auto& l : leveraged) sightings.push_back(l.second);
+  return sightings;
+}
+
 bool LandmarkAssociation::KeepIfBetter(LandmarkSlam* slam, std::vector<int> trial, long splits) {
   LandmarkSlamResult solved = slam->Solve(*data_, trial, &result_.solution);
   if (!solved.summary.IsUsable() || !solved.evidence.valid ||
@@ -1087,6 +1123,18 @@ void LandmarkAssociation::SplitMisfitSightings() {
     }
     if (!kept) break;
   }
+  if (options_.sighting_split_rounds > 0) {
+    int tried = 0;
+    for (const int k : HighLeverageSightings(&slam)) {
+      if (tried++ == options_.sighting_split_rounds) break;
+      std::vector<int> trial = result_.association;
+      trial[k] = next_id;
+      if (KeepIfBetter(&slam, std::move(trial), 1)) {
+        ++next_id;
+        ++result_.leverage_splits;
+      }
+    }
+  }
   if (result_.sighting_splits == 0) return;
   LandmarkSlamOptions with_covariances = result_.slam_options;
   with_covariances.compute_landmark_covariances = true;
@@ -1094,10 +1142,10 @@ void LandmarkAssociation::SplitMisfitSightings() {
       LandmarkSlam(with_covariances).Solve(*data_, result_.association, &result_.solution);
   result_.log_target = result_.solution.evidence.log_evidence;
   Say(
-      Format("sighting splits: %.0f sightings split off their tracks (%.0f landmarks joined "
-             "across a shared scan), log target %.1f -> %.1f",
-             double(result_.sighting_splits), double(result_.shared_scan_joins), before,
-             result_.log_target));
+      Format("sighting splits: %.0f sightings split off their tracks (%.0f of high leverage; "
+             "%.0f landmarks joined across a shared scan), log target %.1f -> %.1f",
+             double(result_.sighting_splits), double(result_.leverage_splits),
+             double(result_.shared_scan_joins), before, result_.log_target));
 }
 
 }  // namespace oslam

@@ -303,6 +303,7 @@ struct UnknownAssociationResult {
   LandmarkSlamOptions slam_options;
   long refine_splits = 0, refine_merges = 0;
   long sighting_splits = 0;    // sightings split off their tracks (sighting_split_gate)
+  long leverage_splits = 0;    // of them, high-leverage ones (HighLeverageSightings)
   long shared_scan_joins = 0;  // landmark pairs joined across a shared scan (the same)
   double calibration_time_s = 0;
   SamplerSummary sampler;  // when samples > 0
@@ -482,6 +483,11 @@ class LandmarkAssociation {
   // in each shared scan, the sighting farther from their joint place split
   // off; kept when the evidence rises. Returns the pairs joined.
   long JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id);
+  // Sightings the solve bent the map to fit: each a track of one sighting in
+  // a landmark with others, whose deleted residual (its error against the
+  // solve without it, from the joint covariance of its pose and landmark)
+  // exceeds sighting_split_gate while its residual does not; worst first.
+  std::vector<int> HighLeverageSightings(LandmarkSlam* slam);
   // Solves `trial` (an association of result_'s sightings with `splits`
   // sightings split off) and makes it result_'s when its evidence is higher.
   bool KeepIfBetter(LandmarkSlam* slam, std::vector<int> trial, long splits);

@@ -1,11 +1,17 @@
 #include "slam/landmark_reference.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 
+#include <Eigen/Cholesky>
+
 #include "core/error.h"
 #include "slam/landmark_factors.h"
+#include "solver/factor_graph.h"
+#include "solver/sparse_solver.h"
 
 namespace oslam {
 
@@ -104,6 +110,52 @@ std::vector<int> LeaveOutOutlierSightings(const LandmarkDataset& data, std::vect
   if (removed) *removed = count;
   if (solved) *solved = std::move(result);
   return ids;
+}
+
+std::vector<double> DeletedSightingErrors(const LandmarkDataset& data, const std::vector<int>& ids,
+                                          const LandmarkSlamResult& solved, LandmarkSlam* slam,
+                                          const std::vector<int>& sightings, int held_poses) {
+  const double not_computable = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> errors(sightings.size(), not_computable);
+  std::vector<size_t> landmark_of(sightings.size());
+  std::vector<std::vector<int>> groups;
+  std::vector<size_t> grouped;  // which sightings have a group
+  for (size_t c = 0; c < sightings.size(); ++c) {
+    const int k = sightings[c];
+    if (k < 0 || k >= static_cast<int>(ids.size()) || ids[k] < 0) continue;
+    const auto it = std::lower_bound(solved.landmarks.begin(), solved.landmarks.end(), ids[k],
+                                     [](const MappedLandmark& l, int v) { return l.id < v; });
+    if (it == solved.landmarks.end() || it->id != ids[k]) continue;
+    landmark_of[c] = static_cast<size_t>(it - solved.landmarks.begin());
+    const int landmark_key = solved.landmark_position_keys[landmark_of[c]];
+    const int pose = data.sightings[k].pose;
+    const bool pose_fixed = pose == 0 || pose < held_poses;
+    groups.push_back(pose_fixed ? std::vector<int>{landmark_key}
+                                : std::vector<int>{solved.pose_keys[pose], landmark_key});
+    grouped.push_back(c);
+  }
+  std::vector<CovarianceRoot> roots;
+  if (groups.empty() || !slam->solver().CovarianceRoots(groups, &roots)) return errors;
+  for (size_t g = 0; g < grouped.size(); ++g) {
+    const size_t c = grouped[g];
+    const LandmarkSighting& s = data.sightings[sightings[c]];
+    const Pose2& p = solved.trajectory[s.pose];
+    FactorGraph one;
+    const int pose_key = one.AddPose(p.x, p.y, p.theta);
+    const int landmark_key = one.AddVariable(solved.landmarks[landmark_of[c]].position_m);
+    AddSightingFactor(&one, pose_key, landmark_key, s, data.sensor_offset_m);
+    Eigen::VectorXd e(2);
+    Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(2, 5);  // (pose, landmark)
+    if (!one.factors().front()->Linearize(one.values(), e, &jacobian)) continue;
+    const Eigen::MatrixXd j =
+        groups[g].size() == 1 ? Eigen::MatrixXd(jacobian.rightCols(2)) : jacobian;
+    const Eigen::MatrixXd covariance = RootProduct(roots[g], roots[g]);
+    const Eigen::Matrix2d rest = Eigen::Matrix2d::Identity() - j * covariance * j.transpose();
+    const Eigen::LDLT<Eigen::Matrix2d> ldlt(rest);
+    const bool positive = ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-12;
+    errors[c] = positive ? e.dot(ldlt.solve(e)) : std::numeric_limits<double>::infinity();
+  }
+  return errors;
 }
 
 }  // namespace oslam

@@ -45,4 +45,19 @@ std::vector<int> LeaveOutOutlierSightings(const LandmarkDataset& data, std::vect
                                           LandmarkSlamResult* solved = nullptr,
                                           int* removed = nullptr, int rounds = 100);
 
+// Deleted residuals (Cook and Weisberg's studentised residuals, in the
+// whitened metric): for each of `sightings` (indices into data.sightings
+// with ids[k] >= 0), its squared whitened error against the solve of `ids`
+// without it, as its error e at the solve and its whitened Jacobian J in the
+// pose and the landmark give it: e^T (I - J S J^T)^{-1} e, S their joint
+// covariance at the solve. A sighting the map turned to fit (the only one
+// tying a landmark to a stretch of the drive) has a small e but J S J^T near
+// I. `slam`'s last Solve must be that of `ids` giving `solved`; poses below
+// `held_poses` (and pose 0) count as fixed. Infinity where I - J S J^T is not
+// positive definite; NaN where not computable (no such landmark, the landmark
+// on the sensor, no covariance).
+std::vector<double> DeletedSightingErrors(const LandmarkDataset& data, const std::vector<int>& ids,
+                                          const LandmarkSlamResult& solved, LandmarkSlam* slam,
+                                          const std::vector<int>& sightings, int held_poses = 0);
+
 }  // namespace oslam

@@ -176,6 +176,7 @@ int AddLandmarkFactors(const LandmarkDataset& data, const LandmarkSlamOptions& o
 void ReadSolution(const Values& values, const std::vector<int>& pose_keys,
                   const std::vector<LandmarkKeys>& landmarks, LandmarkSlamResult* result) {
   result->trajectory.reserve(pose_keys.size());
+  result->pose_keys = pose_keys;
   for (int key : pose_keys) {
     const double* p = values.Data(key);
     result->trajectory.push_back({p[0], p[1], p[2]});

@@ -100,6 +100,7 @@ struct LandmarkSlamResult {
   // The solver's variable key of each landmark's position (parallel to
   // landmarks), for MarginalCovariances on solver() after this solve.
   std::vector<int> landmark_position_keys;
+  std::vector<int> pose_keys;  // the solver's key of each pose (LandmarkSlam::solver())
   SolverSummary summary;
   Evidence evidence;
   std::string covariance_message;  // why covariances are missing, if they are
