@@ -828,7 +828,7 @@ EvaluationPtr LandmarkAssociation::CalibrateAndRefine(EvaluationPtr best) {
       throw Error::InFile(data_->path, "the solve under the calibrated noise failed");
     const double before = current_->log_target;
     for (int sweep = 0; sweep < options_.refine_sweeps; ++sweep) {
-      const long splits = SplitSweep();
+      const long splits = SplitSweep() + LeverageSplits();
       const long merges =
           options_.refine_radius_m > 0 ? MergeRounds(0, options_.refine_radius_m) : 0;
       result_.refine_splits += splits;
@@ -845,6 +845,31 @@ EvaluationPtr LandmarkAssociation::CalibrateAndRefine(EvaluationPtr best) {
   }
   result_.calibration_time_s += SecondsSince(start);
   return best;
+}
+
+long LandmarkAssociation::LeverageSplits() {
+  if (options_.sighting_split_rounds <= 0 || options_.diameter_per_track) return 0;
+  LandmarkSlamOptions slam_options = options_.target.slam;
+  slam_options.compute_landmark_covariances = slam_options.compute_pose_covariances = false;
+  LandmarkSlam slam(slam_options);
+  const std::vector<int> flagged =
+      HighLeverageSightings(&slam, evaluator_->Association(current_->state), nullptr);
+  std::map<int, int> track_of;  // one-sighting tracks by their sighting
+  for (int t = 0; t < num_tracks_; ++t)
+    if (result_.tracks[t].size() == 1) track_of[result_.tracks[t].front()] = t;
+  long made = 0;
+  EvaluationPtr reference = current_;  // the evaluator's reference
+  for (size_t i = 0; i < flagged.size() && static_cast<int>(i) < options_.sighting_split_rounds;
+       ++i) {
+    const int track = track_of.at(flagged[i]);
+    reference = Refine(current_->state.WithTrackMoved(track, -1, 0), current_.get());
+    if (reference->valid && reference->log_target > current_->log_target) {
+      current_ = reference;
+      ++made;
+    }
+  }
+  if (reference != current_) current_ = Refine(current_->state, current_.get());
+  return made;
 }
 
 long LandmarkAssociation::SplitSweep() {
@@ -970,25 +995,27 @@ void LandmarkAssociation::FinalSolve(const EvaluationPtr& best) {
 // leverage: a wrong one (a clutter return) turns the whole map to fit it, so
 // its own residual stays small and only its deleted residual shows it
 // (DeletedSightingErrors; docs/method.md §16.2).
-std::vector<int> LandmarkAssociation::HighLeverageSightings(LandmarkSlam* slam) {
+std::vector<int> LandmarkAssociation::HighLeverageSightings(LandmarkSlam* slam,
+                                                            const std::vector<int>& association,
+                                                            const LandmarkSlamResult* warm_start) {
   const LandmarkDataset& data = *data_;
-  const LandmarkSlamResult solved = slam->Solve(data, result_.association, &result_.solution);
+  const LandmarkSlamResult solved = slam->Solve(data, association, warm_start);
   if (!solved.summary.IsUsable()) return {};
   std::map<int, int> count;
-  for (int id : result_.association)
+  for (int id : association)
     if (id >= 0) ++count[id];
   std::vector<int> candidates;  // tracks of one sighting in a landmark with others
   for (const auto& track : result_.tracks)
-    if (track.size() == 1 && result_.association[track.front()] >= 0 &&
-        count[result_.association[track.front()]] >= 2)
+    if (track.size() == 1 && association[track.front()] >= 0 &&
+        count[association[track.front()]] >= 2)
       candidates.push_back(track.front());
-  const std::vector<double> deleted = DeletedSightingErrors(
-      data, result_.association, solved, slam, candidates, result_.slam_options.held_poses);
+  const std::vector<double> deleted = DeletedSightingErrors(data, association, solved, slam,
+                                                            candidates, slam->options().held_poses);
   std::vector<std::pair<double, int>> leveraged;  // (deleted error, sighting)
   for (size_t c = 0; c < candidates.size(); ++c) {
     const LandmarkSighting& s = data.sightings[candidates[c]];
     const auto it = std::lower_bound(solved.landmarks.begin(), solved.landmarks.end(),
-                                     result_.association[candidates[c]],
+                                     association[candidates[c]],
                                      [](const MappedLandmark& l, int v) { return l.id < v; });
     const double error =
         SightingSquaredError(s, solved.trajectory[s.pose], it->position_m, data.sensor_offset_m);
@@ -1125,7 +1152,7 @@ void LandmarkAssociation::SplitMisfitSightings() {
   }
   if (options_.sighting_split_rounds > 0) {
     int tried = 0;
-    for (const int k : HighLeverageSightings(&slam)) {
+    for (const int k : HighLeverageSightings(&slam, result_.association, &result_.solution)) {
       if (tried++ == options_.sighting_split_rounds) break;
       std::vector<int> trial = result_.association;
       trial[k] = next_id;

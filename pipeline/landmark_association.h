@@ -483,11 +483,17 @@ class LandmarkAssociation {
   // in each shared scan, the sighting farther from their joint place split
   // off; kept when the evidence rises. Returns the pairs joined.
   long JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id);
+  // In the refinement: the high-leverage one-sighting tracks of the current
+  // state (HighLeverageSightings on its association) each tried alone in a
+  // landmark of its own by a full solve, so that the sweeps after it can
+  // merge what the turned map had kept apart; returns the splits made.
+  long LeverageSplits();
   // Sightings the solve bent the map to fit: each a track of one sighting in
   // a landmark with others, whose deleted residual (its error against the
   // solve without it, from the joint covariance of its pose and landmark)
   // exceeds sighting_split_gate while its residual does not; worst first.
-  std::vector<int> HighLeverageSightings(LandmarkSlam* slam);
+  std::vector<int> HighLeverageSightings(LandmarkSlam* slam, const std::vector<int>& association,
+                                         const LandmarkSlamResult* warm_start);
   // Solves `trial` (an association of result_'s sightings with `splits`
   // sightings split off) and makes it result_'s when its evidence is higher.
   bool KeepIfBetter(LandmarkSlam* slam, std::vector<int> trial, long splits);

@@ -126,6 +126,7 @@ class LandmarkSlam {
                            const LandmarkSlamResult* warm_start = nullptr);
 
   SparseSolver& solver() { return solver_; }
+  const LandmarkSlamOptions& options() const { return options_; }
 
  private:
   LandmarkSlamResult StagedInitialisation(const LandmarkDataset& data,
