@@ -780,16 +780,7 @@ EvaluationPtr LandmarkAssociation::CalibrateAndRefine(EvaluationPtr best) {
   for (int round = 0; round < options_.calibration_rounds; ++round) {
     current_ = best;
     // The calibration starts from the current solution.
-    LandmarkSlamResult warm;
-    warm.trajectory = current_->solution->trajectory;
-    for (size_t j = 0; j < current_->state.blocks.size(); ++j) {
-      MappedLandmark l;
-      l.id = current_->state.blocks[j].front();
-      l.position_m = current_->locations[j].head<2>();
-      warm.landmarks.push_back(l);
-    }
-    std::sort(warm.landmarks.begin(), warm.landmarks.end(),
-              [](const MappedLandmark& a, const MappedLandmark& b) { return a.id < b.id; });
+    const LandmarkSlamResult warm = WarmStart(*current_);
     LandmarkSlamOptions slam = options_.target.slam;
     slam.held_poses = 0;
     // Only the calibration's solution itself seeds the re-solve below.
@@ -847,13 +838,30 @@ EvaluationPtr LandmarkAssociation::CalibrateAndRefine(EvaluationPtr best) {
   return best;
 }
 
+// `e`'s solution as a known-association start for evaluator_->Association(
+// e.state) (ids: each landmark's earliest track).
+LandmarkSlamResult LandmarkAssociation::WarmStart(const StateEvaluation& e) {
+  LandmarkSlamResult warm;
+  warm.trajectory = e.solution->trajectory;
+  for (size_t j = 0; j < e.state.blocks.size(); ++j) {
+    MappedLandmark l;
+    l.id = e.state.blocks[j].front();
+    l.position_m = e.locations[j].head<2>();
+    warm.landmarks.push_back(l);
+  }
+  std::sort(warm.landmarks.begin(), warm.landmarks.end(),
+            [](const MappedLandmark& a, const MappedLandmark& b) { return a.id < b.id; });
+  return warm;
+}
+
 long LandmarkAssociation::LeverageSplits() {
   if (options_.sighting_split_rounds <= 0 || options_.diameter_per_track) return 0;
   LandmarkSlamOptions slam_options = options_.target.slam;
   slam_options.compute_landmark_covariances = slam_options.compute_pose_covariances = false;
   LandmarkSlam slam(slam_options);
+  const LandmarkSlamResult warm = WarmStart(*current_);
   const std::vector<int> flagged =
-      HighLeverageSightings(&slam, evaluator_->Association(current_->state), nullptr);
+      HighLeverageSightings(&slam, evaluator_->Association(current_->state), &warm);
   std::map<int, int> track_of;  // one-sighting tracks by their sighting
   for (int t = 0; t < num_tracks_; ++t)
     if (result_.tracks[t].size() == 1) track_of[result_.tracks[t].front()] = t;
@@ -1009,20 +1017,14 @@ std::vector<int> LandmarkAssociation::HighLeverageSightings(LandmarkSlam* slam,
     if (track.size() == 1 && association[track.front()] >= 0 &&
         count[association[track.front()]] >= 2)
       candidates.push_back(track.front());
-  const std::vector<double> deleted = DeletedSightingErrors(data, association, solved, slam,
-                                                            candidates, slam->options().held_poses);
+  const std::vector<SightingErrors> errors = DeletedSightingErrors(
+      data, association, solved, slam, candidates, slam->options().held_poses);
   std::vector<std::pair<double, int>> leveraged;  // (deleted error, sighting)
-  for (size_t c = 0; c < candidates.size(); ++c) {
-    const LandmarkSighting& s = data.sightings[candidates[c]];
-    const auto it = std::lower_bound(solved.landmarks.begin(), solved.landmarks.end(),
-                                     association[candidates[c]],
-                                     [](const MappedLandmark& l, int v) { return l.id < v; });
-    const double error =
-        SightingSquaredError(s, solved.trajectory[s.pose], it->position_m, data.sensor_offset_m);
+  for (size_t c = 0; c < candidates.size(); ++c)
     // Above the gate only once deleted: the residual rounds judge the rest.
-    if (error <= options_.sighting_split_gate && deleted[c] > options_.sighting_split_gate)
-      leveraged.push_back({deleted[c], candidates[c]});
-  }
+    if (errors[c].at_solve <= options_.sighting_split_gate &&
+        errors[c].deleted > options_.sighting_split_gate)
+      leveraged.push_back({errors[c].deleted, candidates[c]});
   std::sort(leveraged.rbegin(), leveraged.rend());
   std::vector<int> sightings;
   for (const auto& l : leveraged) sightings.push_back(l.second);

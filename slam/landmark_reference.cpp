@@ -112,11 +112,10 @@ std::vector<int> LeaveOutOutlierSightings(const LandmarkDataset& data, std::vect
   return ids;
 }
 
-std::vector<double> DeletedSightingErrors(const LandmarkDataset& data, const std::vector<int>& ids,
-                                          const LandmarkSlamResult& solved, LandmarkSlam* slam,
-                                          const std::vector<int>& sightings, int held_poses) {
-  const double not_computable = std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> errors(sightings.size(), not_computable);
+std::vector<SightingErrors> DeletedSightingErrors(
+    const LandmarkDataset& data, const std::vector<int>& ids, const LandmarkSlamResult& solved,
+    LandmarkSlam* slam, const std::vector<int>& sightings, int held_poses) {
+  std::vector<SightingErrors> errors(sightings.size());
   std::vector<size_t> landmark_of(sightings.size());
   std::vector<std::vector<int>> groups;
   std::vector<size_t> grouped;  // which sightings have a group
@@ -153,7 +152,8 @@ std::vector<double> DeletedSightingErrors(const LandmarkDataset& data, const std
     const Eigen::Matrix2d rest = Eigen::Matrix2d::Identity() - j * covariance * j.transpose();
     const Eigen::LDLT<Eigen::Matrix2d> ldlt(rest);
     const bool positive = ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-12;
-    errors[c] = positive ? e.dot(ldlt.solve(e)) : std::numeric_limits<double>::infinity();
+    errors[c].at_solve = e.squaredNorm();
+    errors[c].deleted = positive ? e.dot(ldlt.solve(e)) : std::numeric_limits<double>::infinity();
   }
   return errors;
 }

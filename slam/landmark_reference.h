@@ -8,6 +8,7 @@
 // instead of it.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "slam/landmark_data.h"
@@ -45,19 +46,26 @@ std::vector<int> LeaveOutOutlierSightings(const LandmarkDataset& data, std::vect
                                           LandmarkSlamResult* solved = nullptr,
                                           int* removed = nullptr, int rounds = 100);
 
+// A sighting's squared whitened error at a solve and its deleted one.
+struct SightingErrors {
+  double at_solve = std::numeric_limits<double>::quiet_NaN();
+  double deleted = std::numeric_limits<double>::quiet_NaN();
+};
+
 // Deleted residuals (Cook and Weisberg's studentised residuals, in the
 // whitened metric): for each of `sightings` (indices into data.sightings
-// with ids[k] >= 0), its squared whitened error against the solve of `ids`
-// without it, as its error e at the solve and its whitened Jacobian J in the
-// pose and the landmark give it: e^T (I - J S J^T)^{-1} e, S their joint
-// covariance at the solve. A sighting the map turned to fit (the only one
-// tying a landmark to a stretch of the drive) has a small e but J S J^T near
-// I. `slam`'s last Solve must be that of `ids` giving `solved`; poses below
-// `held_poses` (and pose 0) count as fixed. Infinity where I - J S J^T is not
-// positive definite; NaN where not computable (no such landmark, the landmark
-// on the sensor, no covariance).
-std::vector<double> DeletedSightingErrors(const LandmarkDataset& data, const std::vector<int>& ids,
-                                          const LandmarkSlamResult& solved, LandmarkSlam* slam,
-                                          const std::vector<int>& sightings, int held_poses = 0);
+// with ids[k] >= 0), its squared whitened error e^T e at the solve of `ids`
+// and its error against the solve without it, as e and its whitened
+// Jacobian J in the pose and the landmark give it: e^T (I - J S J^T)^{-1} e,
+// S their joint covariance at the solve. A sighting the map turned to fit
+// (the only one tying a landmark to a stretch of the drive) has a small
+// e^T e but J S J^T near I. `slam`'s last Solve must be that of `ids` giving
+// `solved`; poses below `held_poses` (and pose 0) count as fixed. `deleted`
+// is infinity where I - J S J^T is not positive definite; both are NaN where
+// not computable (no such landmark, the landmark on the sensor, no
+// covariance).
+std::vector<SightingErrors> DeletedSightingErrors(
+    const LandmarkDataset& data, const std::vector<int>& ids, const LandmarkSlamResult& solved,
+    LandmarkSlam* slam, const std::vector<int>& sightings, int held_poses = 0);
 
 }  // namespace oslam

@@ -156,9 +156,9 @@ TEST(LandmarkReferenceTest, DeletedErrorsAreWhatTheSolveWithoutTheSightingPredic
     if (k != wrong && seen[ids[k]] >= 3 && world.data.sightings[k].pose > 0) sightings.push_back(k);
   ASSERT_EQ(sightings.size(), 4u);
   sightings.insert(sightings.begin() + 2, wrong);
-  const std::vector<double> deleted =
+  const std::vector<SightingErrors> errors =
       DeletedSightingErrors(world.data, ids, solved, &slam, sightings);
-  ASSERT_EQ(deleted.size(), sightings.size());
+  ASSERT_EQ(errors.size(), sightings.size());
   for (size_t c = 0; c < sightings.size(); ++c) {
     const int k = sightings[c];
     const LandmarkSighting& s = world.data.sightings[k];
@@ -172,16 +172,19 @@ TEST(LandmarkReferenceTest, DeletedErrorsAreWhatTheSolveWithoutTheSightingPredic
     const LandmarkSlamResult without = other.Solve(world.data, left_out);
     const double predicted = PredictedError(world.data, k, ids[k], &other, without);
     std::printf("sighting %d: at the solve %.3f, deleted %.3f, predicted without it %.3f\n", k,
-                at_solve, deleted[c], predicted);
-    EXPECT_GE(deleted[c], at_solve - 1e-9) << "sighting " << k;
-    EXPECT_NEAR(deleted[c], predicted, 0.05 * predicted + 0.05) << "sighting " << k;
+                at_solve, errors[c].deleted, predicted);
+    EXPECT_NEAR(errors[c].at_solve, at_solve, 1e-9 * (1 + at_solve)) << "sighting " << k;
+    EXPECT_GE(errors[c].deleted, at_solve - 1e-9) << "sighting " << k;
+    EXPECT_NEAR(errors[c].deleted, predicted, 0.05 * predicted + 0.05) << "sighting " << k;
   }
-  EXPECT_GT(deleted[2], 25.0);  // the wrong one
+  EXPECT_GT(errors[2].deleted, 25.0);  // the wrong one
   // Not computable: a sighting with no landmark.
   std::vector<int> none = ids;
   none[7] = -1;
   const LandmarkSlamResult partial = slam.Solve(world.data, none);
-  EXPECT_TRUE(std::isnan(DeletedSightingErrors(world.data, none, partial, &slam, {7})[0]));
+  const SightingErrors lost = DeletedSightingErrors(world.data, none, partial, &slam, {7})[0];
+  EXPECT_TRUE(std::isnan(lost.at_solve));
+  EXPECT_TRUE(std::isnan(lost.deleted));
 }
 
 TEST(LandmarkReferenceTest, RejectsMismatchedIdsAndAZeroGate) {
