@@ -129,6 +129,9 @@ class LandmarkEvaluator : public StateEvaluator {
   // when not computable (not the reference, a key without a position).
   bool JointMergeDelta(const AssociationState& state, const std::vector<std::vector<int>>& groups,
                        double* delta);
+  // `from`'s solution as a known-association start for Association(
+  // from.state) (ids: each landmark's earliest track).
+  LandmarkSlamResult WarmStart(const StateEvaluation& from) const;
   // The full solution of `state` with landmark covariances, warm-started
   // from `from` when given (for the output map).
   LandmarkSlamResult Solve(const AssociationState& state, const StateEvaluation* from);
@@ -160,7 +163,6 @@ class LandmarkEvaluator : public StateEvaluator {
   // merged, fills `evaluation` in closed form and returns true.
   bool MarginalMergeEvaluation(const AssociationState& state, StateEvaluation* evaluation);
   const BlockValue& LocalBlock(const std::vector<int>& block, const StateEvaluation* from);
-  LandmarkSlamResult WarmStart(const StateEvaluation& from) const;
   void Store(const EvaluationPtr& evaluation);
   std::vector<int> SightingsOf(const std::vector<int>& block) const;
 

@@ -780,7 +780,7 @@ EvaluationPtr LandmarkAssociation::CalibrateAndRefine(EvaluationPtr best) {
   for (int round = 0; round < options_.calibration_rounds; ++round) {
     current_ = best;
     // The calibration starts from the current solution.
-    const LandmarkSlamResult warm = WarmStart(*current_);
+    const LandmarkSlamResult warm = evaluator_->WarmStart(*current_);
     LandmarkSlamOptions slam = options_.target.slam;
     slam.held_poses = 0;
     // Only the calibration's solution itself seeds the re-solve below.
@@ -838,28 +838,12 @@ EvaluationPtr LandmarkAssociation::CalibrateAndRefine(EvaluationPtr best) {
   return best;
 }
 
-// `e`'s solution as a known-association start for evaluator_->Association(
-// e.state) (ids: each landmark's earliest track).
-LandmarkSlamResult LandmarkAssociation::WarmStart(const StateEvaluation& e) {
-  LandmarkSlamResult warm;
-  warm.trajectory = e.solution->trajectory;
-  for (size_t j = 0; j < e.state.blocks.size(); ++j) {
-    MappedLandmark l;
-    l.id = e.state.blocks[j].front();
-    l.position_m = e.locations[j].head<2>();
-    warm.landmarks.push_back(l);
-  }
-  std::sort(warm.landmarks.begin(), warm.landmarks.end(),
-            [](const MappedLandmark& a, const MappedLandmark& b) { return a.id < b.id; });
-  return warm;
-}
-
 long LandmarkAssociation::LeverageSplits() {
   if (options_.sighting_split_rounds <= 0 || options_.diameter_per_track) return 0;
   LandmarkSlamOptions slam_options = options_.target.slam;
   slam_options.compute_landmark_covariances = slam_options.compute_pose_covariances = false;
   LandmarkSlam slam(slam_options);
-  const LandmarkSlamResult warm = WarmStart(*current_);
+  const LandmarkSlamResult warm = evaluator_->WarmStart(*current_);
   const std::vector<int> flagged =
       HighLeverageSightings(&slam, evaluator_->Association(current_->state), &warm);
   std::map<int, int> track_of;  // one-sighting tracks by their sighting

@@ -488,7 +488,6 @@ class LandmarkAssociation {
   // landmark of its own by a full solve, so that the sweeps after it can
   // merge what the turned map had kept apart; returns the splits made.
   long LeverageSplits();
-  static LandmarkSlamResult WarmStart(const StateEvaluation& e);
   // Sightings the solve bent the map to fit: each a track of one sighting in
   // a landmark with others, whose deleted residual (its error against the
   // solve without it, from the joint covariance of its pose and landmark)
