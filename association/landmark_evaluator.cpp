@@ -21,12 +21,6 @@ double SecondsSince(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-const MappedLandmark* FindLandmark(const LandmarkSlamResult& result, int id) {
-  const auto it = std::lower_bound(result.landmarks.begin(), result.landmarks.end(), id,
-                                   [](const MappedLandmark& l, int v) { return l.id < v; });
-  return it != result.landmarks.end() && it->id == id ? &*it : nullptr;
-}
-
 LandmarkSlamOptions FullOptions(const LandmarkTargetOptions& options) {
   LandmarkSlamOptions full = options.slam;
   full.compute_landmark_covariances = false;  // Solve() adds them for the output only
@@ -162,7 +156,7 @@ EvaluationPtr LandmarkEvaluator::FullEvaluation(const AssociationState& state,
   evaluation->solution = std::move(solution);
   if (refine) last_refine_keys_.clear();
   for (const auto& block : state.blocks) {
-    const MappedLandmark* l = FindLandmark(result, block.front());
+    const MappedLandmark* l = result.FindLandmark(block.front());
     if (refine)
       last_refine_keys_.push_back(l ? result.landmark_position_keys[l - result.landmarks.data()]
                                     : -1);

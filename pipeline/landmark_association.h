@@ -303,7 +303,7 @@ struct UnknownAssociationResult {
   LandmarkSlamOptions slam_options;
   long refine_splits = 0, refine_merges = 0;
   long sighting_splits = 0;    // sightings split off their tracks (sighting_split_gate)
-  long leverage_splits = 0;    // of them, high-leverage ones (HighLeverageSightings)
+  long leverage_splits = 0;    // of them, high-leverage ones (HighLeverageTracks)
   long shared_scan_joins = 0;  // landmark pairs joined across a shared scan (the same)
   double calibration_time_s = 0;
   SamplerSummary sampler;  // when samples > 0
@@ -484,16 +484,17 @@ class LandmarkAssociation {
   // off; kept when the evidence rises. Returns the pairs joined.
   long JoinAcrossSharedScans(LandmarkSlam* slam, int* next_id);
   // In the refinement: the high-leverage one-sighting tracks of the current
-  // state (HighLeverageSightings on its association) each tried alone in a
+  // state (HighLeverageTracks on its association) each tried alone in a
   // landmark of its own by a full solve, so that the sweeps after it can
   // merge what the turned map had kept apart; returns the splits made.
   long LeverageSplits();
-  // Sightings the solve bent the map to fit: each a track of one sighting in
-  // a landmark with others, whose deleted residual (its error against the
-  // solve without it, from the joint covariance of its pose and landmark)
-  // exceeds sighting_split_gate while its residual does not; worst first.
-  std::vector<int> HighLeverageSightings(LandmarkSlam* slam, const std::vector<int>& association,
-                                         const LandmarkSlamResult* warm_start);
+  // The one-sighting tracks the solve bent the map to fit: each in a
+  // landmark with others, its sighting's deleted residual (its error against
+  // the solve without it, from the joint covariance of its pose and
+  // landmark) above sighting_split_gate while its residual is not; worst
+  // first.
+  std::vector<int> HighLeverageTracks(LandmarkSlam* slam, const std::vector<int>& association,
+                                      const LandmarkSlamResult* warm_start);
   // Solves `trial` (an association of result_'s sightings with `splits`
   // sightings split off) and makes it result_'s when its evidence is higher.
   bool KeepIfBetter(LandmarkSlam* slam, std::vector<int> trial, long splits);

@@ -92,14 +92,11 @@ Sums ResidualSums(const LandmarkDataset& data, const std::vector<int>& associati
   std::vector<const MappedLandmark*> landmark;
   landmark_key.reserve(data.sightings.size());
   for (size_t k = 0; k < data.sightings.size(); ++k) {
-    const auto it =
-        std::lower_bound(result.landmarks.begin(), result.landmarks.end(), association[k],
-                         [](const MappedLandmark& l, int id) { return l.id < id; });
-    const bool found =
-        association[k] >= 0 && it != result.landmarks.end() && it->id == association[k];
-    landmark_key.push_back(found ? result.landmark_position_keys[it - result.landmarks.begin()]
+    const MappedLandmark* found =
+        association[k] >= 0 ? result.FindLandmark(association[k]) : nullptr;
+    landmark_key.push_back(found ? result.landmark_position_keys[found - result.landmarks.data()]
                                  : -1);
-    landmark.push_back(found ? &*it : nullptr);
+    landmark.push_back(found);
   }
   std::vector<std::vector<int>> groups;
   std::vector<int> sighting_group(data.sightings.size(), -1);

@@ -122,10 +122,9 @@ std::vector<SightingErrors> DeletedSightingErrors(
   for (size_t c = 0; c < sightings.size(); ++c) {
     const int k = sightings[c];
     if (k < 0 || k >= static_cast<int>(ids.size()) || ids[k] < 0) continue;
-    const auto it = std::lower_bound(solved.landmarks.begin(), solved.landmarks.end(), ids[k],
-                                     [](const MappedLandmark& l, int v) { return l.id < v; });
-    if (it == solved.landmarks.end() || it->id != ids[k]) continue;
-    landmark_of[c] = static_cast<size_t>(it - solved.landmarks.begin());
+    const MappedLandmark* landmark = solved.FindLandmark(ids[k]);
+    if (!landmark) continue;
+    landmark_of[c] = static_cast<size_t>(landmark - solved.landmarks.data());
     const int landmark_key = solved.landmark_position_keys[landmark_of[c]];
     const int pose = data.sightings[k].pose;
     const bool pose_fixed = pose == 0 || pose < held_poses;

@@ -27,6 +27,12 @@ std::vector<Pose2> ExtendByOdometry(const std::vector<Pose2>& solved,
   return poses;
 }
 
+const MappedLandmark* LandmarkSlamResult::FindLandmark(int id) const {
+  const auto it = std::lower_bound(landmarks.begin(), landmarks.end(), id,
+                                   [](const MappedLandmark& l, int v) { return l.id < v; });
+  return it != landmarks.end() && it->id == id ? &*it : nullptr;
+}
+
 double LandmarkSlamOptions::LogLandmarkDensity() const {
   return landmark_density_per_m2 > 0 ? std::log(landmark_density_per_m2) : 0.0;
 }

@@ -109,6 +109,10 @@ struct LandmarkSlamResult {
   double total_time_s = 0;
   double initialisation_time_s = 0;  // the staged initialisation's part
   int initialisation_stages = 0;     // prefixes solved before the full solve
+
+  // The landmark of this id (binary search: landmarks are sorted by id), or
+  // nullptr.
+  const MappedLandmark* FindLandmark(int id) const;
 };
 
 class LandmarkSlam {

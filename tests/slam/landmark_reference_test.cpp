@@ -104,17 +104,16 @@ TEST(LandmarkReferenceTest, LeavesOutSightingsGivenAWrongIdAndNothingElse) {
 // with k left out): its predicted error and that error's whitened spread.
 double PredictedError(const LandmarkDataset& data, int k, int id, LandmarkSlam* slam,
                       const LandmarkSlamResult& without) {
-  const auto it = std::lower_bound(without.landmarks.begin(), without.landmarks.end(), id,
-                                   [](const MappedLandmark& l, int v) { return l.id < v; });
+  const MappedLandmark* landmark = without.FindLandmark(id);
   const LandmarkSighting& s = data.sightings[k];
   std::vector<CovarianceRoot> roots;
-  const int landmark_key = without.landmark_position_keys[it - without.landmarks.begin()];
+  const int landmark_key = without.landmark_position_keys[landmark - without.landmarks.data()];
   EXPECT_TRUE(slam->solver().CovarianceRoots({{without.pose_keys[s.pose], landmark_key}}, &roots));
   const Eigen::MatrixXd covariance = RootProduct(roots[0], roots[0]);
   FactorGraph one;
   const Pose2& p = without.trajectory[s.pose];
   const int pose_key = one.AddPose(p.x, p.y, p.theta);
-  AddSightingFactor(&one, pose_key, one.AddVariable(it->position_m), s, data.sensor_offset_m);
+  AddSightingFactor(&one, pose_key, one.AddVariable(landmark->position_m), s, data.sensor_offset_m);
   Eigen::VectorXd e(2);
   Eigen::MatrixXd j = Eigen::MatrixXd::Zero(2, 5);
   EXPECT_TRUE(one.factors().front()->Linearize(one.values(), e, &j));
@@ -162,10 +161,9 @@ TEST(LandmarkReferenceTest, DeletedErrorsAreWhatTheSolveWithoutTheSightingPredic
   for (size_t c = 0; c < sightings.size(); ++c) {
     const int k = sightings[c];
     const LandmarkSighting& s = world.data.sightings[k];
-    const auto it = std::lower_bound(solved.landmarks.begin(), solved.landmarks.end(), ids[k],
-                                     [](const MappedLandmark& l, int v) { return l.id < v; });
-    const double at_solve = SightingSquaredError(s, solved.trajectory[s.pose], it->position_m,
-                                                 world.data.sensor_offset_m);
+    const double at_solve =
+        SightingSquaredError(s, solved.trajectory[s.pose], solved.FindLandmark(ids[k])->position_m,
+                             world.data.sensor_offset_m);
     std::vector<int> left_out = ids;
     left_out[k] = -1;
     LandmarkSlam other(options);

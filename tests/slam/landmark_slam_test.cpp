@@ -174,6 +174,10 @@ TEST(LandmarkSlamTest, RecoversASimulatedWorld) {
   }
   nees /= result.landmarks.size();
   std::printf("landmarks: max error %.3f m, mean NEES %.2f\n", max_error, nees);
+  for (const MappedLandmark& landmark : result.landmarks)
+    EXPECT_EQ(result.FindLandmark(landmark.id), &landmark);
+  EXPECT_EQ(result.FindLandmark(-1), nullptr);
+  EXPECT_EQ(result.FindLandmark(result.landmarks.back().id + 1), nullptr);
   EXPECT_LT(max_error, 1.0);
   EXPECT_GT(nees, 0.2);
   EXPECT_LT(nees, 5.0);
