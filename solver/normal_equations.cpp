@@ -146,6 +146,8 @@ bool NormalEquations::Rebuild(OrderingType ordering, bool independent_of_history
       BuildPermutedHessian(pattern_, block_order, static_cast<const int*>(hessian_->p)[pattern_.n],
                            cc, &permuted_)) {
     factor_ = AnalyzeBlockwise(pattern_, block_order, permuted_, cc);
+    if (factor_ && !factor_->is_super && !UseUpperTriangle(&permuted_, cc))
+      cholmod_free_factor(&factor_, cc);
     if (factor_ && std::getenv("OSLAM_SOLVER_TRACE"))
       std::fprintf(stderr,
                    "chosen ordering %d, factor ordering %d super %d (%d supernodes) lnz %.0f\n",
@@ -206,12 +208,15 @@ bool NormalEquations::Assemble(const Evaluation& evaluation) {
   for (size_t f = 0; f < num_factors; ++f) {
     const Eigen::MatrixXd& jacobian = evaluation.jacobians[f];
     const Eigen::VectorXd& error = evaluation.errors[f];
-    // The common factor shapes (bounding slice 4x8, odometry 3x6, priors)
-    // get fixed-size products: Eigen's dynamic lazy product runs a scalar
-    // loop per entry (20 % of a one-step O-SLAM proposal's instructions).
+    // The common factor shapes (bounding slice 4x8, odometry 3x6, a
+    // landmark sighting 2x5, priors) get fixed-size products: Eigen's
+    // dynamic lazy product runs a scalar loop per entry (20 % of a one-step
+    // O-SLAM proposal's instructions).
     const int rows = static_cast<int>(jacobian.rows()), columns = layout_.factor_columns[f];
     if (rows == 4 && columns == 8)
       AssembleFactor<4, 8>(jacobian, error, f, x, p);
+    else if (rows == 2 && columns == 5)
+      AssembleFactor<2, 5>(jacobian, error, f, x, p);
     else if (rows == 3 && columns == 6)
       AssembleFactor<3, 6>(jacobian, error, f, x, p);
     else if (rows == 3 && columns == 3)

@@ -236,4 +236,34 @@ cholmod_factor* AnalyzeBlockwise(const BlockPattern& pattern, const std::vector<
   return factor;
 }
 
+bool UseUpperTriangle(PermutedHessian* permuted, cholmod_common* cc) {
+  const cholmod_sparse* lower = permuted->matrix;
+  const int n = static_cast<int>(lower->ncol);
+  const auto* lp = static_cast<const int*>(lower->p);
+  const auto* li = static_cast<const int*>(lower->i);
+  const int nnz = lp[n];
+  cholmod_sparse* upper = cholmod_allocate_sparse(n, n, nnz, 1, 1, 1, CHOLMOD_REAL, cc);
+  if (!upper) return false;
+  auto* up = static_cast<int*>(upper->p);
+  auto* ui = static_cast<int*>(upper->i);
+  // Counting transpose: lower entry (i, j) becomes upper entry (j, i);
+  // columns of the lower triangle taken in order leave each upper column's
+  // rows sorted.
+  std::vector<int> next(n + 1, 0);
+  for (int k = 0; k < nnz; ++k) ++next[li[k] + 1];
+  for (int c = 0; c < n; ++c) next[c + 1] += next[c];
+  std::copy(next.begin(), next.end(), up);
+  std::vector<int> moved(nnz);  // lower entry -> upper entry
+  for (int j = 0; j < n; ++j)
+    for (int k = lp[j]; k < lp[j + 1]; ++k) {
+      const int at = next[li[k]]++;
+      ui[at] = j;
+      moved[k] = at;
+    }
+  for (int& e : permuted->entry) e = moved[e];
+  cholmod_free_sparse(&permuted->matrix, cc);
+  permuted->matrix = upper;
+  return true;
+}
+
 }  // namespace oslam

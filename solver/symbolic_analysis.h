@@ -3,9 +3,11 @@
 //
 // The Hessian is assembled in the variables' order (upper triangle) and
 // copied into `PermutedHessian::matrix`, the same matrix with the block
-// order applied, as a lower triangle: CHOLMOD factors that with its natural
-// ordering, which spares the transpose-and-permute copy every
-// cholmod_factorize of an unpermuted matrix makes. Every variable's entries
+// order applied: CHOLMOD factors that with its natural ordering, which spares
+// the transpose-and-permute copy every cholmod_factorize of an unpermuted
+// matrix makes. The copy is a lower triangle for a supernodal factor and an
+// upper one for a simplicial factor, the forms each factorisation reads
+// without a transpose of its own. Every variable's entries
 // stay together, so a pair of variables is one dense block in either
 // matrix, and both the copy's map and the analysis work on blocks.
 #pragma once
@@ -21,9 +23,11 @@ struct cholmod_sparse_struct;
 namespace oslam {
 
 struct PermutedHessian {
-  cholmod_sparse_struct* matrix = nullptr;  // lower triangle, block order; owned by the user
-  std::vector<int> entry;                   // Hessian entry -> matrix entry
-  std::vector<int> inverse_permutation;     // scalar column of delta -> position in matrix
+  // Block order; lower triangle (upper after UseUpperTriangle); owned by the
+  // user.
+  cholmod_sparse_struct* matrix = nullptr;
+  std::vector<int> entry;                // Hessian entry -> matrix entry
+  std::vector<int> inverse_permutation;  // scalar column of delta -> position in matrix
   // The block pattern below the diagonal: per variable, the variables after
   // it in the block order that share a factor with it (compressed).
   std::vector<int> below_begin, below;
@@ -52,5 +56,11 @@ bool BuildPermutedHessian(const BlockPattern& pattern, const std::vector<int>& b
 cholmod_factor_struct* AnalyzeBlockwise(const BlockPattern& pattern,
                                         const std::vector<int>& block_order,
                                         const PermutedHessian& permuted, cholmod_common_struct* cc);
+
+// Turns `permuted`'s lower triangle into the upper one (the same matrix,
+// `entry` remapped): a simplicial factorisation reads the upper triangle,
+// and given the lower one copies it transposed on every cholmod_factorize.
+// False when CHOLMOD cannot allocate it (`permuted` unchanged).
+bool UseUpperTriangle(PermutedHessian* permuted, cholmod_common_struct* cc);
 
 }  // namespace oslam
