@@ -108,6 +108,44 @@ TEST(SymbolicAnalysisTest, PermutedMatrixHoldsEveryHessianEntryOnceInTheLowerTri
   }
 }
 
+// The upper triangle holds the same entries, transposed: Hessian entry
+// (r, c) at (min, max) of its permuted positions, columns sorted and ending
+// at the diagonal, each entry hit once.
+TEST(SymbolicAnalysisTest, UpperTriangleHoldsEveryHessianEntryOnceTransposed) {
+  testing::CholmodWorkspace cholmod;
+  const int poses = 12;
+  const BlockPattern pattern = PosesAndObjects(poses, 3);
+  const std::vector<std::pair<int, int>> entries = HessianEntries(pattern);
+  for (const std::vector<int>& order : Orders(pattern, poses)) {
+    PermutedHessian permuted;
+    ASSERT_TRUE(BuildPermutedHessian(pattern, order, static_cast<int>(entries.size()), &cholmod.cc,
+                                     &permuted));
+    ASSERT_TRUE(UseUpperTriangle(&permuted, &cholmod.cc));
+    EXPECT_EQ(permuted.matrix->stype, 1);
+    const auto* p = static_cast<const int*>(permuted.matrix->p);
+    const auto* i = static_cast<const int*>(permuted.matrix->i);
+    ASSERT_EQ(p[pattern.n], static_cast<int>(entries.size()));
+    for (int c = 0; c < pattern.n; ++c) {
+      ASSERT_LT(p[c], p[c + 1]);
+      EXPECT_EQ(i[p[c + 1] - 1], c);
+      EXPECT_TRUE(std::is_sorted(i + p[c], i + p[c + 1]));
+    }
+    const std::vector<int>& inverse = permuted.inverse_permutation;
+    std::vector<int> hits(entries.size(), 0);
+    for (size_t k = 0; k < entries.size(); ++k) {
+      const int a = inverse[entries[k].first], b = inverse[entries[k].second];
+      const int row = std::min(a, b), column = std::max(a, b);
+      const int at = permuted.entry[k];
+      ASSERT_GE(at, p[column]);
+      ASSERT_LT(at, p[column + 1]);
+      EXPECT_EQ(i[at], row);
+      ++hits[at];
+    }
+    EXPECT_EQ(std::count(hits.begin(), hits.end(), 1), static_cast<long>(entries.size()));
+    cholmod_free_sparse(&permuted.matrix, &cholmod.cc);
+  }
+}
+
 TEST(SymbolicAnalysisTest, BlockwiseAnalysisEqualsCholmodsSimplicialAndSupernodal) {
   for (const int supernodal : {CHOLMOD_SIMPLICIAL, CHOLMOD_SUPERNODAL}) {
     testing::CholmodWorkspace cholmod;
