@@ -54,9 +54,10 @@ struct MeasureBuffers {
 };
 
 // The candidates of each `from` point and the inliers of a transform. The
-// `to` points sit on a grid of inlier_m cells: a transform's inliers are then
-// found in the 3 x 3 cells around each moved point instead of among all its
-// candidates (thousands with clutter); the same pairs as a scan of the
+// `to` points sit on a grid of cells just over 2 inlier_m wide: a
+// transform's inliers are then found in the 2 x 2 cells nearest each moved
+// point instead of among all its candidates (thousands with clutter; most
+// cells are empty, so fewer cells beat smaller ones); the same pairs as a scan of the
 // candidates (ties to the higher index, as that scan). Measure runs for every
 // candidate transform of every sample, so the cells are an array over the
 // `to` points' bounding box (a hash beyond kMaxDenseCells), and each thread
@@ -69,8 +70,14 @@ class InlierCounter {
         to_(to),
         inlier_m_(options.inlier_m),
         inlier2_(inlier_m_ * inlier_m_),
+        per_cell_m_(1 / (2 * inlier_m_ * (1 + 1e-9))),
         score_std2_(options.score_std_m * options.score_std_m),
         reach_(options.search_m + inlier_m_),
+        // Within this of its own place a moved point's inliers (within
+        // inlier_m of it) are all within reach: no candidate check needed.
+        // The margin keeps rounding out of that triangle inequality.
+        sure_reach2_(std::max(options.search_m - kReachMarginM, 0.0) *
+                     std::max(options.search_m - kReachMarginM, 0.0)),
         near_(from.size()) {
     for (size_t i = 0; i < from_.size(); ++i) {
       for (size_t o = 0; o < to_.size(); ++o)
@@ -140,15 +147,22 @@ class InlierCounter {
     for (size_t i = 0; i < from_.size(); ++i) {
       if (near_[i].empty()) continue;
       const Eigen::Vector2d p = rotation * from_[i] + rigid.t;  // rigid(from_[i])
-      const auto [cx, cy] = CellOf(p);
+      const bool all_candidates = (p - from_[i]).squaredNorm() <= sure_reach2_;
+      // The disc of inlier_m around p lies in the 2 x 2 cells on p's side
+      // of its cell's centre.
+      const double ux = p.x() * per_cell_m_, uy = p.y() * per_cell_m_;
+      const long fx = Floor(ux), fy = Floor(uy);
+      const long x0 = ux - static_cast<double>(fx) < 0.5 ? fx - 1 : fx;
+      const long y0 = uy - static_cast<double>(fy) < 0.5 ? fy - 1 : fy;
       int nearest = -1;
       double best = inlier2_;
-      for (long x = cx - 1; x <= cx + 1; ++x)
-        for (long y = cy - 1; y <= cy + 1; ++y) {
+      for (long x = x0; x <= x0 + 1; ++x)
+        for (long y = y0; y <= y0 + 1; ++y) {
           const std::pair<int, int> cell = Cell(x, y);
           for (int k = cell.first; k < cell.second; ++k) {
             const int o = cell_points_[k];
-            if (!IsCandidate(static_cast<int>(i), o)) continue;  // not in near_[i]
+            // Not in near_[i]:
+            if (!all_candidates && !IsCandidate(static_cast<int>(i), o)) continue;
             const double d2 = (to_[o] - p).squaredNorm();
             if (d2 < best || (d2 == best && o > nearest)) {
               best = d2;
@@ -197,17 +211,26 @@ class InlierCounter {
   }
 
   std::pair<long, long> CellOf(const Eigen::Vector2d& p) const {
-    return std::make_pair(static_cast<long>(std::floor(p.x() / inlier_m_)),
-                          static_cast<long>(std::floor(p.y() / inlier_m_)));
+    return std::make_pair(Floor(p.x() * per_cell_m_), Floor(p.y() * per_cell_m_));
+  }
+
+  // std::floor for a cell index (finite, far within long's range), inline:
+  // the library call was 1-2 % of a landmark search.
+  static long Floor(double v) {
+    const long truncated = static_cast<long>(v);
+    return truncated - (v < static_cast<double>(truncated) ? 1 : 0);
   }
 
   const std::vector<Eigen::Vector2d>& from_;
   const std::vector<Eigen::Vector2d>& to_;
-  const double inlier_m_, inlier2_, score_std2_, reach_;
+  static constexpr double kReachMarginM = 1e-6;
+  // Cells a little wider than the inlier disc's diameter (the margin keeps
+  // rounding out of the 2 x 2 cover).
+  const double inlier_m_, inlier2_, per_cell_m_, score_std2_, reach_, sure_reach2_;
   std::vector<std::vector<int>> near_;  // candidates (to points within reach) per from point
   int with_candidates_ = 0;
-  // A grid larger than this (4 million cells of inlier_m: a 5 km square at
-  // 2.5 m) is hashed instead.
+  // A grid larger than this (4 million cells: a 10 km square at an inlier
+  // distance of 2.5 m) is hashed instead.
   static constexpr double kMaxDenseCells = 4e6;
   bool dense_ = true;
   long origin_x_ = 0, origin_y_ = 0, width_ = 0, height_ = 0;
