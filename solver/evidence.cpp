@@ -266,6 +266,8 @@ bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_p
     return false;
   }
   auto* zx = static_cast<double*>(buffers.rhs->x);
+  std::vector<int> variable_of(static_cast<size_t>(n));  // factor row -> variable
+  for (int i = 0; i < n; ++i) variable_of[inverse_permutation[i]] = i;
   for (int first = 0; first < count; first += kCovarianceBatch) {
     const int width = std::min(kCovarianceBatch, count - first);
     for (int c = 0; c < width; ++c)
@@ -277,11 +279,17 @@ bool CovarianceSamples(cholmod_factor* factor, const std::vector<int>& inverse_p
       if (why) *why = "CHOLMOD solve failed";
       return false;
     }
+    // Transposed in blocks of the solution's rows: a block's entries of one
+    // draw are contiguous, and the rows they go to stay in cache across the
+    // draws (row by row, every read was a page apart).
     const auto* yx = static_cast<const double*>(buffers.solution->x);
-    for (int i = 0; i < n; ++i) {
-      const double* column = yx + inverse_permutation[i];
-      double* row = samples->row(i).data() + first;
-      for (int c = 0; c < width; ++c) row[c] = column[static_cast<size_t>(c) * n];
+    constexpr int kBlock = 32;
+    for (int j0 = 0; j0 < n; j0 += kBlock) {
+      const int j1 = std::min(n, j0 + kBlock);
+      for (int c = 0; c < width; ++c) {
+        const double* column = yx + static_cast<size_t>(c) * n;
+        for (int j = j0; j < j1; ++j) (*samples)(variable_of[j], first + c) = column[j];
+      }
     }
   }
   return true;
