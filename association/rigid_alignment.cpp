@@ -76,8 +76,7 @@ class InlierCounter {
         // Within this of its own place a moved point's inliers (within
         // inlier_m of it) are all within reach: no candidate check needed.
         // The margin keeps rounding out of that triangle inequality.
-        sure_reach2_(std::max(options.search_m - kReachMarginM, 0.0) *
-                     std::max(options.search_m - kReachMarginM, 0.0)),
+        sure_reach2_(std::pow(std::max(options.search_m - kReachMarginM, 0.0), 2)),
         near_(from.size()) {
     for (size_t i = 0; i < from_.size(); ++i) {
       for (size_t o = 0; o < to_.size(); ++o)
@@ -161,8 +160,8 @@ class InlierCounter {
           const std::pair<int, int> cell = Cell(x, y);
           for (int k = cell.first; k < cell.second; ++k) {
             const int o = cell_points_[k];
-            // Not in near_[i]:
-            if (!all_candidates && !IsCandidate(static_cast<int>(i), o)) continue;
+            if (!all_candidates && !IsCandidate(static_cast<int>(i), o))
+              continue;  // not in near_[i]
             const double d2 = (to_[o] - p).squaredNorm();
             if (d2 < best || (d2 == best && o > nearest)) {
               best = d2;
