@@ -54,14 +54,15 @@ struct MeasureBuffers {
 };
 
 // The candidates of each `from` point and the inliers of a transform. The
-// `to` points sit on a grid of cells just over 2 inlier_m wide: a
-// transform's inliers are then found in the 2 x 2 cells nearest each moved
-// point instead of among all its candidates (thousands with clutter; most
-// cells are empty, so fewer cells beat smaller ones); the same pairs as a scan of the
-// candidates (ties to the higher index, as that scan). Measure runs for every
-// candidate transform of every sample, so the cells are an array over the
-// `to` points' bounding box (a hash beyond kMaxDenseCells), and each thread
-// keeps its own buffers.
+// `to` points sit on a grid of cells just over 2 inlier_m wide, and every
+// 2 x 2 block of cells keeps the list of its points: a transform's inliers
+// are then found in the one block around each moved point instead of among
+// all its candidates (thousands with clutter; one list per point rather than
+// a lookup per cell, as most cells are empty); the same pairs as a scan of
+// the candidates (ties to the higher index, as that scan). Measure runs for
+// every candidate transform of every sample, so the blocks are an array over
+// the `to` points' bounding box (a hash beyond kMaxDenseCells), and each
+// thread keeps its own buffers.
 class InlierCounter {
  public:
   InlierCounter(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
@@ -89,8 +90,8 @@ class InlierCounter {
   int with_candidates() const { return with_candidates_; }
   const std::vector<int>& near(size_t i) const { return near_[i]; }
 
-  // Builds the grid; needed before Measure(). Each cell lists its points by
-  // ascending index.
+  // Builds the blocks; needed before Measure(). Block (x, y) holds the
+  // points of cells x..x+1, y..y+1, by ascending index.
   void Index() {
     if (to_.empty()) return;
     long min_x = CellOf(to_[0]).first, max_x = min_x, min_y = CellOf(to_[0]).second, max_y = min_y;
@@ -101,8 +102,10 @@ class InlierCounter {
       min_y = std::min(min_y, y);
       max_y = std::max(max_y, y);
     }
-    std::vector<std::pair<long long, int>> keyed;  // (cell, point), sorted
-    keyed.reserve(to_.size());
+    --min_x;  // the blocks reaching the lowest cells start one cell lower
+    --min_y;
+    std::vector<std::pair<long long, int>> keyed;  // (block, point), sorted
+    keyed.reserve(4 * to_.size());
     const double cells = (double(max_x - min_x) + 1) * (double(max_y - min_y) + 1);
     dense_ = cells <= kMaxDenseCells;
     origin_x_ = min_x;
@@ -110,22 +113,24 @@ class InlierCounter {
     width_ = max_x - min_x + 1;
     height_ = max_y - min_y + 1;
     for (size_t o = 0; o < to_.size(); ++o) {
-      const auto [x, y] = CellOf(to_[o]);
-      keyed.push_back({dense_ ? (x - min_x) * height_ + (y - min_y) : PairKey(x, y), int(o)});
+      const auto [cx, cy] = CellOf(to_[o]);
+      for (long x = cx - 1; x <= cx; ++x)
+        for (long y = cy - 1; y <= cy; ++y)
+          keyed.push_back({dense_ ? (x - min_x) * height_ + (y - min_y) : PairKey(x, y), int(o)});
     }
     std::sort(keyed.begin(), keyed.end());
-    cell_points_.clear();
-    for (const auto& entry : keyed) cell_points_.push_back(entry.second);
+    block_points_.clear();
+    for (const auto& entry : keyed) block_points_.push_back(entry.second);
     if (dense_) {
-      cell_begin_.assign(static_cast<size_t>(cells) + 1, 0);
-      for (const auto& entry : keyed) ++cell_begin_[entry.first + 1];
-      for (size_t c = 1; c < cell_begin_.size(); ++c) cell_begin_[c] += cell_begin_[c - 1];
+      block_begin_.assign(static_cast<size_t>(cells) + 1, 0);
+      for (const auto& entry : keyed) ++block_begin_[entry.first + 1];
+      for (size_t c = 1; c < block_begin_.size(); ++c) block_begin_[c] += block_begin_[c - 1];
       return;
     }
     for (size_t k = 0; k < keyed.size(); ++k) {
       if (k == 0 || keyed[k].first != keyed[k - 1].first)
-        cells_[keyed[k].first] = {static_cast<int>(k), static_cast<int>(k)};
-      ++cells_[keyed[k].first].second;
+        blocks_[keyed[k].first] = {static_cast<int>(k), static_cast<int>(k)};
+      ++blocks_[keyed[k].first].second;
     }
   }
 
@@ -155,20 +160,16 @@ class InlierCounter {
       const long y0 = uy - static_cast<double>(fy) < 0.5 ? fy - 1 : fy;
       int nearest = -1;
       double best = inlier2_;
-      for (long x = x0; x <= x0 + 1; ++x)
-        for (long y = y0; y <= y0 + 1; ++y) {
-          const std::pair<int, int> cell = Cell(x, y);
-          for (int k = cell.first; k < cell.second; ++k) {
-            const int o = cell_points_[k];
-            if (!all_candidates && !IsCandidate(static_cast<int>(i), o))
-              continue;  // not in near_[i]
-            const double d2 = (to_[o] - p).squaredNorm();
-            if (d2 < best || (d2 == best && o > nearest)) {
-              best = d2;
-              nearest = o;
-            }
-          }
+      const std::pair<int, int> block = Block(x0, y0);
+      for (int k = block.first; k < block.second; ++k) {
+        const int o = block_points_[k];
+        if (!all_candidates && !IsCandidate(static_cast<int>(i), o)) continue;  // not in near_[i]
+        const double d2 = (to_[o] - p).squaredNorm();
+        if (d2 < best || (d2 == best && o > nearest)) {
+          best = d2;
+          nearest = o;
         }
+      }
       if (nearest < 0) continue;
       std::pair<double, int>& at = best_of_to[nearest];
       if (at.second < 0) {
@@ -197,16 +198,16 @@ class InlierCounter {
     return (to_[o] - from_[i]).squaredNorm() <= reach_ * reach_;
   }
 
-  // The range of cell_points_ in cell (x, y); empty outside the grid.
-  std::pair<int, int> Cell(long x, long y) const {
+  // The range of block_points_ in block (x, y); empty outside the grid.
+  std::pair<int, int> Block(long x, long y) const {
     if (dense_) {
       const long dx = x - origin_x_, dy = y - origin_y_;
       if (dx < 0 || dy < 0 || dx >= width_ || dy >= height_) return {0, 0};
       const size_t c = static_cast<size_t>(dx * height_ + dy);
-      return {cell_begin_[c], cell_begin_[c + 1]};
+      return {block_begin_[c], block_begin_[c + 1]};
     }
-    const auto cell = cells_.find(PairKey(x, y));
-    return cell == cells_.end() ? std::pair<int, int>{0, 0} : cell->second;
+    const auto block = blocks_.find(PairKey(x, y));
+    return block == blocks_.end() ? std::pair<int, int>{0, 0} : block->second;
   }
 
   std::pair<long, long> CellOf(const Eigen::Vector2d& p) const {
@@ -233,9 +234,9 @@ class InlierCounter {
   static constexpr double kMaxDenseCells = 4e6;
   bool dense_ = true;
   long origin_x_ = 0, origin_y_ = 0, width_ = 0, height_ = 0;
-  std::vector<int> cell_begin_;  // dense: cell c's points are cell_points_[begin[c], begin[c+1])
-  std::unordered_map<long long, std::pair<int, int>> cells_;  // hashed: cell -> its range
-  std::vector<int> cell_points_;                              // to points, cell by cell
+  std::vector<int> block_begin_;  // dense: block b's points are block_points_[begin[b], begin[b+1])
+  std::unordered_map<long long, std::pair<int, int>> blocks_;  // hashed: block -> its range
+  std::vector<int> block_points_;                              // to points, block by block
 };
 
 // The sampled transforms with at least min_inliers inliers and the most of
