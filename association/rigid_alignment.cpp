@@ -57,8 +57,8 @@ struct MeasureBuffers {
 // `to` points sit on a grid of cells just over 2 inlier_m wide, and every
 // 2 x 2 block of cells keeps the list of its points: a transform's inliers
 // are then found in the one block around each moved point instead of among
-// all its candidates (thousands with clutter; one list per point rather than
-// a lookup per cell, as most cells are empty); the same pairs as a scan of
+// all its candidates (thousands with clutter; one lookup per moved point
+// rather than one per cell, as most cells are empty); the same pairs as a scan of
 // the candidates (ties to the higher index, as that scan). Measure runs for
 // every candidate transform of every sample, so the blocks are an array over
 // the `to` points' bounding box (a hash beyond kMaxDenseCells), and each
