@@ -68,7 +68,39 @@ std::vector<std::vector<int>> Orders(const BlockPattern& pattern, int poses) {
   return {own, reversed, objects_first};
 }
 
-TEST(SymbolicAnalysisTest, PermutedMatrixHoldsEveryHessianEntryOnceInTheLowerTriangle) {
+// Every Hessian entry (r, c) sits at its permuted positions (a, b): in the
+// lower triangle at (max, min), in the upper one at (min, max); each column
+// sorted and holding its diagonal (first in the lower triangle, last in the
+// upper); every matrix entry hit exactly once.
+void ExpectEveryHessianEntryOnce(const BlockPattern& pattern,
+                                 const std::vector<std::pair<int, int>>& entries,
+                                 const PermutedHessian& permuted, bool upper) {
+  const auto* p = static_cast<const int*>(permuted.matrix->p);
+  const auto* i = static_cast<const int*>(permuted.matrix->i);
+  ASSERT_EQ(p[pattern.n], static_cast<int>(entries.size()));
+  for (int c = 0; c < pattern.n; ++c) {
+    ASSERT_LT(p[c], p[c + 1]);
+    EXPECT_EQ(i[upper ? p[c + 1] - 1 : p[c]], c);
+    EXPECT_TRUE(std::is_sorted(i + p[c], i + p[c + 1]));
+  }
+  const std::vector<int>& inverse = permuted.inverse_permutation;
+  std::vector<int> hits(entries.size(), 0);
+  for (size_t k = 0; k < entries.size(); ++k) {
+    const int a = inverse[entries[k].first], b = inverse[entries[k].second];
+    const int row = upper ? std::min(a, b) : std::max(a, b);
+    const int column = upper ? std::max(a, b) : std::min(a, b);
+    const int at = permuted.entry[k];
+    ASSERT_GE(at, p[column]);
+    ASSERT_LT(at, p[column + 1]);
+    EXPECT_EQ(i[at], row);
+    ++hits[at];
+  }
+  EXPECT_EQ(std::count(hits.begin(), hits.end(), 1), static_cast<long>(entries.size()));
+}
+
+// The permuted copy holds every Hessian entry once in its lower triangle,
+// and after UseUpperTriangle in its upper one, transposed.
+TEST(SymbolicAnalysisTest, PermutedMatrixHoldsEveryHessianEntryOnceInEitherTriangle) {
   testing::CholmodWorkspace cholmod;
   const int poses = 12;
   const BlockPattern pattern = PosesAndObjects(poses, 3);
@@ -77,71 +109,17 @@ TEST(SymbolicAnalysisTest, PermutedMatrixHoldsEveryHessianEntryOnceInTheLowerTri
     PermutedHessian permuted;
     ASSERT_TRUE(BuildPermutedHessian(pattern, order, static_cast<int>(entries.size()), &cholmod.cc,
                                      &permuted));
-    const auto* p = static_cast<const int*>(permuted.matrix->p);
-    const auto* i = static_cast<const int*>(permuted.matrix->i);
-    ASSERT_EQ(p[pattern.n], static_cast<int>(entries.size()));
     // A variable's entries stay together, in the block order.
     const std::vector<int>& inverse = permuted.inverse_permutation;
     EXPECT_EQ(inverse[pattern.offsets[order[0]]], 0);
     for (int v = 0; v < pattern.num_blocks(); ++v)
       for (int q = 1; q < pattern.dims[v]; ++q)
         EXPECT_EQ(inverse[pattern.offsets[v] + q], inverse[pattern.offsets[v]] + q);
-    // Columns sorted, starting at the diagonal.
-    for (int c = 0; c < pattern.n; ++c) {
-      EXPECT_EQ(i[p[c]], c);
-      EXPECT_TRUE(std::is_sorted(i + p[c], i + p[c + 1]));
-    }
-    // Entry (r, c) of the Hessian at (max, min) of its permuted positions,
-    // and every matrix entry hit exactly once.
-    std::vector<int> hits(entries.size(), 0);
-    for (size_t k = 0; k < entries.size(); ++k) {
-      const int a = inverse[entries[k].first], b = inverse[entries[k].second];
-      const int row = std::max(a, b), column = std::min(a, b);
-      const int at = permuted.entry[k];
-      ASSERT_GE(at, p[column]);
-      ASSERT_LT(at, p[column + 1]);
-      EXPECT_EQ(i[at], row);
-      ++hits[at];
-    }
-    EXPECT_EQ(std::count(hits.begin(), hits.end(), 1), static_cast<long>(entries.size()));
-    cholmod_free_sparse(&permuted.matrix, &cholmod.cc);
-  }
-}
-
-// The upper triangle holds the same entries, transposed: Hessian entry
-// (r, c) at (min, max) of its permuted positions, columns sorted and ending
-// at the diagonal, each entry hit once.
-TEST(SymbolicAnalysisTest, UpperTriangleHoldsEveryHessianEntryOnceTransposed) {
-  testing::CholmodWorkspace cholmod;
-  const int poses = 12;
-  const BlockPattern pattern = PosesAndObjects(poses, 3);
-  const std::vector<std::pair<int, int>> entries = HessianEntries(pattern);
-  for (const std::vector<int>& order : Orders(pattern, poses)) {
-    PermutedHessian permuted;
-    ASSERT_TRUE(BuildPermutedHessian(pattern, order, static_cast<int>(entries.size()), &cholmod.cc,
-                                     &permuted));
+    EXPECT_EQ(permuted.matrix->stype, -1);
+    ExpectEveryHessianEntryOnce(pattern, entries, permuted, /*upper=*/false);
     ASSERT_TRUE(UseUpperTriangle(&permuted, &cholmod.cc));
     EXPECT_EQ(permuted.matrix->stype, 1);
-    const auto* p = static_cast<const int*>(permuted.matrix->p);
-    const auto* i = static_cast<const int*>(permuted.matrix->i);
-    ASSERT_EQ(p[pattern.n], static_cast<int>(entries.size()));
-    for (int c = 0; c < pattern.n; ++c) {
-      ASSERT_LT(p[c], p[c + 1]);
-      EXPECT_EQ(i[p[c + 1] - 1], c);
-      EXPECT_TRUE(std::is_sorted(i + p[c], i + p[c + 1]));
-    }
-    const std::vector<int>& inverse = permuted.inverse_permutation;
-    std::vector<int> hits(entries.size(), 0);
-    for (size_t k = 0; k < entries.size(); ++k) {
-      const int a = inverse[entries[k].first], b = inverse[entries[k].second];
-      const int row = std::min(a, b), column = std::max(a, b);
-      const int at = permuted.entry[k];
-      ASSERT_GE(at, p[column]);
-      ASSERT_LT(at, p[column + 1]);
-      EXPECT_EQ(i[at], row);
-      ++hits[at];
-    }
-    EXPECT_EQ(std::count(hits.begin(), hits.end(), 1), static_cast<long>(entries.size()));
+    ExpectEveryHessianEntryOnce(pattern, entries, permuted, /*upper=*/true);
     cholmod_free_sparse(&permuted.matrix, &cholmod.cc);
   }
 }
