@@ -844,9 +844,7 @@ void LandmarkAssociation::FinalSolve(const EvaluationPtr& best) {
   result_.association = evaluator_->Association(result_.state);
   result_.solution = evaluator_->Solve(result_.state, best.get());
   result_.log_target = result_.solution.evidence.log_evidence;
-  if (options_.sighting_split_gate > 0 && options_.sighting_split_rounds > 0 &&
-      !options_.diameter_per_track)
-    SplitMisfitSightings();
+  if (SightingSplitsOn()) SplitMisfitSightings();
   result_.total_time_s = SecondsSince(start_);
   Say(Format("final solve: %.0f landmarks, log evidence %.1f, total %.2f s",
              double(result_.solution.landmarks.size()), result_.log_target, result_.total_time_s));

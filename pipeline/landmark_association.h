@@ -488,6 +488,9 @@ class LandmarkAssociation {
   // landmark of its own by a full solve, so that the sweeps after it can
   // merge what the turned map had kept apart; returns the splits made.
   long LeverageSplits();
+  // Whether the sighting-level splits run: a gate and rounds > 0, no
+  // per-track diameters.
+  bool SightingSplitsOn() const;
   // The one-sighting tracks the solve bent the map to fit: each in a
   // landmark with others, its sighting's deleted residual (its error against
   // the solve without it, from the joint covariance of its pose and

@@ -17,8 +17,15 @@
 
 namespace oslam {
 
+// Not with per-track diameters: a track's one diameter would go with the
+// sighting that carries it.
+bool LandmarkAssociation::SightingSplitsOn() const {
+  return options_.sighting_split_gate > 0 && options_.sighting_split_rounds > 0 &&
+         !options_.diameter_per_track;
+}
+
 long LandmarkAssociation::LeverageSplits() {
-  if (options_.sighting_split_rounds <= 0 || options_.diameter_per_track) return 0;
+  if (!SightingSplitsOn()) return 0;
   LandmarkSlamOptions slam_options = options_.target.slam;
   slam_options.compute_landmark_covariances = slam_options.compute_pose_covariances = false;
   LandmarkSlam slam(slam_options);
@@ -192,16 +199,14 @@ void LandmarkAssociation::SplitMisfitSightings() {
     }
     if (!kept) break;
   }
-  if (options_.sighting_split_rounds > 0) {
-    int tried = 0;
-    for (const int t : HighLeverageTracks(&slam, result_.association, &result_.solution)) {
-      if (tried++ == options_.sighting_split_rounds) break;
-      std::vector<int> trial = result_.association;
-      trial[result_.tracks[t].front()] = next_id;
-      if (KeepIfBetter(&slam, std::move(trial), 1)) {
-        ++next_id;
-        ++result_.leverage_splits;
-      }
+  int tried = 0;
+  for (const int t : HighLeverageTracks(&slam, result_.association, &result_.solution)) {
+    if (tried++ == options_.sighting_split_rounds) break;
+    std::vector<int> trial = result_.association;
+    trial[result_.tracks[t].front()] = next_id;
+    if (KeepIfBetter(&slam, std::move(trial), 1)) {
+      ++next_id;
+      ++result_.leverage_splits;
     }
   }
   if (result_.sighting_splits == 0) return;
